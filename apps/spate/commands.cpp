@@ -1,0 +1,226 @@
+#include "commands.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <thread>
+#include <unistd.h>
+
+#include "backend/cpu/cpu_backend.hpp"
+#include "case/case.hpp"
+#include "case/generator.hpp"
+#include "comm/in_process_transport.hpp"
+#include "io/checkpoint.hpp"
+#include "io/run_summary.hpp"
+#include "sim/simulation.hpp"
+#include "sim/slab_worker.hpp"
+
+namespace spate::app {
+
+namespace {
+
+Case load(const std::string& file, const std::vector<std::string>& overrides) {
+  try {
+    return load_case(file, overrides);
+  } catch (const CaseError& e) {
+    throw BadInput(e.what());
+  }
+}
+
+void check_backend(const std::string& backend) {
+  if (backend == "cpu") return;
+  if (backend == "cuda")
+    throw BadInput("--backend cuda: this spate was built without a usable CUDA device path (no CUDA device found)");
+  throw BadInput(fmt::format("--backend {}: expected 'cpu' or 'cuda'", backend));
+}
+
+int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
+
+}  // namespace
+
+int run_command(const RunArgs& a) {
+  Case c = load(a.case_file, a.overrides);
+  check_backend(a.backend);
+  if (!a.pipelines.empty() || a.insitu_every || !a.live.empty())
+    throw BadInput("--pipeline/--insitu-every/--live: this spate was built without ParaView Catalyst");
+  if (!a.steering_log.empty()) throw BadInput("--steering-log: steering needs ParaView Catalyst, which this build lacks");
+  if (a.steps && *a.steps < 0) throw BadInput("--steps: must be >= 0");
+  if (a.until && !(*a.until > 0)) throw BadInput("--until: must be > 0");
+  if (a.threads < 0) throw BadInput("--threads: must be >= 0 (0: all cores)");
+  if (a.devices < 1) throw BadInput(fmt::format("--devices {}: must be at least 1", a.devices));
+  if (a.checkpoint_every && *a.checkpoint_every < 0) throw BadInput("--checkpoint-every: must be >= 0");
+
+  RunOptions o;
+  o.out_dir = a.out.empty() ? std::filesystem::path("out") / c.name : std::filesystem::path(a.out);
+  if (a.steps) o.steps = *a.steps;
+  o.until = a.until;
+  o.threads = a.threads;
+  o.devices = a.devices;
+  o.checkpoint_every = a.checkpoint_every;
+  if (!a.restart.empty()) o.restart = a.restart;
+  o.quiet = a.quiet;
+
+  RunResult r;
+  try {
+    r = Simulation(c, o).run();
+  } catch (const InputError& e) {
+    throw BadInput(e.what());
+  } catch (const CaseError& e) {
+    throw BadInput(e.what());
+  }
+  SummaryExtras x;
+  x.threads = a.threads > 0 ? a.threads : hardware_threads();
+  x.devices = a.devices;
+  write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
+  if (r.exit_code == 3) {
+    std::fprintf(stderr, "spate: the run went unstable: %s\n", r.message.c_str());
+  } else if (!a.quiet) {
+    std::printf("spate: %s done: %lld steps to t = %.6g s in %.2f s (%.3g particle-steps/s); outputs in %s\n", c.name.c_str(),
+                static_cast<long long>(r.steps), r.simulated_time, r.wall_seconds,
+                r.wall_seconds > 0 ? r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds : 0.0,
+                o.out_dir.string().c_str());
+  }
+  return r.exit_code;
+}
+
+int info_command(const InfoArgs& a) {
+  Case c = load(a.case_file, a.overrides);
+  if (a.backend != "cpu" && a.backend != "cuda") throw BadInput(fmt::format("--backend {}: expected 'cpu' or 'cuda'", a.backend));
+  if (a.devices < 1) throw BadInput(fmt::format("--devices {}: must be at least 1", a.devices));
+  const ParticleCounts n = count_particles(c);
+  if (n.fluid == 0) throw BadInput(c.file + ": the case generates no fluid particles (check fluid_blocks, wet_bed and dp)");
+  const PhysicsParams P = physics_params(c);
+  const Lattice L = make_lattice(c);
+  const double dt = c.fixed_dt ? *c.fixed_dt : c.cfl * P.h / P.c0;
+  const std::size_t bpp = ParticleStore(c.dim).bytes_per_particle();
+  const double memory = static_cast<double>(n.total()) * bpp;
+  if (a.json) {
+    nlohmann::ordered_json j;
+    j["case"] = c.name;
+    j["dimensions"] = c.dim;
+    j["particles"] = {{"fluid", n.fluid}, {"wall", n.wall}, {"total", n.total()}};
+    j["dp"] = c.dp;
+    j["smoothing_length"] = P.h;
+    j["sound_speed"] = P.c0;
+    j["sound_speed_automatic"] = !c.sound_speed.has_value();
+    j["dt"] = dt;
+    j["dt_adaptive"] = !c.fixed_dt.has_value();
+    j["cells"] = {L.cells[0], L.cells[1], L.cells[2]};
+    j["bytes_per_particle"] = bpp;
+    j["memory_bytes"] = memory;
+    j["backend"] = a.backend;
+    std::printf("%s\n", j.dump(2).c_str());
+  } else {
+    std::printf("case            %s (%dD, %s)\n", c.name.c_str(), c.dim, c.file.c_str());
+    std::printf("particles       %lld fluid, %lld wall, %lld total\n", static_cast<long long>(n.fluid),
+                static_cast<long long>(n.wall), static_cast<long long>(n.total()));
+    std::printf("resolution      dp = %g m, h = %g m (%.2f dp), support 2h\n", c.dp, P.h, c.smoothing_ratio);
+    std::printf("sound speed     c0 = %g m/s (%s)\n", P.c0, c.sound_speed ? "from the case" : "automatic: 10 sqrt(g H)");
+    std::printf("time step       %g s (%s)\n", dt, c.fixed_dt ? "fixed" : "adaptive, initial CFL estimate");
+    std::printf("cell lattice    %d x %d x %d\n", L.cells[0], L.cells[1], L.cells[2]);
+    std::printf("memory          %zu bytes/particle, %.1f MiB for the particles (%s backend)\n", bpp, memory / 1048576.0,
+                a.backend.c_str());
+  }
+  return 0;
+}
+
+int compare_command(const CompareArgs& a) {
+  ParticleStore pa, pb;
+  CheckpointMeta ma, mb;
+  try {
+    ma = read_checkpoint(a.a, pa);
+    mb = read_checkpoint(a.b, pb);
+  } catch (const std::exception& e) {
+    throw BadInput(e.what());
+  }
+  if (pa.size() != pb.size() || pa.dim() != pb.dim()) {
+    std::printf("different particle sets: %zu (%dD) vs %zu (%dD)\n", pa.size(), pa.dim(), pb.size(), pb.dim());
+    return 1;
+  }
+  if (pa.id != pb.id) {
+    std::printf("different particle ids\n");
+    return 1;
+  }
+  bool ok = true;
+  std::printf("%-18s %-14s %s\n", "field", "max |a - b|", "at id");
+  auto fa = pa.fields(), fb = pb.fields();
+  for (std::size_t f = 0; f < fa.size(); ++f) {
+    if (!fa[f].checkpoint || fa[f].name == "id") continue;
+    double worst = 0.0;
+    std::uint32_t at = 0;
+    for (std::size_t i = 0; i < pa.size(); ++i) {
+      double x, y;
+      if (fa[f].elem_size == 1) {
+        x = static_cast<unsigned char>(fa[f].bytes()[i]);
+        y = static_cast<unsigned char>(fb[f].bytes()[i]);
+      } else {
+        x = reinterpret_cast<const float*>(fa[f].bytes())[i];
+        y = reinterpret_cast<const float*>(fb[f].bytes())[i];
+      }
+      const double d = (std::isnan(x) != std::isnan(y)) ? INFINITY : (std::isnan(x) ? 0.0 : std::fabs(x - y));
+      if (d > worst) worst = d, at = pa.id[i];
+    }
+    ok = ok && worst <= a.tolerance;
+    std::printf("%-18s %-14.6g %u\n", std::string(fa[f].name).c_str(), worst, at);
+  }
+  std::printf("step %lld vs %lld, time %.17g vs %.17g\n", static_cast<long long>(ma.step), static_cast<long long>(mb.step),
+              ma.time, mb.time);
+  std::printf("%s (tolerance %g)\n", ok ? "MATCH" : "DIFFERENT", a.tolerance);
+  return ok ? 0 : 1;
+}
+
+int bench_command(const BenchArgs& a) {
+  std::vector<std::string> overrides = a.overrides;
+  overrides.push_back("output.interval=0");
+  overrides.push_back("probes=[]");
+  Case c = load(a.case_file, overrides);
+  if (a.steps < 1) throw BadInput("--steps: must be >= 1");
+  // Neighbour interactions per step: fluid-particle pairs inside the support at the initial state.
+  std::int64_t interactions = 0;
+  {
+    InProcessHub hub(1);
+    auto t = hub.endpoint(0, false);
+    const Lattice L = make_lattice(c);
+    SlabWorker w(L, physics_params(c), *t);
+    w.take_share(generate_particles(c), SlabLayout::uniform(L.cells[0], 1));
+    w.prepare(false);
+    interactions = cpu::count_fluid_interactions(w.particles(), w.grid(), w.params());
+  }
+  RunOptions o;
+  o.out_dir = std::filesystem::temp_directory_path() / fmt::format("spate-bench-{}", ::getpid());
+  o.steps = a.steps;
+  o.threads = a.threads;
+  o.devices = a.devices;
+  o.quiet = true;
+  const RunResult r = Simulation(c, o).run();
+  std::filesystem::remove_all(o.out_dir);
+  const double psps = r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds;
+  const double ips = r.steps * static_cast<double>(interactions) / r.wall_seconds;
+  const int threads = a.threads > 0 ? a.threads : hardware_threads();
+  if (a.json) {
+    nlohmann::ordered_json j;
+    j["case"] = c.name;
+    j["particles"] = {{"fluid", r.particles.fluid}, {"wall", r.particles.wall}, {"total", r.particles.total()}};
+    j["threads"] = threads;
+    j["devices"] = a.devices;
+    j["steps"] = r.steps;
+    j["wall_seconds"] = r.wall_seconds;
+    j["seconds_per_step"] = r.wall_seconds / r.steps;
+    j["particle_steps_per_second"] = psps;
+    j["interactions_per_step"] = interactions;
+    j["interactions_per_second"] = ips;
+    j["bytes_per_particle"] = r.bytes_per_particle;
+    j["ghost_particles"] = r.ghosts;
+    std::printf("%s\n", j.dump(2).c_str());
+  } else {
+    std::printf("%s: %lld particles, %d threads, %d devices: %.4f s/step, %.3g particle-steps/s, %.3g interactions/s, %.1f B/particle\n",
+                c.name.c_str(), static_cast<long long>(r.particles.total()), threads, a.devices, r.wall_seconds / r.steps, psps,
+                ips, r.bytes_per_particle);
+  }
+  return 0;
+}
+
+}  // namespace spate::app

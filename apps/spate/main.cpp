@@ -1,0 +1,80 @@
+// The spate command-line program: parse, load the case, run, report. Exit codes (spate --help):
+// 0 done, 1 `compare` found differences, 2 bad input, 3 the run went unstable, 4 internal error.
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <iostream>
+#include <thread>
+
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  using namespace spate::app;
+  CLI::App app{"spate: weakly-compressible SPH for free-surface flows, on CPUs and GPUs, watched and steered in situ.\n"};
+  app.footer(
+      "Exit codes: 0 done; 1 compare found differences; 2 bad input (case file, options, restart file);\n"
+      "            3 the run went unstable (diagnostic snapshot written, last good checkpoint kept); 4 internal error.");
+  app.require_subcommand(1);
+
+  RunArgs run;
+  auto* run_cmd = app.add_subcommand("run", "Run a case");
+  run_cmd->add_option("case", run.case_file, "Case file (YAML)")->required();
+  run_cmd->add_option("--out", run.out, "Output folder (default out/<case name>)");
+  auto* steps_opt = run_cmd->add_option("--steps", run.steps, "Run this many steps");
+  run_cmd->add_option("--until", run.until, "Run until this simulated time [s]")->excludes(steps_opt);
+  run_cmd->add_option("--set", run.overrides, "Override a case key: key.path=value (repeatable)");
+  run_cmd->add_option("--threads", run.threads, "CPU threads in all (default: all cores)");
+  run_cmd->add_option("--devices", run.devices, "Device workers (x-slabs) in this process");
+  run_cmd->add_option("--backend", run.backend, "cpu or cuda");
+  run_cmd->add_option("--checkpoint-every", run.checkpoint_every, "Write a checkpoint every N steps");
+  run_cmd->add_option("--restart", run.restart, "Continue from a checkpoint (HDF5)");
+  run_cmd->add_flag("--quiet", run.quiet, "No progress output");
+  run_cmd->add_option("--pipeline", run.pipelines, "ParaView Catalyst script (repeatable)");
+  run_cmd->add_option("--insitu-every", run.insitu_every, "Run pipelines every N steps");
+  run_cmd->add_option("--live", run.live, "Connect to ParaView Catalyst Live at [HOST:]PORT")->expected(0, 1)->default_str("localhost:22222");
+  run_cmd->add_option("--steering-log", run.steering_log, "Replay a recorded steering log");
+
+  InfoArgs info;
+  auto* info_cmd = app.add_subcommand("info", "Particle counts, resolution, sound speed, time step and memory of a case; no run");
+  info_cmd->add_option("case", info.case_file, "Case file (YAML)")->required();
+  info_cmd->add_option("--set", info.overrides, "Override a case key: key.path=value (repeatable)");
+  info_cmd->add_option("--backend", info.backend, "cpu or cuda");
+  info_cmd->add_option("--devices", info.devices, "Device workers to size memory for");
+  info_cmd->add_flag("--json", info.json, "Print one JSON object");
+
+  CompareArgs cmp;
+  auto* cmp_cmd = app.add_subcommand("compare", "Compare two checkpoints particle by particle (matched by id)");
+  cmp_cmd->add_option("a", cmp.a, "First checkpoint")->required();
+  cmp_cmd->add_option("b", cmp.b, "Second checkpoint")->required();
+  cmp_cmd->add_option("--tolerance", cmp.tolerance, "Largest allowed absolute difference (default 0: bit-identical)");
+
+  BenchArgs bench;
+  auto* bench_cmd = app.add_subcommand("bench", "Measure particle-steps and neighbour interactions per second");
+  bench_cmd->add_option("case", bench.case_file, "Case file (YAML)")->required();
+  bench_cmd->add_option("--set", bench.overrides, "Override a case key (repeatable)");
+  bench_cmd->add_option("--steps", bench.steps, "Timed steps (after warm-up)");
+  bench_cmd->add_option("--threads", bench.threads, "CPU threads in all");
+  bench_cmd->add_option("--devices", bench.devices, "Device workers");
+  bench_cmd->add_flag("--json", bench.json, "Print one JSON object");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
+  }
+  try {
+    if (*run_cmd) return run_command(run);
+    if (*info_cmd) return info_command(info);
+    if (*cmp_cmd) return compare_command(cmp);
+    if (*bench_cmd) return bench_command(bench);
+  } catch (const BadInput& e) {
+    std::fprintf(stderr, "spate: error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "spate: internal error: %s\n", e.what());
+    return 4;
+  }
+  return 0;
+}

@@ -1,0 +1,184 @@
+#include "cpu_backend.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "../../particles/particle_access.hpp"
+#include "../../physics/dispatch.hpp"
+#include "../../physics/eos.hpp"
+#include "../../physics/fluid_interactions.hpp"
+#include "../../physics/integrator.hpp"
+#include "../../physics/wall_boundary.hpp"
+
+namespace spate::cpu {
+
+namespace {
+
+// Calls body(i, g) for every owned particle i, g its global cell coordinates, one cell at a time
+// (cells are the unit of work: their neighbour ranges are computed once for all their particles).
+template <class Body>
+void for_each_owned_cell(const CellGrid& grid, Body&& body) {
+  const CellGridView v = grid.view();
+  const auto cells = static_cast<std::int64_t>(grid.owned_cell_count());
+#pragma omp parallel for schedule(dynamic, 64)
+  for (std::int64_t c = 0; c < cells; ++c) {
+    const std::uint32_t b = v.start[c], e = v.start[c + 1];
+    if (b == e) continue;
+    int g[3];
+    grid.global_coords(static_cast<std::uint32_t>(c), g);
+    body(b, e, g);
+  }
+}
+
+}  // namespace
+
+void predict(ParticleStore& p, const PhysicsParams& P, float dt) {
+  p.swap_rates();  // the rates of step n become the "previous" ones the corrector needs
+  const auto n = static_cast<std::int64_t>(p.owned());
+  for (int k = 0; k < P.dim; ++k) {
+    float* x = p.pos[k].data();
+    float* v = p.vel[k].data();
+    const float* a = p.acc_prev[k].data();
+    const std::uint8_t* kind = p.kind.data();
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i)
+      if (is_fluid(kind[i])) predict_component(x[i], v[i], a[i], dt);
+  }
+  if (P.density_mode == DensityMode::Continuity) {
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i)
+      if (is_fluid(p.kind[i])) predict_density(p.density[i], p.density_rate_prev[i], dt);
+  }
+}
+
+void correct(ParticleStore& p, const PhysicsParams& P, float dt) {
+  const auto n = static_cast<std::int64_t>(p.owned());
+  for (int k = 0; k < P.dim; ++k) {
+    float* v = p.vel[k].data();
+    const float* a = p.acc[k].data();
+    const float* a_old = p.acc_prev[k].data();
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i)
+      if (is_fluid(p.kind[i])) spate::correct(v[i], a[i], a_old[i], dt);
+  }
+  if (P.density_mode == DensityMode::Continuity) {
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i)
+      if (is_fluid(p.kind[i])) spate::correct(p.density[i], p.density_rate[i], p.density_rate_prev[i], dt);
+  }
+}
+
+void equation_of_state(ParticleStore& p, const PhysicsParams& P) {
+  const auto n = static_cast<std::int64_t>(p.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i)
+    if (is_fluid(p.kind[i])) p.pressure[i] = tait_pressure(p.density[i], P.rho0, P.tait_b);
+}
+
+void summation_density(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+    const CellGridView v = grid.view();
+    for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
+      for (std::uint32_t i = b; i < e; ++i) {
+        if (!is_fluid(p.kind[i])) continue;
+        const Vec<Dim> xi = load_vec<Dim>(p.pos, i);
+        float rho = 0.0f;
+        v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+          for (std::uint32_t j = jb; j < je; ++j)
+            rho += summation_density_term<Kernel, Dim>(P, xi, load_vec<Dim>(p.pos, j));
+        });
+        p.density[i] = std::max(rho, P.rho0);
+      }
+    });
+  });
+}
+
+void wall_state(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+    const CellGridView v = grid.view();
+    for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
+      for (std::uint32_t w = b; w < e; ++w) {
+        if (is_fluid(p.kind[w])) continue;
+        const Vec<Dim> xw = load_vec<Dim>(p.pos, w);
+        WallSums<Dim> sums;
+        v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+          for (std::uint32_t j = jb; j < je; ++j)
+            if (is_fluid(p.kind[j])) accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(p, j), sums);
+        });
+        const WallState<Dim> s = finish_wall(P, sums);
+        p.pressure[w] = s.p;
+        p.density[w] = s.rho;
+        for (int k = 0; k < Dim; ++k) p.vel[k][w] = s.v[k];
+      }
+    });
+  });
+}
+
+void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+    const CellGridView v = grid.view();
+    for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
+      for (std::uint32_t i = b; i < e; ++i) {
+        if (!is_fluid(p.kind[i])) {
+          for (int k = 0; k < Dim; ++k) p.acc[k][i] = 0.0f;
+          p.density_rate[i] = 0.0f;
+          continue;
+        }
+        const ParticleState<Dim> si = load_state<Dim>(p, i);
+        FluidRates<Dim> rates;
+        v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+          for (std::uint32_t j = jb; j < je; ++j)
+            accumulate_fluid_pair<Kernel, Dim>(P, si, load_state<Dim>(p, j), rates);
+        });
+        add_body_forces(P, rates);
+        for (int k = 0; k < Dim; ++k) p.acc[k][i] = rates.acc[k];
+        p.density_rate[i] = P.density_mode == DensityMode::Continuity ? rates.density_rate : 0.0f;
+      }
+    });
+  });
+}
+
+float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) {
+  float dt = std::numeric_limits<float>::infinity();
+  const auto n = static_cast<std::int64_t>(p.owned());
+  const int d = P.dim;
+#pragma omp parallel for schedule(static) reduction(min : dt)
+  for (std::int64_t i = 0; i < n; ++i) {
+    if (!is_fluid(p.kind[i])) continue;
+    float v2 = 0.0f, a2 = 0.0f;
+    for (int k = 0; k < d; ++k) {
+      v2 += p.vel[k][i] * p.vel[k][i];
+      a2 += p.acc[k][i] * p.acc[k][i];
+    }
+    dt = std::min(dt, particle_time_step(P, c, std::sqrt(v2), std::sqrt(a2)));
+  }
+  return std::min(dt, viscous_time_step(P, c));
+}
+
+}  // namespace spate::cpu
+
+namespace spate::cpu {
+std::int64_t count_fluid_interactions(const ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  std::int64_t total = 0;
+  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+    const CellGridView v = grid.view();
+    for (std::uint32_t c = 0; c < grid.owned_cell_count(); ++c) {
+      int g[3];
+      grid.global_coords(c, g);
+      for (std::uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
+        if (!is_fluid(p.kind[i])) continue;
+        const Vec<Dim> xi = load_vec<Dim>(p.pos, i);
+        v.for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
+          for (std::uint32_t j = b; j < e; ++j) {
+            const Vec<Dim> r = xi - load_vec<Dim>(p.pos, j);
+            const float r2 = dot(r, r);
+            total += r2 < P.support2 && r2 > 0.0f;
+          }
+        });
+      }
+    }
+  });
+  return total;
+}
+}  // namespace spate::cpu

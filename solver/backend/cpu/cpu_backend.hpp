@@ -1,0 +1,30 @@
+#pragma once
+// The OpenMP driver: loops over owned particles (or cells) and calls the shared physics bodies in
+// solver/physics. Nothing here knows a formula; it only knows where the arrays are.
+#include "../../grid/cell_grid.hpp"
+#include "../../particles/particle_store.hpp"
+#include "../../physics/params.hpp"
+#include "../../physics/timestep.hpp"
+
+namespace spate::cpu {
+
+// Integrator halves (physics/integrator.hpp) over owned fluid particles.
+void predict(ParticleStore& p, const PhysicsParams& P, float dt);
+void correct(ParticleStore& p, const PhysicsParams& P, float dt);
+// Tait pressure of every fluid particle, owned and ghost (ghosts carry the owner's density).
+void equation_of_state(ParticleStore& p, const PhysicsParams& P);
+// Mass summation density (eq. 5) of owned fluid particles, clipped below at rho0 (free surface).
+void summation_density(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+// Adami wall pressure, density and no-slip velocity of owned wall particles.
+void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+// Acceleration and density rate of owned fluid particles.
+void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+// Smallest stable time step over owned fluid particles (infinity when there are none).
+float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c);
+
+}  // namespace spate::cpu
+
+namespace spate::cpu {
+// Pairs (fluid i, any j) inside the support: the neighbour interactions one rate evaluation does.
+std::int64_t count_fluid_interactions(const ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+}  // namespace spate::cpu

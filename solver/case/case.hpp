@@ -1,0 +1,96 @@
+#pragma once
+// A simulation case as read from YAML (schema in docs/cases.md). Plain data; the loader validates
+// it, the generator turns it into particles, physics_params() into the pair-loop constants.
+#include <array>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "../physics/params.hpp"
+
+namespace spate {
+
+// Bad input: names the file, the key and what was expected. The program exits with code 2.
+struct CaseError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+using Vec3d = std::array<double, 3>;
+
+struct Box {
+  Vec3d min{0, 0, 0};
+  Vec3d max{0, 0, 0};
+};
+
+struct SolidSpec {
+  std::string name;
+  Box box;
+  bool hollow = true;  // only `wall_layers` layers under its surface are particles
+};
+
+enum class ProbeType { Pressure, Height, Force, Front };
+
+struct ProbeSpec {
+  std::string name;
+  ProbeType type = ProbeType::Pressure;
+  Vec3d position{0, 0, 0};  // pressure: the point; height: the gauge (x, y) in 3D, (x) in 2D
+  std::string solid;        // force: the solid's name
+  int axis = 0;             // front: the axis along which the front advances
+};
+
+struct Case {
+  std::string file;  // where it came from, for messages
+  std::string name;
+  std::string source_yaml;  // the effective YAML (after --set), stored in checkpoints
+  int dim = 3;
+  double dp = 0.01;
+  double smoothing_ratio = 1.3;
+  KernelType kernel = KernelType::WendlandC2;
+
+  double rho0 = 1000.0;
+  double viscosity = 1.0e-3;
+  std::optional<double> sound_speed;  // empty: automatic, 10 sqrt(g H)
+  double artificial_viscosity = 0.0;
+  DensityMode density_mode = DensityMode::Continuity;
+  DensityDiffusion diffusion = DensityDiffusion::Fourtakas;
+  double delta = 0.1;
+  Vec3d gravity{0, 0, -9.81};
+  Vec3d body_force{0, 0, 0};
+
+  double end_time = 1.0;
+  std::optional<double> fixed_dt;  // empty: adaptive
+  double cfl = 0.2;
+  double density_min_ratio = 0.5, density_max_ratio = 2.0;  // sanity limits on rho/rho0
+
+  // Tank: interior [origin, origin + size], wall_layers layers of wall particles outside it.
+  Vec3d tank_origin{0, 0, 0};
+  Vec3d tank_size{1, 1, 1};
+  int wall_layers = 3;
+  bool open_top = true;
+  std::array<bool, 3> periodic{false, false, false};
+  double headroom = 0.5;  // domain extends this fraction of the tank height above an open top
+
+  std::vector<Box> fluid_blocks;
+  double wet_bed = 0.0;  // depth of still water on the rest of the floor
+  std::vector<SolidSpec> solids;
+  std::vector<ProbeSpec> probes;
+
+  double output_interval = 0.0;   // simulated seconds between snapshots; 0: none
+  double probe_interval = 0.0;    // 0: every step
+  int checkpoint_every = 0;       // steps; 0: only at the end
+  int balance_every = 100;        // steps between load-balancing passes
+};
+
+// Reads, applies `overrides` ("key.path=value"), validates. Throws CaseError.
+Case load_case(const std::string& path, const std::vector<std::string>& overrides = {});
+// Same from YAML text already in memory (checkpoints keep the case they ran).
+Case parse_case(const std::string& yaml_text, const std::string& file_name,
+                const std::vector<std::string>& overrides = {});
+
+// Highest fluid column, for the automatic sound speed.
+double highest_fluid_column(const Case& c);
+double sound_speed(const Case& c);
+PhysicsParams physics_params(const Case& c);
+
+}  // namespace spate

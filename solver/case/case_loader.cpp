@@ -1,0 +1,432 @@
+// YAML -> Case. Every key is read through a Section that remembers what it read, so anything left
+// over is an unknown key, reported with the closest valid name.
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "case.hpp"
+
+namespace spate {
+
+namespace {
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+class Section {
+ public:
+  Section(YAML::Node node, std::string path, const std::string& file) : node_(node), path_(std::move(path)), file_(file) {}
+
+  [[noreturn]] void fail(const YAML::Node& at, const std::string& key, const std::string& what) const {
+    std::ostringstream s;
+    s << file_;
+    if (at && at.Mark().line >= 0) s << ':' << at.Mark().line + 1 << ':' << at.Mark().column + 1;
+    s << ": key '" << full(key) << "': " << what;
+    throw CaseError(s.str());
+  }
+  std::string full(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+  bool has(const std::string& key) {
+    known_.insert(key);
+    return node_[key].IsDefined() && !node_[key].IsNull();
+  }
+  YAML::Node raw(const std::string& key) {
+    known_.insert(key);
+    return node_[key];
+  }
+
+  double number(const std::string& key, std::optional<double> fallback = {}) {
+    YAML::Node n = raw(key);
+    if (!n.IsDefined() || n.IsNull()) {
+      if (fallback) return *fallback;
+      fail(node_, key, "is required (a number)");
+    }
+    return to_number(n, key);
+  }
+  double to_number(const YAML::Node& n, const std::string& key) const {
+    if (!n.IsScalar()) fail(n, key, "expected a number");
+    try {
+      const double v = n.as<double>();
+      if (!std::isfinite(v)) fail(n, key, "expected a finite number, got '" + n.Scalar() + "'");
+      return v;
+    } catch (const YAML::Exception&) {
+      fail(n, key, "expected a number, got '" + n.Scalar() + "'");
+    }
+  }
+  int integer(const std::string& key, int fallback) {
+    YAML::Node n = raw(key);
+    if (!n.IsDefined() || n.IsNull()) return fallback;
+    try {
+      return n.as<int>();
+    } catch (const YAML::Exception&) {
+      fail(n, key, "expected an integer, got '" + (n.IsScalar() ? n.Scalar() : std::string("a ") + (n.IsMap() ? "map" : "list")) + "'");
+    }
+  }
+  bool boolean(const std::string& key, bool fallback) {
+    YAML::Node n = raw(key);
+    if (!n.IsDefined() || n.IsNull()) return fallback;
+    try {
+      return n.as<bool>();
+    } catch (const YAML::Exception&) {
+      fail(n, key, "expected true or false");
+    }
+  }
+  std::string text(const std::string& key, std::optional<std::string> fallback = {}) {
+    YAML::Node n = raw(key);
+    if (!n.IsDefined() || n.IsNull()) {
+      if (fallback) return *fallback;
+      fail(node_, key, "is required (a string)");
+    }
+    if (!n.IsScalar()) fail(n, key, "expected a string");
+    return n.Scalar();
+  }
+  template <class E>
+  E choice(const std::string& key, E fallback, const std::vector<std::pair<std::string, E>>& options) {
+    if (!has(key)) return fallback;
+    const std::string v = text(key);
+    std::string names;
+    for (auto& [name, value] : options) {
+      if (name == v) return value;
+      names += (names.empty() ? "" : ", ") + name;
+    }
+    fail(node_[key], key, "'" + v + "' is not one of: " + names);
+  }
+  // A vector of `dim` numbers, stored in the first dim components of a Vec3d.
+  Vec3d vector(const std::string& key, int dim, std::optional<Vec3d> fallback = {}) {
+    YAML::Node n = raw(key);
+    if (!n.IsDefined() || n.IsNull()) {
+      if (fallback) return *fallback;
+      fail(node_, key, "is required (a list of " + std::to_string(dim) + " numbers)");
+    }
+    if (!n.IsSequence() || static_cast<int>(n.size()) != dim)
+      fail(n, key, "expected a list of " + std::to_string(dim) + " numbers");
+    Vec3d v{0, 0, 0};
+    for (int k = 0; k < dim; ++k) v[k] = to_number(n[k], key);
+    return v;
+  }
+  std::optional<Section> child(const std::string& key) {
+    YAML::Node n = raw(key);
+    if (!n.IsDefined() || n.IsNull()) return std::nullopt;
+    if (!n.IsMap()) fail(n, key, "expected a map of keys");
+    return Section(n, full(key), file_);
+  }
+  std::vector<Section> list(const std::string& key) {
+    YAML::Node n = raw(key);
+    std::vector<Section> out;
+    if (!n.IsDefined() || n.IsNull()) return out;
+    if (!n.IsSequence()) fail(n, key, "expected a list");
+    for (std::size_t i = 0; i < n.size(); ++i) {
+      if (!n[i].IsMap()) fail(n[i], key, "each entry must be a map of keys");
+      out.emplace_back(n[i], full(key) + "[" + std::to_string(i) + "]", file_);
+    }
+    return out;
+  }
+  // Every key must have been read by now.
+  void finish() const {
+    for (auto it = node_.begin(); it != node_.end(); ++it) {
+      const std::string k = it->first.Scalar();
+      if (known_.count(k)) continue;
+      std::string best;
+      std::size_t best_d = 1000;
+      for (auto& cand : known_) {
+        const std::size_t d = edit_distance(k, cand);
+        if (d < best_d) best_d = d, best = cand;
+      }
+      std::string msg = "unknown key";
+      if (!best.empty() && best_d <= std::max<std::size_t>(2, k.size() / 3)) msg += " (did you mean '" + full(best) + "'?)";
+      fail(it->first, k, msg);
+    }
+  }
+  const YAML::Node& node() const { return node_; }
+
+ private:
+  YAML::Node node_;
+  std::string path_;
+  const std::string& file_;
+  std::set<std::string> known_;
+};
+
+void apply_override(YAML::Node root, const std::string& file, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw CaseError(file + ": --set '" + assignment + "': expected key.path=value");
+  const std::string path = assignment.substr(0, eq);
+  YAML::Node value;
+  try {
+    value = YAML::Load(assignment.substr(eq + 1));
+  } catch (const YAML::Exception& e) {
+    throw CaseError(file + ": --set '" + assignment + "': value is not valid YAML: " + e.msg);
+  }
+  std::vector<std::string> parts;
+  std::stringstream ss(path);
+  for (std::string part; std::getline(ss, part, '.');) parts.push_back(part);
+  // yaml-cpp nodes are handles: walk down with fresh handles, never assign one node to another.
+  std::vector<YAML::Node> chain{root};
+  for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+    YAML::Node next = chain.back()[parts[i]];
+    if (next.IsDefined() && !next.IsNull() && !next.IsMap())
+      throw CaseError(file + ": --set '" + assignment + "': '" + parts[i] + "' is not a map");
+    chain.push_back(next);
+  }
+  chain.back()[parts.back()] = value;
+}
+
+Box read_box(Section& s, int dim) {
+  Box b;
+  b.min = s.vector("min", dim);
+  b.max = s.vector("max", dim);
+  for (int k = 0; k < dim; ++k)
+    if (!(b.max[k] > b.min[k])) s.fail(s.raw("max"), "max", "must be greater than min on every axis");
+  return b;
+}
+
+bool inside(const Box& inner, const Vec3d& lo, const Vec3d& hi, int dim, double tol) {
+  for (int k = 0; k < dim; ++k)
+    if (inner.min[k] < lo[k] - tol || inner.max[k] > hi[k] + tol) return false;
+  return true;
+}
+
+bool overlap(const Box& a, const Box& b, int dim, double tol) {
+  for (int k = 0; k < dim; ++k)
+    if (a.max[k] <= b.min[k] + tol || b.max[k] <= a.min[k] + tol) return false;
+  return true;
+}
+
+Case read(Section& root, const std::string& file) {
+  Case c;
+  c.file = file;
+  c.name = root.text("name");
+  c.dim = root.integer("dimensions", 3);
+  if (c.dim != 2 && c.dim != 3) root.fail(root.raw("dimensions"), "dimensions", "must be 2 or 3");
+  const int d = c.dim;
+  c.dp = root.number("dp");
+  if (!(c.dp > 0)) root.fail(root.raw("dp"), "dp", "particle spacing must be > 0");
+  c.smoothing_ratio = root.number("smoothing_ratio", 1.3);
+  if (c.smoothing_ratio < 1.0 || c.smoothing_ratio > 3.0)
+    root.fail(root.raw("smoothing_ratio"), "smoothing_ratio", "must be between 1 and 3 (h = ratio x dp)");
+  c.kernel = root.choice<KernelType>("kernel", KernelType::WendlandC2,
+                                     {{"wendland_c2", KernelType::WendlandC2}, {"cubic_spline", KernelType::CubicSpline}});
+  Vec3d g_default{0, 0, 0};
+  g_default[d - 1] = -9.81;
+  c.gravity = root.vector("gravity", d, g_default);
+
+  if (auto f = root.child("fluid")) {
+    c.rho0 = f->number("density", 1000.0);
+    if (!(c.rho0 > 0)) f->fail(f->raw("density"), "density", "must be > 0");
+    c.viscosity = f->number("viscosity", 1.0e-3);
+    if (c.viscosity < 0) f->fail(f->raw("viscosity"), "viscosity", "must be >= 0");
+    if (f->has("sound_speed") && !(f->raw("sound_speed").IsScalar() && f->raw("sound_speed").Scalar() == "auto")) {
+      c.sound_speed = f->number("sound_speed");
+      if (!(*c.sound_speed > 0)) f->fail(f->raw("sound_speed"), "sound_speed", "must be > 0 or 'auto'");
+    }
+    c.artificial_viscosity = f->number("artificial_viscosity", 0.0);
+    if (c.artificial_viscosity < 0) f->fail(f->raw("artificial_viscosity"), "artificial_viscosity", "must be >= 0");
+    c.body_force = f->vector("body_force", d, Vec3d{0, 0, 0});
+    f->finish();
+  }
+  if (auto s = root.child("density")) {
+    c.density_mode = s->choice<DensityMode>("mode", DensityMode::Continuity,
+                                            {{"continuity", DensityMode::Continuity}, {"summation", DensityMode::Summation}});
+    c.diffusion = s->choice<DensityDiffusion>(
+        "diffusion", DensityDiffusion::Fourtakas,
+        {{"fourtakas", DensityDiffusion::Fourtakas}, {"molteni_colagrossi", DensityDiffusion::MolteniColagrossi}, {"none", DensityDiffusion::None}});
+    c.delta = s->number("delta", 0.1);
+    if (c.delta < 0 || c.delta > 1) s->fail(s->raw("delta"), "delta", "must be between 0 and 1");
+    c.density_min_ratio = s->number("min_ratio", 0.5);
+    c.density_max_ratio = s->number("max_ratio", 2.0);
+    s->finish();
+  }
+  if (auto t = root.child("time")) {
+    c.end_time = t->number("end");
+    if (!(c.end_time > 0)) t->fail(t->raw("end"), "end", "must be > 0");
+    if (t->has("dt") && !(t->raw("dt").IsScalar() && t->raw("dt").Scalar() == "auto")) {
+      c.fixed_dt = t->number("dt");
+      if (!(*c.fixed_dt > 0)) t->fail(t->raw("dt"), "dt", "must be > 0 or 'auto'");
+    }
+    c.cfl = t->number("cfl", 0.2);
+    if (!(c.cfl > 0 && c.cfl <= 1)) t->fail(t->raw("cfl"), "cfl", "must be in (0, 1]");
+    t->finish();
+  } else {
+    root.fail(root.node(), "time", "is required (a map with at least 'end')");
+  }
+
+  auto tank = root.child("tank");
+  if (!tank) root.fail(root.node(), "tank", "is required");
+  c.tank_origin = tank->vector("origin", d, Vec3d{0, 0, 0});
+  c.tank_size = tank->vector("size", d);
+  for (int k = 0; k < d; ++k)
+    if (!(c.tank_size[k] > 0)) tank->fail(tank->raw("size"), "size", "every extent must be > 0");
+  c.wall_layers = tank->integer("wall_layers", 3);
+  if (c.wall_layers < 1 || c.wall_layers > 8) tank->fail(tank->raw("wall_layers"), "wall_layers", "must be between 1 and 8");
+  c.open_top = tank->boolean("open_top", true);
+  c.headroom = tank->number("headroom", 0.5);
+  if (tank->has("periodic")) {
+    YAML::Node p = tank->raw("periodic");
+    if (!p.IsSequence()) tank->fail(p, "periodic", "expected a list of axes, e.g. [x]");
+    for (auto a : p) {
+      const std::string axis = a.IsScalar() ? a.Scalar() : "";
+      const int k = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;
+      if (k < 0 || k >= d) tank->fail(a, "periodic", "'" + axis + "' is not an axis of this " + std::to_string(d) + "D case");
+      if (k == d - 1) tank->fail(a, "periodic", "the vertical axis cannot be periodic");
+      c.periodic[k] = true;
+    }
+  }
+  tank->finish();
+
+  const Vec3d tank_hi{c.tank_origin[0] + c.tank_size[0], c.tank_origin[1] + c.tank_size[1], c.tank_origin[2] + c.tank_size[2]};
+  const double tol = 1e-9;
+  for (auto& f : root.list("fluid_blocks")) {
+    Box b = read_box(f, d);
+    f.finish();
+    if (!inside(b, c.tank_origin, tank_hi, d, tol)) f.fail(f.node(), "max", "fluid block lies (partly) outside the tank");
+    c.fluid_blocks.push_back(b);
+  }
+  c.wet_bed = root.number("wet_bed", 0.0);
+  if (c.wet_bed < 0 || c.wet_bed >= c.tank_size[d - 1]) root.fail(root.raw("wet_bed"), "wet_bed", "depth must be >= 0 and below the tank top");
+  std::set<std::string> solid_names;
+  for (auto& s : root.list("solids")) {
+    SolidSpec spec;
+    spec.name = s.text("name");
+    spec.box = read_box(s, d);
+    spec.hollow = s.boolean("hollow", true);
+    s.finish();
+    if (!solid_names.insert(spec.name).second) s.fail(s.raw("name"), "name", "solid '" + spec.name + "' is defined twice");
+    if (!inside(spec.box, c.tank_origin, tank_hi, d, tol)) s.fail(s.node(), "max", "solid lies (partly) outside the tank");
+    for (auto& b : c.fluid_blocks)
+      if (overlap(b, spec.box, d, tol)) s.fail(s.node(), "min", "solid '" + spec.name + "' overlaps a fluid block");
+    c.solids.push_back(spec);
+  }
+  if (c.solids.size() > 200) root.fail(root.raw("solids"), "solids", "at most 200 solids");
+  if (c.fluid_blocks.empty() && c.wet_bed <= 0) root.fail(root.node(), "fluid_blocks", "the case has no fluid (no fluid_blocks and no wet_bed)");
+
+  for (auto& p : root.list("probes")) {
+    ProbeSpec probe;
+    probe.name = p.text("name");
+    probe.type = p.choice<ProbeType>("type", ProbeType::Pressure,
+                                     {{"pressure", ProbeType::Pressure}, {"height", ProbeType::Height},
+                                      {"force", ProbeType::Force}, {"front", ProbeType::Front}});
+    switch (probe.type) {
+      case ProbeType::Pressure: probe.position = p.vector("position", d); break;
+      case ProbeType::Height: probe.position = p.vector("position", d - 1); break;
+      case ProbeType::Force:
+        probe.solid = p.text("solid");
+        if (!solid_names.count(probe.solid)) p.fail(p.raw("solid"), "solid", "no solid named '" + probe.solid + "'");
+        break;
+      case ProbeType::Front: {
+        const std::string axis = p.text("axis", std::string("x"));
+        probe.axis = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;
+        if (probe.axis < 0 || probe.axis >= d) p.fail(p.raw("axis"), "axis", "must be an axis of the case");
+        break;
+      }
+    }
+    p.finish();
+    c.probes.push_back(probe);
+  }
+  if (auto o = root.child("output")) {
+    c.output_interval = o->number("interval", 0.0);
+    c.probe_interval = o->number("probe_interval", 0.0);
+    c.checkpoint_every = o->integer("checkpoint_every", 0);
+    if (c.output_interval < 0) o->fail(o->raw("interval"), "interval", "must be >= 0");
+    if (c.probe_interval < 0) o->fail(o->raw("probe_interval"), "probe_interval", "must be >= 0");
+    if (c.checkpoint_every < 0) o->fail(o->raw("checkpoint_every"), "checkpoint_every", "must be >= 0");
+    o->finish();
+  }
+  if (auto dcmp = root.child("decomposition")) {
+    c.balance_every = dcmp->integer("balance_every", 100);
+    if (c.balance_every < 0) dcmp->fail(dcmp->raw("balance_every"), "balance_every", "must be >= 0 (0: never)");
+    dcmp->finish();
+  }
+  root.finish();
+  return c;
+}
+
+}  // namespace
+
+Case parse_case(const std::string& yaml_text, const std::string& file_name, const std::vector<std::string>& overrides) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    throw CaseError(file_name + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +
+                    ": YAML syntax error: " + e.msg);
+  }
+  if (!root.IsMap()) throw CaseError(file_name + ": expected a YAML map of case keys at the top level");
+  for (auto& o : overrides) apply_override(root, file_name, o);
+  Section top(root, "", file_name);
+  Case c = read(top, file_name);
+  c.source_yaml = YAML::Dump(root);
+  return c;
+}
+
+Case load_case(const std::string& path, const std::vector<std::string>& overrides) {
+  std::ifstream in(path);
+  if (!in) throw CaseError(path + ": cannot read the case file (" + std::string(std::strerror(errno)) + ")");
+  std::stringstream s;
+  s << in.rdbuf();
+  return parse_case(s.str(), path, overrides);
+}
+
+double highest_fluid_column(const Case& c) {
+  const int v = c.dim - 1;
+  double h = c.wet_bed;
+  for (auto& b : c.fluid_blocks) h = std::max(h, b.max[v] - c.tank_origin[v]);
+  return h;
+}
+
+double sound_speed(const Case& c) {
+  if (c.sound_speed) return *c.sound_speed;
+  double g = 0;
+  for (int k = 0; k < c.dim; ++k) g += c.gravity[k] * c.gravity[k];
+  g = std::sqrt(g);
+  const double auto_c0 = 10.0 * std::sqrt(g * highest_fluid_column(c));
+  return auto_c0 > 0 ? auto_c0 : 1.0;
+}
+
+PhysicsParams physics_params(const Case& c) {
+  PhysicsParams P;
+  P.dim = c.dim;
+  P.kernel = c.kernel;
+  P.dp = static_cast<float>(c.dp);
+  P.h = static_cast<float>(c.smoothing_ratio * c.dp);
+  P.inv_h = 1.0f / P.h;
+  P.inv_h2 = P.inv_h * P.inv_h;
+  P.support2 = 4.0f * P.h * P.h;
+  P.kernel_norm = c.kernel == KernelType::WendlandC2 ? WendlandC2::normalisation(c.dim, P.h)
+                                                     : CubicSpline::normalisation(c.dim, P.h);
+  P.eta2 = 0.01f * P.h * P.h;
+  P.rho0 = static_cast<float>(c.rho0);
+  P.c0 = static_cast<float>(sound_speed(c));
+  P.gamma = 7.0f;
+  P.tait_b = P.c0 * P.c0 * P.rho0 / P.gamma;
+  P.mass = static_cast<float>(c.rho0 * std::pow(c.dp, c.dim));
+  P.viscosity = static_cast<float>(c.viscosity);
+  P.artificial_viscosity = static_cast<float>(c.artificial_viscosity);
+  P.delta = static_cast<float>(c.delta);
+  P.diffusion = c.diffusion;
+  P.density_mode = c.density_mode;
+  for (int k = 0; k < 3; ++k) {
+    P.gravity[k] = static_cast<float>(c.gravity[k]);
+    P.body_force[k] = static_cast<float>(c.body_force[k]);
+  }
+  return P;
+}
+
+}  // namespace spate

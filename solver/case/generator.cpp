@@ -1,0 +1,181 @@
+#include "generator.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "../physics/eos.hpp"
+
+namespace spate {
+
+namespace {
+
+// The lattice of particle sites: site i along an axis sits at origin + (i + 1/2) dp; the tank
+// interior holds sites [0, n), walls sit at [-layers, 0) and [n, n + layers).
+struct Sites {
+  int dim;
+  double dp;
+  Vec3d origin;
+  int n[3] = {1, 1, 1};
+  int lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};  // all sites, walls included
+
+  explicit Sites(const Case& c) : dim(c.dim), dp(c.dp), origin(c.tank_origin) {
+    for (int a = 0; a < dim; ++a) {
+      n[a] = static_cast<int>(std::lround(c.tank_size[a] / dp));
+      const bool walls = !c.periodic[a];
+      lo[a] = walls ? -c.wall_layers : 0;
+      const bool top = a == dim - 1;
+      hi[a] = n[a] + (walls && !(top && c.open_top) ? c.wall_layers : 0);
+    }
+  }
+  double coord(int a, int i) const { return origin[a] + (i + 0.5) * dp; }
+  int first_inside(int a, double v) const { return static_cast<int>(std::lround((v - origin[a]) / dp)); }
+};
+
+bool in_box(const Box& b, const double x[3], int dim) {
+  for (int a = 0; a < dim; ++a)
+    if (x[a] < b.min[a] || x[a] > b.max[a]) return false;
+  return true;
+}
+
+// Which kind of particle, if any, sits at site (i, j, k). Returns false for an empty site.
+bool classify(const Case& c, const Sites& s, const int idx[3], std::uint8_t& kind) {
+  const int d = c.dim;
+  bool interior = true;
+  for (int a = 0; a < d; ++a) interior = interior && idx[a] >= 0 && idx[a] < s.n[a];
+  if (!interior) {
+    kind = kTankWall;
+    return true;
+  }
+  double x[3] = {0, 0, 0};
+  for (int a = 0; a < d; ++a) x[a] = s.coord(a, idx[a]);
+  for (std::size_t k = 0; k < c.solids.size(); ++k) {
+    const SolidSpec& solid = c.solids[k];
+    if (!in_box(solid.box, x, d)) continue;
+    if (solid.hollow) {
+      // Keep sites within wall_layers of a face that touches fluid (the floor face does not).
+      double depth = 1e30;
+      for (int a = 0; a < d; ++a) {
+        depth = std::min(depth, x[a] - solid.box.min[a] + (a == d - 1 ? 1e30 : 0.0));
+        depth = std::min(depth, solid.box.max[a] - x[a]);
+      }
+      if (depth > c.wall_layers * c.dp) return false;
+    }
+    kind = static_cast<std::uint8_t>(kSolidBase + k);
+    return true;
+  }
+  for (auto& b : c.fluid_blocks)
+    if (in_box(b, x, d)) {
+      kind = kFluid;
+      return true;
+    }
+  if (x[d - 1] - c.tank_origin[d - 1] < c.wet_bed) {
+    kind = kFluid;
+    return true;
+  }
+  return false;
+}
+
+template <class Visit>
+void for_each_site(const Case& c, Visit&& visit) {
+  const Sites s(c);
+  int idx[3];
+  for (idx[0] = s.lo[0]; idx[0] < s.hi[0]; ++idx[0])
+    for (idx[1] = s.lo[1]; idx[1] < s.hi[1]; ++idx[1])
+      for (idx[2] = s.lo[2]; idx[2] < s.hi[2]; ++idx[2]) {
+        std::uint8_t kind;
+        if (classify(c, s, idx, kind)) visit(s, idx, kind);
+      }
+}
+
+}  // namespace
+
+Lattice make_lattice(const Case& c) {
+  Lattice L;
+  L.dim = c.dim;
+  // 0.1% above the support so that rounding in cell_of never hides a neighbour.
+  const double support = 2.0 * c.smoothing_ratio * c.dp * 1.001;
+  const Sites s(c);
+  for (int a = 0; a < 3; ++a) {
+    if (a >= c.dim) {
+      L.cells[a] = 1;
+      L.cell_size[a] = 1.0f;
+      L.inv_cell[a] = 1.0f;
+      continue;
+    }
+    double lo = s.origin[a] + s.lo[a] * c.dp;
+    double hi = s.origin[a] + s.hi[a] * c.dp;
+    if (c.periodic[a]) {
+      const double period = c.tank_size[a];
+      const int cells = static_cast<int>(std::floor(period / support));
+      if (cells < 3)
+        throw CaseError(c.file + ": key 'tank.size': the periodic extent holds " + std::to_string(cells) +
+                        " cells of one kernel support; at least 3 are needed");
+      L.periodic[a] = true;
+      L.period[a] = static_cast<float>(period);
+      L.origin[a] = static_cast<float>(c.tank_origin[a]);
+      L.cells[a] = cells;
+      L.cell_size[a] = static_cast<float>(period / cells);
+    } else {
+      if (a == c.dim - 1 && c.open_top) hi += c.headroom * c.tank_size[a];
+      // One spare cell on either side: particles may never reach it, but a wall layer at the edge
+      // must not be in the outermost column where a slab would have no room for its halo.
+      L.origin[a] = static_cast<float>(lo - support);
+      L.cells[a] = static_cast<int>(std::ceil((hi - lo) / support)) + 2;
+      L.cell_size[a] = static_cast<float>(support);
+    }
+    L.inv_cell[a] = 1.0f / L.cell_size[a];
+  }
+  return L;
+}
+
+ParticleCounts count_particles(const Case& c) {
+  ParticleCounts n;
+  for_each_site(c, [&](const Sites&, const int*, std::uint8_t kind) { (kind == kFluid ? n.fluid : n.wall)++; });
+  return n;
+}
+
+// Height of the free surface above site x at rest: the top of the highest fluid block over it, or
+// the wet bed.
+double rest_surface(const Case& c, const float* x) {
+  const int v = c.dim - 1;
+  double top = c.tank_origin[v] + c.wet_bed;
+  for (auto& b : c.fluid_blocks) {
+    bool over = true;
+    for (int a = 0; a < v; ++a) over = over && x[a] >= b.min[a] && x[a] <= b.max[a];
+    if (over) top = std::max(top, b.max[v]);
+  }
+  return top;
+}
+
+ParticleStore generate_particles(const Case& c) {
+  const ParticleCounts n = count_particles(c);
+  if (n.fluid == 0) throw CaseError(c.file + ": the case generates no fluid particles (check fluid_blocks, wet_bed and dp)");
+  if (n.total() > 0xfffffff0LL) throw CaseError(c.file + ": key 'dp': more than 4e9 particles");
+  ParticleStore p(c.dim);
+  p.resize(static_cast<std::size_t>(n.total()));
+  const PhysicsParams P = physics_params(c);
+  const float rho0 = P.rho0;
+  double g = 0;
+  for (int a = 0; a < c.dim; ++a) g += c.gravity[a] * c.gravity[a];
+  g = std::sqrt(g);
+  std::size_t i = 0;
+  for_each_site(c, [&](const Sites& s, const int* idx, std::uint8_t kind) {
+    for (int a = 0; a < c.dim; ++a) p.pos[a][i] = static_cast<float>(s.coord(a, idx[a]));
+    p.kind[i] = kind;
+    p.id[i] = static_cast<std::uint32_t>(i);
+    p.density[i] = rho0;
+    if (kind == kFluid) {
+      // Start from hydrostatic balance (inverse of eq. 9) rather than from a uniform density that
+      // would first have to collapse into it.
+      float x[3] = {0, 0, 0};
+      for (int a = 0; a < c.dim; ++a) x[a] = p.pos[a][i];
+      const double depth = std::max(0.0, rest_surface(c, x) - x[c.dim - 1]);
+      p.density[i] = tait_density(static_cast<float>(rho0 * g * depth), rho0, P.tait_b);
+    }
+    ++i;
+  });
+  p.set_owned(p.size());
+  return p;
+}
+
+}  // namespace spate

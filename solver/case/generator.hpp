@@ -1,0 +1,24 @@
+#pragma once
+// Case -> particles on the lattice (i + 1/2) dp: fluid blocks, wet bed, solids (hollow shells of
+// wall particles) and the tank's wall layers; and the global cell lattice that holds them.
+#include <cstdint>
+
+#include "../grid/lattice.hpp"
+#include "../particles/particle_store.hpp"
+#include "case.hpp"
+
+namespace spate {
+
+struct ParticleCounts {
+  std::int64_t fluid = 0;
+  std::int64_t wall = 0;  // tank walls and solids
+  std::int64_t total() const { return fluid + wall; }
+};
+
+Lattice make_lattice(const Case& c);
+// Counts without allocating (spate info on the paper's 12M-particle case).
+ParticleCounts count_particles(const Case& c);
+// All particles, ids 0..n-1 in generation order, all owned.
+ParticleStore generate_particles(const Case& c);
+
+}  // namespace spate

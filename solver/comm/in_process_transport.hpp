@@ -1,0 +1,41 @@
+#pragma once
+// Slabs that live in one process as worker threads: buffers are copied with memcpy through a shared
+// hub, collectives combine per-slab slots behind a barrier. A worker that fails calls
+// `abandon()`: the others see PeerFailure at their next collective instead of waiting forever.
+#include <atomic>
+#include <barrier>
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+#include "transport.hpp"
+
+namespace spate {
+
+struct PeerFailure : std::runtime_error {
+  PeerFailure() : std::runtime_error("another slab failed") {}
+};
+
+class InProcessHub {
+ public:
+  explicit InProcessHub(int slabs);
+  int slabs() const { return slabs_; }
+  std::unique_ptr<SlabTransport> endpoint(int slab, bool periodic_x);
+  void abandon();  // called by a failing worker, once
+  bool failed() const { return failed_.load(); }
+
+ private:
+  friend class InProcessTransport;
+  void wait();
+
+  int slabs_;
+  std::barrier<> barrier_;
+  std::atomic<bool> failed_{false};
+  std::vector<Bytes> to_left_, to_right_;
+  std::vector<double> dslot_;
+  std::vector<std::int64_t> islot_;
+  std::vector<std::vector<std::int64_t>> vslot_;
+  std::vector<Bytes> gslot_;
+};
+
+}  // namespace spate

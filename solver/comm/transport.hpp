@@ -1,0 +1,44 @@
+#pragma once
+// How slabs talk: neighbour exchange of byte buffers and global reductions. `solver/domain` decides
+// what to send; a transport only moves bytes. The in-process transport (threads sharing memory) and
+// the MPI transport implement this one interface, so a run can be R ranks x D devices.
+//
+// Slabs are numbered globally left to right along x; slab s has neighbours s-1 and s+1 (wrapping
+// around when x is periodic, possibly to itself).
+#include <cstdint>
+#include <vector>
+
+namespace spate {
+
+using Bytes = std::vector<char>;
+
+class SlabTransport {
+ public:
+  virtual ~SlabTransport() = default;
+  virtual int slab() const = 0;
+  virtual int slab_count() const = 0;
+
+  // Send to_left to slab left_of(slab()) and to_right to right_of(slab()); receive what they sent
+  // this way. A slab without a neighbour on a side receives an empty buffer from it.
+  virtual void exchange(const Bytes& to_left, const Bytes& to_right, Bytes& from_left,
+                        Bytes& from_right) = 0;
+
+  // Collectives over every slab. Each is exact and independent of the number of slabs:
+  // minimum/maximum are order-free, integer sums are exact.
+  virtual double min(double v) = 0;
+  virtual double max(double v) = 0;
+  virtual std::int64_t sum(std::int64_t v) = 0;
+  // Element-wise integer sum of equal-length vectors.
+  virtual void sum(std::vector<std::int64_t>& v) = 0;
+  // Every slab's buffer, in slab order, on every slab.
+  virtual std::vector<Bytes> allgather(const Bytes& mine) = 0;
+  virtual void barrier() = 0;
+  // Any slab may raise a failure; every slab learns of it at the next call to this (no hang).
+  virtual bool any(bool flag) = 0;
+
+  bool periodic_x = false;
+  int left_of(int s) const { return s > 0 ? s - 1 : (periodic_x ? slab_count() - 1 : -1); }
+  int right_of(int s) const { return s + 1 < slab_count() ? s + 1 : (periodic_x ? 0 : -1); }
+};
+
+}  // namespace spate

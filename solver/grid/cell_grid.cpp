@@ -1,0 +1,142 @@
+#include "cell_grid.hpp"
+
+#include <algorithm>
+#include <numeric>
+#include <stdexcept>
+
+namespace spate {
+
+void CellGrid::configure(const Lattice& lattice, int owned_lo, int owned_hi) {
+  lattice_ = lattice;
+  owned_lo_ = owned_lo;
+  owned_hi_ = owned_hi;
+  const int d = lattice.dim;
+  for (int a = 0; a < 3; ++a) {
+    if (a >= d) {
+      lo_[a] = 0;
+      hi_[a] = 1;
+      continue;
+    }
+    const int l = a == 0 ? owned_lo : 0;
+    const int h = a == 0 ? owned_hi : lattice.cells[a];
+    // One ghost layer on every side: x halos always (a neighbour or a periodic image may be
+    // there), y/z layers exist only where periodic images are made.
+    const bool layer = a == 0 || lattice.periodic[a];
+    lo_[a] = layer ? l - 1 : l;
+    hi_[a] = layer ? h + 1 : h;
+  }
+  for (int a = 0; a < 3; ++a) box_[a] = hi_[a] - lo_[a];
+  const int ny = d >= 2 ? lattice.cells[1] : 1;
+  const int nz = d >= 3 ? lattice.cells[2] : 1;
+  owned_cells_ = static_cast<std::uint32_t>((owned_hi - owned_lo) * ny * nz);
+  ghost_cells_ = static_cast<std::uint32_t>(box_[0] * box_[1] * box_[2]);
+  start_.assign(cell_count() + 1, 0);
+  view_ = CellGridView{};
+  view_.dim = d;
+  for (int a = 0; a < 3; ++a) {
+    view_.cells[a] = a < d ? lattice.cells[a] : 1;
+    view_.lo[a] = lo_[a];
+    view_.box[a] = box_[a];
+  }
+  view_.owned_lo = owned_lo;
+  view_.owned_hi = owned_hi;
+  view_.owned_cells = owned_cells_;
+  view_.start = start_.data();
+}
+
+std::uint32_t CellGrid::local_cell(int ix, int iy, int iz) const { return view_.local_cell(ix, iy, iz); }
+
+std::uint32_t CellGrid::local_cell_of(const float* const pos[3], std::size_t i) const {
+  int c[3] = {0, 0, 0};
+  for (int a = 0; a < lattice_.dim; ++a) c[a] = lattice_.cell_of(pos[a][i], a);
+  return local_cell(c[0], c[1], c[2]);
+}
+
+
+void CellGrid::global_coords(std::uint32_t c, int out[3]) const {
+  const int ny = lattice_.dim >= 2 ? lattice_.cells[1] : 1;
+  const int nz = lattice_.dim >= 3 ? lattice_.cells[2] : 1;
+  if (c < owned_cells_) {
+    out[2] = static_cast<int>(c % nz);
+    out[1] = static_cast<int>((c / nz) % ny);
+    out[0] = static_cast<int>(c / (nz * ny)) + owned_lo_;
+    return;
+  }
+  const std::uint32_t g = c - owned_cells_;
+  out[2] = static_cast<int>(g % box_[2]) + lo_[2];
+  out[1] = static_cast<int>((g / box_[2]) % box_[1]) + lo_[1];
+  out[0] = static_cast<int>(g / (box_[2] * box_[1])) + lo_[0];
+}
+
+void CellGrid::sort(ParticleStore& particles) {
+  sort_owned(particles);
+  sort_ghosts(particles);
+}
+
+void CellGrid::sort_owned(ParticleStore& particles) {
+  particles.resize(particles.owned());  // any ghosts are stale once owned particles move
+  keys_.resize(particles.size());
+  sort_range(particles, 0, particles.owned());
+  ghost_perm_.clear();
+  rebuild_table();
+}
+
+void CellGrid::sort_ghosts(ParticleStore& particles) {
+  keys_.resize(particles.size());
+  sort_range(particles, particles.owned(), particles.size());
+  ghost_perm_.assign(perm_.begin(), perm_.begin() + static_cast<std::ptrdiff_t>(particles.ghosts()));
+  rebuild_table();
+}
+
+void CellGrid::rebuild_table() {
+  std::fill(start_.begin(), start_.end(), 0u);
+  for (const std::uint32_t k : keys_) ++start_[k + 1];
+  for (std::size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+}
+
+// Counting sort of [first, last) by cell, then by id inside each cell (insertion sort: the order
+// from the previous step is nearly right). The fields and keys_ follow the permutation.
+void CellGrid::sort_range(ParticleStore& particles, std::size_t first, std::size_t last) {
+  const std::size_t n = last - first;
+  perm_.resize(n);
+  if (n == 0) return;
+  const float* pos[3] = {particles.pos[0].data(), particles.pos[1].data(),
+                         lattice_.dim == 3 ? particles.pos[2].data() : nullptr};
+  std::size_t outside = 0;
+#pragma omp parallel for schedule(static) reduction(+ : outside)
+  for (std::size_t i = first; i < last; ++i) {
+    keys_[i] = local_cell_of(pos, i);
+    outside += keys_[i] == kOutside;
+  }
+  // The simulation stops runs with particles outside the domain before sorting; reaching this is a
+  // bug in ownership, not bad input.
+  if (outside) throw std::logic_error("CellGrid::sort: particle outside the local grid");
+
+  const std::uint32_t cells = cell_count();
+  counts_.assign(cells + 1, 0u);
+  for (std::size_t i = first; i < last; ++i) ++counts_[keys_[i] + 1];
+  for (std::uint32_t c = 0; c < cells; ++c) counts_[c + 1] += counts_[c];
+  for (std::size_t i = first; i < last; ++i) perm_[counts_[keys_[i]]++] = static_cast<std::uint32_t>(i - first);
+  // counts_[c] is now the end of cell c within the range.
+  const std::uint32_t* ids = particles.id.data() + first;
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::int64_t c = 0; c < static_cast<std::int64_t>(cells); ++c) {
+    const std::uint32_t e = counts_[c];
+    const std::uint32_t b = c == 0 ? 0u : counts_[c - 1];
+    for (std::uint32_t k = b + 1; k < e; ++k) {
+      const std::uint32_t v = perm_[k];
+      std::uint32_t m = k;
+      while (m > b && ids[perm_[m - 1]] > ids[v]) {
+        perm_[m] = perm_[m - 1];
+        --m;
+      }
+      perm_[m] = v;
+    }
+  }
+  particles.permute(first, perm_);
+  sorted_keys_.resize(n);
+  for (std::size_t k = 0; k < n; ++k) sorted_keys_[k] = keys_[first + perm_[k]];
+  std::copy(sorted_keys_.begin(), sorted_keys_.end(), keys_.begin() + static_cast<std::ptrdiff_t>(first));
+}
+
+}  // namespace spate

@@ -1,0 +1,73 @@
+#pragma once
+// The local cell grid of one slab: the owned cell block (x columns [owned_lo, owned_hi), every y
+// and z cell) plus one ghost layer around it (x halo columns, periodic image cells). Owned cells are
+// numbered first, x slowest then y then z, so owned particles are contiguous after the sort and
+// z-consecutive cells are contiguous in memory; ghost cells follow, in the same order.
+//
+// Particles are sorted by (cell, id): a pure function of the particle state, so the neighbour
+// order, and therefore every floating-point sum, is the same however the domain is split.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "../particles/particle_store.hpp"
+#include "cell_grid_view.hpp"
+#include "lattice.hpp"
+
+namespace spate {
+
+class CellGrid {
+ public:
+  static constexpr std::uint32_t kOutside = 0xffffffffu;
+
+  // x columns [owned_lo, owned_hi) are owned; ghosts may sit one cell beyond every face that has a
+  // neighbour or a periodic image.
+  void configure(const Lattice& lattice, int owned_lo, int owned_hi);
+
+  const Lattice& lattice() const { return lattice_; }
+  int owned_lo() const { return owned_lo_; }
+  int owned_hi() const { return owned_hi_; }
+  std::uint32_t cell_count() const { return owned_cells_ + ghost_cells_; }
+  std::uint32_t owned_cell_count() const { return owned_cells_; }
+
+  // Local index of global cell (ix, iy, iz), or kOutside if it is not in this grid.
+  std::uint32_t local_cell(int ix, int iy, int iz) const;
+  std::uint32_t local_cell_of(const float* const pos[3], std::size_t i) const;
+  bool owns_column(int ix) const { return ix >= owned_lo_ && ix < owned_hi_; }
+
+  // Sort owned particles [0, owned) then ghosts [owned, size) by (cell, id) and fill the cell
+  // table. Particles outside the grid are a logic error (the simulation stops such runs first).
+  void sort(ParticleStore& particles);
+  // The two halves of sort(): owned particles (dropping ghosts), then the ghosts appended since.
+  void sort_owned(ParticleStore& particles);
+  void sort_ghosts(ParticleStore& particles);
+
+  // Particles of local cell c are [begin(c), end(c)).
+  std::uint32_t begin(std::uint32_t c) const { return start_[c]; }
+  std::uint32_t end(std::uint32_t c) const { return start_[c + 1]; }
+  const std::vector<std::uint32_t>& starts() const { return start_; }
+
+  // The global cell coordinates of local cell c.
+  void global_coords(std::uint32_t c, int out[3]) const;
+
+  const CellGridView& view() const { return view_; }
+  // After sort(): ghost slot k (counted from owned()) holds the ghost that was at owned() + perm[k].
+  const std::vector<std::uint32_t>& ghost_permutation() const { return ghost_perm_; }
+
+  std::size_t bytes() const { return start_.capacity() * sizeof(std::uint32_t); }
+
+ private:
+  void sort_range(ParticleStore& particles, std::size_t first, std::size_t last);
+  void rebuild_table();
+
+  Lattice lattice_;
+  int owned_lo_ = 0, owned_hi_ = 0;
+  int lo_[3] = {0, 0, 0}, hi_[3] = {0, 0, 0};  // full local box including ghost layers
+  int box_[3] = {0, 0, 0};
+  std::uint32_t owned_cells_ = 0, ghost_cells_ = 0;
+  std::vector<std::uint32_t> start_;  // cell_count + 1 prefix offsets
+  CellGridView view_{};
+  std::vector<std::uint32_t> keys_, sorted_keys_, perm_, counts_, ghost_perm_;
+};
+
+}  // namespace spate

@@ -1,0 +1,50 @@
+#include "run_summary.hpp"
+
+#include <sys/resource.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+namespace spate {
+
+std::int64_t peak_rss_bytes() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<std::int64_t>(u.ru_maxrss) * 1024;
+}
+
+void write_summary(const std::filesystem::path& path, const Case& c, const PhysicsParams& P, const RunResult& r,
+                   const SummaryExtras& x) {
+  nlohmann::ordered_json j;
+  j["case"] = c.name;
+  j["case_file"] = c.file;
+  j["dimensions"] = c.dim;
+  j["particles"] = {{"fluid", r.particles.fluid}, {"wall", r.particles.wall}, {"total", r.particles.total()}};
+  j["steps"] = r.steps;
+  j["final_step"] = r.final_step;
+  j["simulated_time"] = r.simulated_time;
+  j["wall_seconds"] = r.wall_seconds;
+  j["particle_steps_per_second"] = r.wall_seconds > 0 ? static_cast<double>(r.steps) * r.particles.total() / r.wall_seconds : 0.0;
+  j["peak_rss_bytes"] = peak_rss_bytes();
+  j["bytes_per_particle"] = r.bytes_per_particle;
+  j["threads"] = x.threads;
+  j["devices"] = x.devices;
+  j["ranks"] = x.ranks;
+  j["backend"] = x.backend;
+  j["dp"] = c.dp;
+  j["smoothing_length"] = P.h;
+  j["sound_speed"] = P.c0;
+  j["device_particles"] = r.slab_particles;
+  j["imbalance"] = r.imbalance;
+  j["imbalance_history"] = r.imbalance_history;
+  j["ghost_particles"] = r.ghosts;
+  j["last_checkpoint"] = r.last_checkpoint.string();
+  j["insitu_failures"] = r.insitu_failures;
+  j["exit_status"] = r.exit_status;
+  j["exit_code"] = r.exit_code;
+  if (!r.message.empty()) j["message"] = r.message;
+  std::filesystem::create_directories(path.parent_path());
+  std::ofstream(path) << j.dump(2) << '\n';
+}
+
+}  // namespace spate

@@ -1,0 +1,34 @@
+#pragma once
+// Packing particles into byte buffers for halos, migration and checkpoint gathers. A buffer is a
+// particle count followed by one block per selected field, so unpacking is a memcpy per field.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "particle_store.hpp"
+
+namespace spate {
+
+using Bytes = std::vector<char>;
+
+enum class FieldSet {
+  All,       // everything: migration, checkpoints
+  Ghost,     // what a ghost needs to act as a neighbour
+  Refresh,   // ghost fields that change after the halo is built (not position, id, kind)
+};
+
+bool in_set(const FieldRef& f, FieldSet set);
+
+struct Shift {
+  int axis = -1;        // no shift
+  float offset = 0.0f;  // added to pos[axis] (periodic images)
+};
+
+Bytes pack_particles(ParticleStore& p, std::span<const std::uint32_t> indices, FieldSet set, Shift shift = {});
+// Appends the packed particles at the end of the store; returns how many.
+std::size_t unpack_append(ParticleStore& p, const Bytes& buffer, FieldSet set);
+// Writes the packed particles into slots (one per packed particle).
+void unpack_into(ParticleStore& p, const Bytes& buffer, FieldSet set, std::span<const std::uint32_t> slots);
+std::size_t packed_count(const Bytes& buffer);
+
+}  // namespace spate

@@ -1,0 +1,71 @@
+#pragma once
+// Structure-of-arrays particle storage on the host: float32 fields, one array per component.
+// Particles [0, owned) belong to this slab, [owned, size) are ghosts (halo copies and periodic
+// images). Every array is listed in `fields()` so that sorting, migration, halos and I/O treat all
+// of them alike; a new field is added in one place.
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string_view>
+#include <vector>
+
+namespace spate {
+
+struct FieldRef {
+  std::string_view name;
+  void* data;            // points at a std::vector<T>
+  std::size_t elem_size; // sizeof(T)
+  bool ghost;            // copied into halo ghosts
+  bool checkpoint;       // part of the restartable state
+  void (*resize)(void*, std::size_t);
+  char* (*storage)(void*);
+  char* bytes() const { return storage(data); }  // start of the vector's storage
+};
+
+class ParticleStore {
+ public:
+  explicit ParticleStore(int dim = 3) : dim_(dim) {}
+
+  int dim() const { return dim_; }
+  std::size_t size() const { return id.size(); }
+  std::size_t owned() const { return owned_; }
+  std::size_t ghosts() const { return size() - owned_; }
+  void set_owned(std::size_t n) { owned_ = n; }
+
+  void resize(std::size_t n);
+  // All fields, in a fixed order. Position/velocity/acceleration components beyond dim are empty.
+  std::vector<FieldRef> fields();
+  // Bytes held per particle by the per-particle arrays (the headline memory figure).
+  std::size_t bytes_per_particle() const;
+
+  // Keep particles [first, first + perm.size()) reordered so that new slot k holds old perm[k].
+  void permute(std::size_t first, std::span<const std::uint32_t> perm);
+  // Append particle `src` of `from` (all fields) at the end.
+  void append_from(const ParticleStore& from, std::size_t src);
+  // Drop particles whose flag is set, among [0, owned); ghosts are discarded too.
+  void remove_owned_if(const std::vector<std::uint8_t>& flag);
+  // Swap old and new rates (the integrator keeps the previous step's rates).
+  void swap_rates();
+
+  // Fields (public: the drivers in backend/ read them directly; names as SPH users say them).
+  std::vector<float> pos[3];
+  std::vector<float> vel[3];
+  std::vector<float> acc[3];
+  std::vector<float> acc_prev[3];
+  std::vector<float> density;
+  std::vector<float> pressure;
+  std::vector<float> density_rate;
+  std::vector<float> density_rate_prev;
+  std::vector<std::uint32_t> id;
+  std::vector<std::uint8_t> kind;
+
+ private:
+  int dim_;
+  std::size_t owned_ = 0;
+  std::vector<std::uint32_t> scratch_u32_;
+  std::vector<float> scratch_f32_;
+  std::vector<std::uint8_t> scratch_u8_;
+};
+
+}  // namespace spate

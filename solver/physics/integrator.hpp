@@ -1,0 +1,23 @@
+#pragma once
+// Velocity-Verlet (kick-drift-kick) with a predicted velocity and density for the force evaluation,
+// one force evaluation per step (second order; symplectic for velocity-independent forces):
+//   predict:  x += dt v + dt^2/2 a;  v_pred = v + dt a;  rho_pred = rho + dt D
+//   evaluate a', D' at (x, v_pred, rho_pred)
+//   correct:  v = v_pred + dt/2 (a' - a);  rho = rho_pred + dt/2 (D' - D)
+// i.e. v^{n+1} = v^n + dt/2 (a^n + a^{n+1}), the trapezoidal kick.
+#include "host_device.hpp"
+
+namespace spate {
+
+SPATE_HD void predict_component(float& x, float& v, float a, float dt) {
+  x += dt * v + 0.5f * dt * dt * a;
+  v += dt * a;
+}
+
+SPATE_HD void predict_density(float& rho, float density_rate, float dt) { rho += dt * density_rate; }
+
+SPATE_HD void correct(float& value, float new_rate, float old_rate, float dt) {
+  value += 0.5f * dt * (new_rate - old_rate);
+}
+
+}  // namespace spate

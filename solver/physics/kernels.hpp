@@ -1,0 +1,60 @@
+#pragma once
+// Smoothing kernels with compact support 2h (design.md). Each kernel gives
+//   W(r)                       value
+//   F(r) = (dW/dr) / r         so that grad_i W_ij = F * r_ij  (no division by r in the pair loop)
+// normalised for 2D and 3D. `norm` is the dimensional constant alpha_d / h^Dim, set once per run.
+#include <cmath>
+
+#include "host_device.hpp"
+
+namespace spate {
+
+enum class KernelType { WendlandC2, CubicSpline };
+
+constexpr float kPi = 3.14159265358979323846f;
+
+// Wendland C2 (Wendland 1995; Dehnen & Aly 2012), support q = r/h in [0, 2):
+//   W = alpha_d (1 - q/2)^4 (2q + 1), alpha_2D = 7/(4 pi h^2), alpha_3D = 21/(16 pi h^3)
+struct WendlandC2 {
+  static constexpr KernelType type = KernelType::WendlandC2;
+  static float normalisation(int dim, float h) {
+    return dim == 2 ? 7.0f / (4.0f * kPi * h * h) : 21.0f / (16.0f * kPi * h * h * h);
+  }
+  SPATE_HD static float value(float q, float norm) {
+    if (q >= 2.0f) return 0.0f;
+    const float t = 1.0f - 0.5f * q;
+    const float t2 = t * t;
+    return norm * t2 * t2 * (2.0f * q + 1.0f);
+  }
+  // dW/dr = norm * (-5 q / h) (1 - q/2)^3, so F = dW/dr / r = -5 norm (1 - q/2)^3 / h^2
+  SPATE_HD static float gradient_factor(float q, float norm, float inv_h2) {
+    if (q >= 2.0f) return 0.0f;
+    const float t = 1.0f - 0.5f * q;
+    return -5.0f * norm * t * t * t * inv_h2;
+  }
+};
+
+// Cubic B-spline (Monaghan & Lattanzio 1985), alpha_2D = 10/(7 pi h^2), alpha_3D = 1/(pi h^3):
+//   W = alpha (1 - 1.5 q^2 + 0.75 q^3) for q < 1, alpha 0.25 (2 - q)^3 for 1 <= q < 2
+struct CubicSpline {
+  static constexpr KernelType type = KernelType::CubicSpline;
+  static float normalisation(int dim, float h) {
+    return dim == 2 ? 10.0f / (7.0f * kPi * h * h) : 1.0f / (kPi * h * h * h);
+  }
+  SPATE_HD static float value(float q, float norm) {
+    if (q >= 2.0f) return 0.0f;
+    if (q < 1.0f) return norm * (1.0f - 1.5f * q * q + 0.75f * q * q * q);
+    const float t = 2.0f - q;
+    return norm * 0.25f * t * t * t;
+  }
+  // dW/dq = alpha (-3q + 2.25 q^2) for q<1, -0.75 alpha (2-q)^2 otherwise; F = dW/dq / (h r) = dW/dq / (q h^2)
+  SPATE_HD static float gradient_factor(float q, float norm, float inv_h2) {
+    if (q >= 2.0f) return 0.0f;
+    if (q < 1.0f) return norm * (-3.0f + 2.25f * q) * inv_h2;
+    if (q <= 0.0f) return 0.0f;
+    const float t = 2.0f - q;
+    return -0.75f * norm * t * t / q * inv_h2;
+  }
+};
+
+}  // namespace spate

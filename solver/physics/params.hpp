@@ -1,0 +1,42 @@
+#pragma once
+// Physical and numerical constants of a run, in the form the pair loops want them (derived once
+// from the case; plain data so that it can be passed by value to a CUDA kernel).
+#include <cstdint>
+
+#include "kernels.hpp"
+
+namespace spate {
+
+enum class DensityMode : std::uint8_t { Continuity, Summation };
+enum class DensityDiffusion : std::uint8_t { None, MolteniColagrossi, Fourtakas };
+
+// Particle kinds; values >= kSolidBase name solid body (kind - kSolidBase) for force probes.
+enum : std::uint8_t { kFluid = 0, kTankWall = 1, kSolidBase = 2 };
+SPATE_HD bool is_fluid(std::uint8_t kind) { return kind == kFluid; }
+
+struct PhysicsParams {
+  int dim = 3;
+  KernelType kernel = KernelType::WendlandC2;
+  float dp = 0.01f;              // particle spacing [m]
+  float h = 0.013f;              // smoothing length [m]; support is 2h
+  float inv_h = 1.0f / 0.013f;
+  float inv_h2 = 1.0f / (0.013f * 0.013f);
+  float support2 = 4.0f * 0.013f * 0.013f;
+  float kernel_norm = 0.0f;      // alpha_d / h^dim
+  float eta2 = 0.01f * 0.013f * 0.013f;  // 0.01 h^2, keeps r_ij . gradW / (r^2 + eta^2) finite
+  float rho0 = 1000.0f;          // reference density [kg/m3]
+  float c0 = 20.0f;              // artificial sound speed [m/s]
+  float gamma = 7.0f;            // Tait exponent (eq. 9)
+  float tait_b = 0.0f;           // c0^2 rho0 / gamma [Pa]
+  float mass = 1.0f;             // particle mass rho0 dp^dim [kg]
+  float viscosity = 1.0e-3f;     // dynamic viscosity mu [Pa s]
+  float artificial_viscosity = 0.0f;  // Monaghan alpha; 0 switches it off
+  float delta = 0.1f;            // density diffusion coefficient
+  DensityDiffusion diffusion = DensityDiffusion::Fourtakas;
+  DensityMode density_mode = DensityMode::Continuity;
+  // Only the first `dim` components are used; the last used axis is vertical (y in 2D, z in 3D).
+  float gravity[3] = {0.0f, 0.0f, -9.81f};
+  float body_force[3] = {0.0f, 0.0f, 0.0f};  // extra acceleration on fluid (Poiseuille driving)
+};
+
+}  // namespace spate

@@ -1,0 +1,56 @@
+#pragma once
+// Wall particles after Adami, Hu & Adams (2012), J. Comput. Phys. 231:7057: each wall particle takes
+// the pressure that balances the surrounding fluid,
+//   p_w = (sum_f p_f W_wf + (g - a_w) . sum_f rho_f r_wf W_wf) / sum_f W_wf,
+// its density from the inverse EOS, and the mirrored fluid velocity (no slip) for the viscous term.
+// Static walls: a_w = 0, prescribed velocity 0. Why this and not DBC: see docs/physics.md.
+#include "eos.hpp"
+#include "fluid_interactions.hpp"
+
+namespace spate {
+
+template <int Dim>
+struct WallSums {
+  float w = 0.0f;
+  float pw = 0.0f;
+  Vec<Dim> rho_r_w = zero_vec<Dim>();
+  Vec<Dim> v_w = zero_vec<Dim>();
+};
+
+template <class Kernel, int Dim>
+SPATE_HD void accumulate_wall_pair(const PhysicsParams& P, const Vec<Dim>& x_wall,
+                                   const ParticleState<Dim>& fluid, WallSums<Dim>& s) {
+  const Vec<Dim> r = x_wall - fluid.x;  // r_wf
+  const float r2 = dot(r, r);
+  if (r2 >= P.support2) return;
+  const float w = Kernel::value(sqrtf(r2) * P.inv_h, P.kernel_norm);
+  s.w += w;
+  s.pw += fluid.p * w;
+  for (int k = 0; k < Dim; ++k) {
+    s.rho_r_w[k] += fluid.rho * w * r[k];
+    s.v_w[k] += fluid.v[k] * w;
+  }
+}
+
+template <int Dim>
+struct WallState {
+  float p;
+  float rho;
+  Vec<Dim> v;  // extrapolated no-slip velocity
+};
+
+// Negative wall pressures would glue fluid to walls at a free surface; they are clipped to zero.
+template <int Dim>
+SPATE_HD WallState<Dim> finish_wall(const PhysicsParams& P, const WallSums<Dim>& s) {
+  WallState<Dim> out{0.0f, P.rho0, zero_vec<Dim>()};
+  if (s.w <= 0.0f) return out;
+  float g_dot = 0.0f;
+  for (int k = 0; k < Dim; ++k) g_dot += (P.gravity[k] + P.body_force[k]) * s.rho_r_w[k];
+  const float p = (s.pw + g_dot) / s.w;
+  out.p = p > 0.0f ? p : 0.0f;
+  out.rho = tait_density(out.p, P.rho0, P.tait_b);
+  for (int k = 0; k < Dim; ++k) out.v[k] = -s.v_w[k] / s.w;
+  return out;
+}
+
+}  // namespace spate

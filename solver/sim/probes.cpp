@@ -1,0 +1,201 @@
+#include "probes.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "../particles/particle_access.hpp"
+#include "../physics/dispatch.hpp"
+#include "../physics/interpolation.hpp"
+
+namespace spate {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+bool owns_point(SlabWorker& w, const Vec3d& at) {
+  const int column = w.lattice().cell_of(static_cast<float>(at[0]), 0);
+  return w.grid().owns_column(column);
+}
+
+// Shepard sums of `field` (nullptr: weights only) around a point this slab owns.
+template <class Kernel, int Dim>
+ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const std::vector<float>* field) {
+  ParticleStore& p = w.particles();
+  const Lattice& L = w.lattice();
+  Vec<Dim> x;
+  int g[3] = {0, 0, 0};
+  for (int a = 0; a < Dim; ++a) {
+    x[a] = static_cast<float>(at[a]);
+    g[a] = L.cell_of(x[a], a);
+  }
+  ShepardSums<Dim> s;
+  w.grid().view().for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
+    for (std::uint32_t j = b; j < e; ++j)
+      if (is_fluid(p.kind[j]))
+        accumulate_shepard<Kernel, Dim>(w.params(), x, load_vec<Dim>(p.pos, j), p.density[j], field ? (*field)[j] : 0.0f, s);
+  });
+  return s;
+}
+
+}  // namespace
+
+double sample_pressure(SlabWorker& w, const Vec3d& at) {
+  if (!owns_point(w, at)) return kNaN;
+  double out = 0.0;
+  dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
+    const auto s = shepard<Kernel, Dim>(w, at, &w.particles().pressure);
+    out = s.weight > 0 ? s.value / s.weight : 0.0;
+  });
+  return out;
+}
+
+// The highest point of the gauge's vertical line where the fluid fill fraction reaches 0.5,
+// sampled every dp/4 from the tank floor; 0 when dry.
+double sample_height(SlabWorker& w, const Vec3d& gauge, const Case& c) {
+  const int v = c.dim - 1;
+  Vec3d at = gauge;
+  at[v] = 0;
+  if (!owns_point(w, at)) return kNaN;
+  const double floor = c.tank_origin[v];
+  const double top = w.lattice().upper(v) - 1e-6;
+  const double step = c.dp / 4;
+  double height = 0.0;
+  dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
+    for (double z = floor; z < top; z += step) {
+      at[v] = z;
+      if (shepard<Kernel, Dim>(w, at, nullptr).weight >= 0.5) height = z - floor;
+    }
+  });
+  return height;
+}
+
+double local_front(SlabWorker& w, int axis) {
+  const ParticleStore& p = w.particles();
+  double front = -std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < p.owned(); ++i)
+    if (is_fluid(p.kind[i])) front = std::max(front, static_cast<double>(p.pos[axis][i]));
+  return front;
+}
+
+namespace {
+
+// Pressure force of the fluid on every owned particle of solid `kind`, as (id, fx, fy, fz) records.
+Bytes solid_force_records(SlabWorker& w, std::uint8_t kind) {
+  Bytes out;
+  ParticleStore& p = w.particles();
+  const CellGrid& grid = w.grid();
+  dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
+    const CellGridView view = grid.view();
+    for (std::uint32_t c = 0; c < grid.owned_cell_count(); ++c) {
+      int g[3];
+      grid.global_coords(c, g);
+      for (std::uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
+        if (p.kind[i] != kind) continue;
+        const auto wi = load_state<Dim>(p, i);
+        Vec<Dim> f = zero_vec<Dim>();
+        view.for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
+          for (std::uint32_t j = b; j < e; ++j)
+            if (is_fluid(p.kind[j])) f += wall_pressure_force<Kernel, Dim>(w.params(), wi, load_state<Dim>(p, j));
+        });
+        float rec[4] = {0, 0, 0, 0};
+        std::memcpy(&rec[0], &p.id[i], sizeof(float));
+        for (int k = 0; k < Dim; ++k) rec[1 + k] = f[k];
+        out.insert(out.end(), reinterpret_cast<char*>(rec), reinterpret_cast<char*>(rec) + sizeof rec);
+      }
+    }
+  });
+  return out;
+}
+
+// Sum in id order, so the total is the same however the solid is split between slabs.
+std::vector<double> sum_by_id(const std::vector<Bytes>& parts) {
+  std::vector<std::array<float, 4>> recs;
+  for (auto& b : parts)
+    for (std::size_t k = 0; k + sizeof(float) * 4 <= b.size(); k += sizeof(float) * 4) {
+      std::array<float, 4> r;
+      std::memcpy(r.data(), b.data() + k, sizeof r);
+      recs.push_back(r);
+    }
+  auto id_of = [](const std::array<float, 4>& r) {
+    std::uint32_t id;
+    std::memcpy(&id, &r[0], sizeof id);
+    return id;
+  };
+  std::sort(recs.begin(), recs.end(), [&](auto& a, auto& b) { return id_of(a) < id_of(b); });
+  std::vector<double> f(3, 0.0);
+  for (auto& r : recs)
+    for (int k = 0; k < 3; ++k) f[k] += r[1 + k];
+  return f;
+}
+
+}  // namespace
+
+ProbeSet::ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, bool append)
+    : case_(c), probes_(c.probes) {
+  if (!writer || probes_.empty()) return;
+  const auto dir = out_dir / "probes";
+  std::filesystem::create_directories(dir);
+  for (auto& p : probes_) {
+    const auto path = dir / (p.name + ".csv");
+    const bool fresh = !append || !std::filesystem::exists(path);
+    auto f = std::make_unique<std::ofstream>(path, fresh ? std::ios::trunc : std::ios::app);
+    f->precision(9);
+    if (fresh) {
+      *f << "time,step,";
+      switch (p.type) {
+        case ProbeType::Pressure: *f << "pressure\n"; break;
+        case ProbeType::Height: *f << "height\n"; break;
+        case ProbeType::Force: *f << (c.dim == 2 ? "fx,fy\n" : "fx,fy,fz\n"); break;
+        case ProbeType::Front: *f << "front\n"; break;
+      }
+    }
+    files_.push_back(std::move(f));
+  }
+}
+
+std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step, SlabWorker& w) {
+  std::vector<std::vector<double>> rows;
+  SlabTransport& t = w.transport();
+  for (auto& p : probes_) {
+    std::vector<double> row;
+    switch (p.type) {
+      case ProbeType::Pressure:
+      case ProbeType::Height: {
+        const double mine = p.type == ProbeType::Pressure ? sample_pressure(w, p.position) : sample_height(w, p.position, case_);
+        // Exactly one slab owns the point; NaN elsewhere. max() ignores nothing, so share by gather.
+        Bytes b(sizeof mine);
+        std::memcpy(b.data(), &mine, sizeof mine);
+        double value = 0.0;
+        for (auto& part : t.allgather(b)) {
+          double v;
+          std::memcpy(&v, part.data(), sizeof v);
+          if (!std::isnan(v)) value = v;
+        }
+        row.push_back(value);
+        break;
+      }
+      case ProbeType::Force: {
+        std::uint8_t kind = kSolidBase;
+        for (std::size_t k = 0; k < case_.solids.size(); ++k)
+          if (case_.solids[k].name == p.solid) kind = static_cast<std::uint8_t>(kSolidBase + k);
+        row = sum_by_id(t.allgather(solid_force_records(w, kind)));
+        row.resize(case_.dim);
+        break;
+      }
+      case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis))); break;
+    }
+    rows.push_back(row);
+  }
+  for (std::size_t k = 0; k < files_.size(); ++k) {
+    *files_[k] << time << ',' << step;
+    for (double v : rows[k]) *files_[k] << ',' << v;
+    *files_[k] << '\n';
+    files_[k]->flush();
+  }
+  return rows;
+}
+
+}  // namespace spate

@@ -1,0 +1,35 @@
+#pragma once
+// Probes written as CSV time series (probes/<name>.csv): pressure at a point (Shepard average of the
+// fluid), water height at a gauge, total pressure force on a named solid, surge-front position.
+// Sampling is collective; every value is independent of the split (owner-computed or exact).
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <vector>
+
+#include "../case/case.hpp"
+#include "slab_worker.hpp"
+
+namespace spate {
+
+class ProbeSet {
+ public:
+  // `writer`: this slab writes the files. `append`: continue existing files (restart).
+  ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, bool append);
+  // Collective over all slabs. Returns the sampled row values in probe order (for tests).
+  std::vector<std::vector<double>> sample(double time, std::int64_t step, SlabWorker& w);
+  bool empty() const { return probes_.empty(); }
+
+ private:
+  const Case& case_;
+  std::vector<ProbeSpec> probes_;
+  std::vector<std::unique_ptr<std::ofstream>> files_;
+};
+
+// Single probe evaluations on one slab (exposed for tests). NaN when this slab does not own the point.
+double sample_pressure(SlabWorker& w, const Vec3d& at);
+double sample_height(SlabWorker& w, const Vec3d& gauge, const Case& c);
+double local_front(SlabWorker& w, int axis);
+
+}  // namespace spate

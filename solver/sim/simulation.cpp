@@ -1,0 +1,316 @@
+#include "simulation.hpp"
+
+#include <omp.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fmt/format.h>
+#include <mutex>
+#include <numeric>
+#include <thread>
+
+#include "../comm/in_process_transport.hpp"
+#include "../io/checkpoint.hpp"
+#include "../io/vtk_snapshot.hpp"
+#include "../particles/particle_pack.hpp"
+#include "probes.hpp"
+#include "slab_worker.hpp"
+
+namespace spate {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr int kMinColumnsPerSlab = 3;
+
+std::string step_name(std::int64_t step) { return fmt::format("step_{:08d}", step); }
+
+// Everything the worker threads of this process share. Written by the writer slab only.
+struct Shared {
+  const Case& c;
+  const RunOptions& opts;
+  Lattice lattice;
+  PhysicsParams params;
+  ParticleStore initial;
+  CheckpointMeta start;
+  bool restarted = false;
+  SlabLayout layout;
+  int omp_threads = 1;
+  RunResult result;
+  std::mutex result_mutex;
+  std::vector<SlabWorker*> workers;  // local slabs, for in-situ views
+};
+
+// Gathers every particle, ordered by id, on every slab (collective). Checkpoints and comparisons
+// are independent of the split because of this order.
+ParticleStore gather_by_id(SlabWorker& w) {
+  ParticleStore& p = w.particles();
+  std::vector<std::uint32_t> all(p.owned());
+  std::iota(all.begin(), all.end(), 0u);
+  ParticleStore merged(p.dim());
+  for (auto& part : w.transport().allgather(pack_particles(p, all, FieldSet::All))) unpack_append(merged, part, FieldSet::All);
+  merged.set_owned(merged.size());
+  std::vector<std::uint32_t> order(merged.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return merged.id[a] < merged.id[b]; });
+  merged.permute(0, order);
+  return merged;
+}
+
+class Progress {
+ public:
+  Progress(bool enabled, std::int64_t particles) : enabled_(enabled), particles_(particles), tty_(isatty(STDOUT_FILENO)) {}
+  void update(std::int64_t steps, double time, double end_time, double start_time, bool force = false) {
+    if (!enabled_) return;
+    const auto now = Clock::now();
+    const double since = std::chrono::duration<double>(now - last_).count();
+    if (!force && since < (tty_ ? 1.0 : 10.0)) return;
+    last_ = now;
+    const double wall = std::chrono::duration<double>(now - begin_).count();
+    const double sps = wall > 0 ? steps / wall : 0.0;
+    const double done = (time - start_time) / std::max(1e-300, end_time - start_time);
+    const double eta = done > 0 ? wall * (1 - done) / done : 0.0;
+    const std::string line = fmt::format("t = {:.5f} s  step {}  {:.2f} steps/s  {:.3g} particle-steps/s  ETA {:.0f} s",
+                                         time, steps, sps, sps * particles_, eta);
+    if (tty_) std::printf("\r%s   ", line.c_str());
+    else std::printf("%s\n", line.c_str());
+    std::fflush(stdout);
+    wrote_tty_ = tty_;
+  }
+  void finish() {
+    if (enabled_ && wrote_tty_) std::printf("\n");
+  }
+
+ private:
+  bool enabled_;
+  std::int64_t particles_;
+  bool tty_;
+  bool wrote_tty_ = false;
+  Clock::time_point begin_ = Clock::now();
+  Clock::time_point last_ = Clock::now();
+};
+
+class Worker {
+ public:
+  Worker(Shared& s, SlabTransport& t) : s_(s), t_(t), w_(s.lattice, s.params, t) {}
+
+  void run() {
+    omp_set_num_threads(s_.omp_threads);
+    const bool writer = t_.slab() == 0;
+    w_.take_share(s_.initial, s_.layout);
+    {
+      std::lock_guard lock(s_.result_mutex);
+      s_.workers[t_.slab()] = &w_;
+    }
+    t_.barrier();  // every slab has its share; `initial` may be dropped by the main thread after join
+    w_.prepare(!s_.restarted);
+
+    ProbeSet probes(s_.c, s_.opts.out_dir, writer, s_.restarted);
+    PvdIndex pvd(s_.opts.out_dir / "particles.pvd");
+    double time = s_.start.time;
+    std::int64_t step = s_.start.step;
+    if (s_.restarted && writer) pvd.load_existing(time);
+    double dt = s_.restarted ? s_.start.dt : next_time_step();
+
+    const double end_time = s_.opts.until.value_or(s_.c.end_time);
+    const int checkpoint_every = s_.opts.checkpoint_every.value_or(s_.c.checkpoint_every);
+    const double out_dt = s_.c.output_interval;
+    double next_output = out_dt > 0 ? (s_.restarted ? (std::floor(time / out_dt + 1e-9) + 1) * out_dt : time) : INFINITY;
+    double next_probe = s_.restarted ? time + s_.c.probe_interval : time;
+    std::int64_t taken = 0;
+    std::int64_t last_snapshot = -1;
+    const auto t0 = Clock::now();
+    const std::int64_t total_particles = t_.sum(static_cast<std::int64_t>(w_.particles().owned()));
+    Progress progress(writer && !s_.opts.quiet, total_particles);
+    std::filesystem::path last_checkpoint;
+    std::vector<double> imbalance_log;
+
+    auto output = [&](bool final_step) {
+      if (!probes.empty() && (s_.c.probe_interval <= 0 || time >= next_probe - 1e-12 || final_step)) {
+        probes.sample(time, step, w_);
+        while (next_probe <= time + 1e-12) next_probe += std::max(s_.c.probe_interval, 1e-300);
+      }
+      if (out_dt > 0 && (time >= next_output - 1e-9 * out_dt || (final_step && last_snapshot != step))) {
+        write_snapshot(pvd, time, step, "snapshots");
+        last_snapshot = step;
+        while (next_output <= time + 1e-9 * out_dt) next_output += out_dt;
+      }
+    };
+
+    if (!s_.restarted) output(false);
+    std::string unstable;
+    while (true) {
+      if (s_.opts.steps ? taken >= *s_.opts.steps : time >= end_time - 1e-12) break;
+      if (s_.c.balance_every > 0 && t_.slab_count() > 1 && taken > 0 && step % s_.c.balance_every == 0)
+        imbalance_log.push_back(w_.rebalance(kMinColumnsPerSlab));
+      if (auto fault = w_.step(static_cast<float>(dt))) {
+        unstable = describe(*fault, step + 1, time + dt);
+        time += dt;
+        ++step;
+        break;
+      }
+      time += dt;
+      ++step;
+      ++taken;
+      if (auto fault = first_fault(t_, w_.health(static_cast<float>(s_.c.density_min_ratio), static_cast<float>(s_.c.density_max_ratio)))) {
+        unstable = describe(*fault, step, time);
+        break;
+      }
+      dt = next_time_step();
+      if (!(dt > 0) || !std::isfinite(dt)) {
+        unstable = fmt::format("step {}, t = {:.6g} s: the time step collapsed to {}", step, time, dt);
+        break;
+      }
+      const bool last = s_.opts.steps ? taken >= *s_.opts.steps : time >= end_time - 1e-12;
+      output(last);
+      if (checkpoint_every > 0 && step % checkpoint_every == 0) last_checkpoint = write_checkpoint_now(time, step, dt);
+      progress.update(taken, time, end_time, s_.start.time);
+    }
+    progress.finish();
+
+    if (!unstable.empty()) {
+      write_snapshot(pvd, time, step, "diagnostic", /*index=*/false);
+    } else if (last_checkpoint.empty() || !last_checkpoint.filename().string().ends_with(step_name(step) + ".h5")) {
+      last_checkpoint = write_checkpoint_now(time, step, dt);
+    }
+    const auto counts = w_.slab_particle_counts();
+    const std::int64_t solver_bytes = t_.sum(static_cast<std::int64_t>(w_.allocated_bytes()));
+    const std::int64_t ghosts = t_.sum(static_cast<std::int64_t>(w_.particles().ghosts()));
+    if (writer) {
+      std::lock_guard lock(s_.result_mutex);
+      RunResult& r = s_.result;
+      r.steps = taken;
+      r.final_step = step;
+      r.simulated_time = time;
+      r.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+      r.last_checkpoint = last_checkpoint;
+      r.slab_particles = counts;
+      r.imbalance = imbalance(counts);
+      r.ghosts = ghosts;
+      r.bytes_per_particle = static_cast<double>(solver_bytes) / static_cast<double>(std::max<std::int64_t>(1, total_particles));
+      r.imbalance_history = imbalance_log;
+      if (!unstable.empty()) {
+        r.exit_code = 3;
+        r.exit_status = "unstable";
+        r.message = unstable + "; diagnostic snapshot in " + (s_.opts.out_dir / "diagnostic").string() +
+                    (last_checkpoint.empty() ? "" : "; last good checkpoint " + last_checkpoint.string());
+      }
+    }
+  }
+
+ private:
+  double next_time_step() {
+    if (s_.c.fixed_dt) return *s_.c.fixed_dt;
+    TimeStepControl ctl;
+    ctl.cfl = static_cast<float>(s_.c.cfl);
+    return t_.min(static_cast<double>(w_.local_time_step(ctl)));
+  }
+
+  std::string describe(const ParticleFault& f, std::int64_t step, double time) const {
+    return fmt::format("step {}, t = {:.6g} s: particle {} {}", step, time, f.id, f.what);
+  }
+
+  void write_snapshot(PvdIndex& pvd, double time, std::int64_t step, const std::string& folder, bool index = true) {
+    const auto dir = s_.opts.out_dir / folder;
+    const std::string piece = step_name(step) + "/slab_" + std::to_string(t_.slab()) + ".vtp";
+    write_vtp_piece(dir / piece, w_.particles(), t_.slab());
+    t_.barrier();
+    if (t_.slab() != 0) return;
+    std::vector<std::string> pieces;
+    for (int s = 0; s < t_.slab_count(); ++s) pieces.push_back(step_name(step) + "/slab_" + std::to_string(s) + ".vtp");
+    write_vtm(dir / (step_name(step) + ".vtm"), pieces);
+    if (index) pvd.add(time, folder + "/" + step_name(step) + ".vtm");
+  }
+
+  std::filesystem::path write_checkpoint_now(double time, std::int64_t step, double dt) {
+    ParticleStore all = gather_by_id(w_);
+    const auto dir = s_.opts.out_dir / "checkpoints";
+    const auto path = dir / ("checkpoint_" + step_name(step) + ".h5");
+    if (t_.slab() == 0) {
+      CheckpointMeta meta{step, time, dt, s_.c.name, s_.c.source_yaml, {}};
+      write_checkpoint(path, meta, all);
+      prune_checkpoints(dir);
+    }
+    t_.barrier();
+    return path;
+  }
+
+  void prune_checkpoints(const std::filesystem::path& dir) const {
+    std::vector<std::filesystem::path> files;
+    for (auto& e : std::filesystem::directory_iterator(dir))
+      if (e.path().extension() == ".h5" && e.path().filename().string().starts_with("checkpoint_step_")) files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    const int keep = std::max(1, s_.opts.keep_checkpoints);
+    for (std::size_t k = 0; k + keep < files.size(); ++k) std::filesystem::remove(files[k]);
+  }
+
+  Shared& s_;
+  SlabTransport& t_;
+  SlabWorker w_;
+};
+
+}  // namespace
+
+Simulation::Simulation(Case c, RunOptions options) : case_(std::move(c)), options_(std::move(options)) {}
+
+RunResult Simulation::run() {
+  Shared s{case_, options_, make_lattice(case_), physics_params(case_), ParticleStore(case_.dim), {}, false, {}, 1, {}, {}, {}};
+  if (options_.devices < 1) throw InputError(fmt::format("--devices {}: must be at least 1", options_.devices));
+  const ParticleCounts expected = count_particles(case_);
+  if (options_.restart) {
+    try {
+      s.start = read_checkpoint(*options_.restart, s.initial);
+    } catch (const std::exception& e) {
+      throw InputError(e.what());
+    }
+    if (s.initial.dim() != case_.dim || static_cast<std::int64_t>(s.initial.size()) != expected.total())
+      throw InputError(fmt::format("{}: checkpoint holds {} {}D particles (case '{}'); {} generates {} {}D particles",
+                                   options_.restart->string(), s.initial.size(), s.initial.dim(), s.start.case_name,
+                                   case_.file, expected.total(), case_.dim));
+    s.restarted = true;
+  } else {
+    s.initial = generate_particles(case_);
+  }
+  s.result.particles = expected;
+  const int slabs = options_.devices;
+  s.layout = SlabLayout::uniform(s.lattice.cells[0], slabs);
+  if (s.layout.narrowest() < kMinColumnsPerSlab)
+    throw InputError(fmt::format("--devices {}: the domain is {} cells long in x; every slab needs at least {} cells, so at most {} devices",
+                                 slabs, s.lattice.cells[0], kMinColumnsPerSlab, s.lattice.cells[0] / kMinColumnsPerSlab));
+  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int threads = options_.threads > 0 ? options_.threads : hw;
+  s.omp_threads = std::max(1, threads / slabs);
+  s.workers.assign(slabs, nullptr);
+  std::filesystem::create_directories(options_.out_dir);
+
+  InProcessHub hub(slabs);
+  std::vector<std::string> errors(slabs);
+  auto body = [&](int slab) {
+    try {
+      auto t = hub.endpoint(slab, s.lattice.periodic[0]);
+      Worker(s, *t).run();
+    } catch (const PeerFailure&) {
+      hub.abandon();
+    } catch (const std::exception& e) {
+      errors[slab] = e.what();
+      hub.abandon();
+    }
+  };
+  if (slabs == 1) {
+    body(0);
+  } else {
+    std::vector<std::thread> pool;
+    for (int k = 0; k < slabs; ++k) pool.emplace_back(body, k);
+    for (auto& th : pool) th.join();
+  }
+  for (auto& e : errors)
+    if (!e.empty()) throw std::runtime_error(e);
+  return s.result;
+}
+
+}  // namespace spate

@@ -1,0 +1,62 @@
+#pragma once
+// The time loop: sets up the slabs (one worker thread per device), runs steps, reduces the time
+// step, samples probes, writes snapshots, checkpoints and the summary. Exit statuses: 0 done,
+// 3 unstable (bad input, 2, is raised before a Simulation exists).
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "../case/case.hpp"
+#include "../case/generator.hpp"
+
+namespace spate {
+
+struct RunOptions {
+  std::filesystem::path out_dir;
+  std::optional<std::int64_t> steps;      // run this many steps (from the start or the restart)
+  std::optional<double> until;            // or until this simulated time (default: the case's end)
+  int threads = 0;                        // 0: all hardware threads
+  int devices = 1;                        // slabs in this process
+  std::optional<int> checkpoint_every;    // overrides the case's output.checkpoint_every
+  std::optional<std::filesystem::path> restart;
+  bool quiet = false;
+  int keep_checkpoints = 2;               // periodic checkpoints kept on disk (the newest)
+};
+
+struct RunResult {
+  int exit_code = 0;                      // 0 done, 3 unstable
+  std::string exit_status = "done";       // "done" | "unstable"
+  std::string message;
+  std::int64_t steps = 0;                 // steps taken in this run
+  std::int64_t final_step = 0;
+  double simulated_time = 0.0;
+  double wall_seconds = 0.0;
+  ParticleCounts particles;
+  std::filesystem::path last_checkpoint;
+  std::vector<std::int64_t> slab_particles;
+  double imbalance = 1.0;
+  std::int64_t ghosts = 0;
+  double bytes_per_particle = 0.0;         // solver arrays (owned + ghosts + cell grid) / particles
+  std::vector<double> imbalance_history;   // max/mean before each balancing pass
+  std::vector<std::string> insitu_failures;
+};
+
+class Simulation {
+ public:
+  Simulation(Case c, RunOptions options);
+  RunResult run();
+
+ private:
+  Case case_;
+  RunOptions options_;
+};
+
+// Error for bad command-line or restart input (exit 2), distinct from case-file errors only in text.
+struct InputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace spate

@@ -1,0 +1,148 @@
+#include "slab_worker.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include "../backend/cpu/cpu_backend.hpp"
+
+namespace spate {
+
+SlabWorker::SlabWorker(const Lattice& lattice, const PhysicsParams& params, SlabTransport& transport)
+    : lattice_(lattice), params_(params), transport_(transport), particles_(lattice.dim) {}
+
+void SlabWorker::take_share(const ParticleStore& global, const SlabLayout& layout) {
+  layout_ = layout;
+  const int s = transport_.slab();
+  std::vector<std::uint32_t> mine;
+  for (std::size_t i = 0; i < global.owned(); ++i)
+    if (layout.owner_of(lattice_.cell_of(global.pos[0][i], 0)) == s) mine.push_back(static_cast<std::uint32_t>(i));
+  particles_ = ParticleStore(lattice_.dim);
+  unpack_append(particles_, pack_particles(const_cast<ParticleStore&>(global), mine, FieldSet::All), FieldSet::All);
+  particles_.set_owned(particles_.size());
+  grid_.configure(lattice_, layout.faces[s], layout.faces[s + 1]);
+}
+
+void SlabWorker::rebuild() {
+  migrate(particles_, layout_.faces, lattice_, transport_);
+  grid_.sort_owned(particles_);
+  halo_.build(particles_, grid_, transport_);
+}
+
+void SlabWorker::compute_rates() {
+  if (params_.density_mode == DensityMode::Summation) {
+    cpu::summation_density(particles_, grid_, params_);
+    halo_.refresh(particles_, transport_);
+  }
+  cpu::equation_of_state(particles_, params_);
+  cpu::wall_state(particles_, grid_, params_);
+  halo_.refresh(particles_, transport_);
+  cpu::fluid_rates(particles_, grid_, params_);
+}
+
+void SlabWorker::prepare(bool rates) {
+  rebuild();
+  if (rates) {
+    compute_rates();
+  } else {
+    // The wall state and pressures still have to exist for outputs and probes.
+    cpu::equation_of_state(particles_, params_);
+    cpu::wall_state(particles_, grid_, params_);
+    halo_.refresh(particles_, transport_);
+  }
+}
+
+std::optional<ParticleFault> SlabWorker::wrap_and_check_domain() {
+  std::optional<ParticleFault> fault;
+  for (int a = 0; a < lattice_.dim; ++a) {
+    float* x = particles_.pos[a].data();
+    const float lo = lattice_.origin[a], hi = lattice_.upper(a);
+    for (std::size_t i = 0; i < particles_.owned(); ++i) {
+      if (lattice_.periodic[a]) {
+        if (x[i] >= hi) x[i] -= lattice_.period[a];
+        else if (x[i] < lo) x[i] += lattice_.period[a];
+      }
+      const int c = lattice_.cell_of(x[i], a);
+      if (!(c >= 0 && c < lattice_.cells[a]) && (!fault || particles_.id[i] < fault->id)) {
+        std::ostringstream s;
+        s << "left the domain along " << "xyz"[a] << " (position " << x[i] << " m, domain [" << lo << ", " << hi << "] m)";
+        fault = ParticleFault{particles_.id[i], s.str()};
+      }
+    }
+  }
+  return fault;
+}
+
+std::optional<ParticleFault> SlabWorker::step(float dt) {
+  cpu::predict(particles_, params_, dt);
+  if (auto fault = first_fault(transport_, wrap_and_check_domain())) return fault;
+  rebuild();
+  compute_rates();
+  cpu::correct(particles_, params_, dt);
+  return std::nullopt;
+}
+
+std::optional<ParticleFault> SlabWorker::health(float min_ratio, float max_ratio) const {
+  std::optional<ParticleFault> fault;
+  const auto& p = particles_;
+  for (std::size_t i = 0; i < p.owned(); ++i) {
+    if (!is_fluid(p.kind[i])) continue;
+    if (fault && p.id[i] >= fault->id) continue;
+    bool finite = std::isfinite(p.density[i]);
+    for (int a = 0; a < lattice_.dim; ++a) finite = finite && std::isfinite(p.pos[a][i]) && std::isfinite(p.vel[a][i]);
+    std::ostringstream s;
+    if (!finite) {
+      s << "has a non-finite position, velocity or density";
+    } else {
+      const float ratio = p.density[i] / params_.rho0;
+      if (ratio >= min_ratio && ratio <= max_ratio) continue;
+      s << "has density " << p.density[i] << " kg/m3, outside [" << min_ratio * params_.rho0 << ", "
+        << max_ratio * params_.rho0 << "] (density.min_ratio/max_ratio)";
+    }
+    fault = ParticleFault{p.id[i], s.str()};
+  }
+  return fault;
+}
+
+float SlabWorker::local_time_step(const TimeStepControl& c) const { return cpu::min_time_step(particles_, params_, c); }
+
+std::vector<std::int64_t> SlabWorker::slab_particle_counts() {
+  std::vector<std::int64_t> counts(transport_.slab_count(), 0);
+  counts[transport_.slab()] = static_cast<std::int64_t>(particles_.owned());
+  transport_.sum(counts);
+  return counts;
+}
+
+double SlabWorker::rebalance(int min_columns) {
+  std::vector<std::int64_t> per_column(lattice_.cells[0], 0);
+  for (std::size_t i = 0; i < particles_.owned(); ++i) ++per_column[lattice_.cell_of(particles_.pos[0][i], 0)];
+  transport_.sum(per_column);
+  std::vector<std::int64_t> per_slab(layout_.slabs(), 0);
+  for (int c = 0; c < lattice_.cells[0]; ++c) per_slab[layout_.owner_of(c)] += per_column[c];
+  const double before = imbalance(per_slab);
+  const SlabLayout next = balanced_layout(per_column, layout_.slabs(), min_columns);
+  if (next != layout_) {
+    layout_ = next;
+    const int s = transport_.slab();
+    grid_.configure(lattice_, layout_.faces[s], layout_.faces[s + 1]);
+    // The next rebuild() migrates particles to their new owners.
+  }
+  return before;
+}
+
+std::size_t SlabWorker::allocated_bytes() const {
+  return particles_.size() * particles_.bytes_per_particle() + grid_.bytes();
+}
+
+std::optional<ParticleFault> first_fault(SlabTransport& t, const std::optional<ParticleFault>& mine) {
+  const double lowest = t.min(mine ? static_cast<double>(mine->id) : INFINITY);
+  if (!std::isfinite(lowest)) return std::nullopt;
+  // The slab that holds the lowest id shares its description.
+  Bytes text;
+  if (mine && static_cast<double>(mine->id) == lowest) text.assign(mine->what.begin(), mine->what.end());
+  for (auto& b : t.allgather(text))
+    if (!b.empty()) return ParticleFault{static_cast<std::uint32_t>(lowest), std::string(b.begin(), b.end())};
+  return ParticleFault{static_cast<std::uint32_t>(lowest), "is faulty"};
+}
+
+}  // namespace spate

@@ -1,0 +1,71 @@
+#pragma once
+// One device's share of the simulation: its slab of owned particles, their ghosts, the cell grid
+// and the step pieces in the order the design prescribes. The CPU backend's driver does the
+// arithmetic; the worker only sequences it and talks to the neighbours through the transport.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "../comm/transport.hpp"
+#include "../domain/halo.hpp"
+#include "../domain/slab_layout.hpp"
+#include "../grid/cell_grid.hpp"
+#include "../particles/particle_store.hpp"
+#include "../physics/params.hpp"
+#include "../physics/timestep.hpp"
+
+namespace spate {
+
+// What went wrong with a particle, for the instability diagnosis.
+struct ParticleFault {
+  std::uint32_t id = 0xffffffffu;
+  std::string what;
+};
+
+class SlabWorker {
+ public:
+  SlabWorker(const Lattice& lattice, const PhysicsParams& params, SlabTransport& transport);
+
+  // Takes the particles of `global` that lie in this slab's columns.
+  void take_share(const ParticleStore& global, const SlabLayout& layout);
+  // Sort, halos and everything the rates need; with `rates` also the accelerations and density
+  // rates (a fresh start; a restart brings them from the checkpoint).
+  void prepare(bool rates);
+  // One full step of size dt. Returns a fault if a particle left the domain (before rates).
+  std::optional<ParticleFault> step(float dt);
+  // NaN/infinity or density outside [min, max] x rho0 among owned particles.
+  std::optional<ParticleFault> health(float min_ratio, float max_ratio) const;
+  float local_time_step(const TimeStepControl& c) const;
+
+  // Moves faces to even out particle counts (collective); returns the global imbalance before.
+  double rebalance(int min_columns);
+  std::vector<std::int64_t> slab_particle_counts();  // collective
+
+  void set_params(const PhysicsParams& p) { params_ = p; }
+  const PhysicsParams& params() const { return params_; }
+  ParticleStore& particles() { return particles_; }
+  const CellGrid& grid() const { return grid_; }
+  const Lattice& lattice() const { return lattice_; }
+  SlabTransport& transport() { return transport_; }
+  const SlabLayout& layout() const { return layout_; }
+  std::size_t allocated_bytes() const;
+
+ private:
+  void rebuild();        // migrate, sort, halos
+  void compute_rates();  // EOS, walls, fluid rates
+  std::optional<ParticleFault> wrap_and_check_domain();
+
+  Lattice lattice_;
+  PhysicsParams params_;
+  SlabTransport& transport_;
+  SlabLayout layout_;
+  ParticleStore particles_;
+  CellGrid grid_;
+  Halo halo_;
+};
+
+// The fault with the lowest particle id over all slabs (collective), or none.
+std::optional<ParticleFault> first_fault(SlabTransport& t, const std::optional<ParticleFault>& mine);
+
+}  // namespace spate
