@@ -411,6 +411,9 @@ PhysicsParams physics_params(const Case& c) {
   P.support2 = 4.0f * P.h * P.h;
   P.kernel_norm = c.kernel == KernelType::WendlandC2 ? WendlandC2::normalisation(c.dim, P.h)
                                                      : CubicSpline::normalisation(c.dim, P.h);
+  const double moment = c.kernel == KernelType::WendlandC2 ? lattice_gradient_moment<WendlandC2>(c.dim, P.h, c.dp)
+                                                          : lattice_gradient_moment<CubicSpline>(c.dim, P.h, c.dp);
+  P.gradient_norm = static_cast<float>(P.kernel_norm / moment);
   P.eta2 = 0.01f * P.h * P.h;
   P.rho0 = static_cast<float>(c.rho0);
   P.c0 = static_cast<float>(sound_speed(c));

@@ -1,5 +1,7 @@
 #include "cell_grid.hpp"
 
+#include "../backend/cpu/parallel.hpp"
+
 #include <algorithm>
 #include <numeric>
 #include <stdexcept>
@@ -103,7 +105,7 @@ void CellGrid::sort_range(ParticleStore& particles, std::size_t first, std::size
   const float* pos[3] = {particles.pos[0].data(), particles.pos[1].data(),
                          lattice_.dim == 3 ? particles.pos[2].data() : nullptr};
   std::size_t outside = 0;
-#pragma omp parallel for schedule(static) reduction(+ : outside)
+#pragma omp parallel for schedule(static) reduction(+ : outside) if (n > cpu::kCheapGrain)
   for (std::size_t i = first; i < last; ++i) {
     keys_[i] = local_cell_of(pos, i);
     outside += keys_[i] == kOutside;
@@ -119,7 +121,7 @@ void CellGrid::sort_range(ParticleStore& particles, std::size_t first, std::size
   for (std::size_t i = first; i < last; ++i) perm_[counts_[keys_[i]]++] = static_cast<std::uint32_t>(i - first);
   // counts_[c] is now the end of cell c within the range.
   const std::uint32_t* ids = particles.id.data() + first;
-#pragma omp parallel for schedule(dynamic, 256)
+#pragma omp parallel for schedule(dynamic, 256) if (n > cpu::kCheapGrain)
   for (std::int64_t c = 0; c < static_cast<std::int64_t>(cells); ++c) {
     const std::uint32_t e = counts_[c];
     const std::uint32_t b = c == 0 ? 0u : counts_[c - 1];

@@ -1,5 +1,7 @@
 #include "particle_store.hpp"
 
+#include "../backend/cpu/parallel.hpp"
+
 #include <algorithm>
 #include <cstring>
 #include <utility>
@@ -25,7 +27,7 @@ void permute_range(std::vector<T>& v, std::size_t first, std::span<const std::ui
   if (v.empty()) return;
   const std::size_t n = perm.size();
   scratch.resize(n);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > cpu::kCheapGrain)
   for (std::size_t k = 0; k < n; ++k) scratch[k] = v[first + perm[k]];
   std::copy(scratch.begin(), scratch.end(), v.begin() + static_cast<std::ptrdiff_t>(first));
 }

@@ -31,7 +31,7 @@ SPATE_HD void accumulate_fluid_pair(const PhysicsParams& P, const ParticleState<
   const float r2 = dot(r, r);
   if (r2 >= P.support2 || r2 == 0.0f) return;  // outside the support, or i itself
   const float q = sqrtf(r2) * P.inv_h;
-  const float F = Kernel::gradient_factor(q, P.kernel_norm, P.inv_h2);  // grad_i W_ij = F r_ij
+  const float F = Kernel::gradient_factor(q, P.gradient_norm, P.inv_h2);  // grad_i W_ij = F r_ij
   const bool j_fluid = is_fluid(j.kind);
   const float volume_i = P.mass / i.rho;
   const float volume_j = P.mass / j.rho;
@@ -49,10 +49,15 @@ SPATE_HD void accumulate_fluid_pair(const PhysicsParams& P, const ParticleState<
   if (P.diffusion != DensityDiffusion::None && j_fluid) {
     float drho_ji = j.rho - i.rho;
     if (P.diffusion == DensityDiffusion::Fourtakas) {
-      // Subtract the hydrostatic part (Fourtakas et al. 2019), linearised: rho^H_ji = rho0 g.r_ji / c0^2.
+      // Subtract the hydrostatic part (Fourtakas et al. 2019): rho^H_ji = rho0 g.r_ji / c^2 over one
+      // pair distance. c^2 = dp/drho of eq. 9 at the pair's mean density, c0^2 (rho/rho0)^6, not
+      // c0^2: at depth the Tait hydrostatic density gradient is a few percent below the linear one,
+      // and diffusing towards the linear profile biases deep pressures upward.
       float g_dot_rji = 0.0f;
       for (int k = 0; k < Dim; ++k) g_dot_rji -= P.gravity[k] * r[k];
-      drho_ji -= P.rho0 * g_dot_rji / (P.c0 * P.c0);
+      const float s = 0.5f * (i.rho + j.rho) / P.rho0;
+      const float s2 = s * s;
+      drho_ji -= P.rho0 * g_dot_rji / (P.c0 * P.c0 * s2 * s2 * s2);
     }
     drho += P.delta * P.h * P.c0 * 2.0f * drho_ji * (-r2 * F) / r2_eta * volume_j;
   }

@@ -23,6 +23,7 @@ struct PhysicsParams {
   float inv_h2 = 1.0f / (0.013f * 0.013f);
   float support2 = 4.0f * 0.013f * 0.013f;
   float kernel_norm = 0.0f;      // alpha_d / h^dim
+  float gradient_norm = 0.0f;    // kernel_norm / lattice gradient moment (kernels.hpp)
   float eta2 = 0.01f * 0.013f * 0.013f;  // 0.01 h^2, keeps r_ij . gradW / (r^2 + eta^2) finite
   float rho0 = 1000.0f;          // reference density [kg/m3]
   float c0 = 20.0f;              // artificial sound speed [m/s]

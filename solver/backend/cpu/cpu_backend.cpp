@@ -1,5 +1,7 @@
 #include "cpu_backend.hpp"
 
+#include "parallel.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -21,7 +23,8 @@ template <class Body>
 void for_each_owned_cell(const CellGrid& grid, Body&& body) {
   const CellGridView v = grid.view();
   const auto cells = static_cast<std::int64_t>(grid.owned_cell_count());
-#pragma omp parallel for schedule(dynamic, 64)
+  const auto particles = static_cast<std::int64_t>(v.start[cells]);
+#pragma omp parallel for schedule(dynamic, 64) if (particles > kPairGrain)
   for (std::int64_t c = 0; c < cells; ++c) {
     const std::uint32_t b = v.start[c], e = v.start[c + 1];
     if (b == e) continue;
@@ -36,42 +39,31 @@ void for_each_owned_cell(const CellGrid& grid, Body&& body) {
 void predict(ParticleStore& p, const PhysicsParams& P, float dt) {
   p.swap_rates();  // the rates of step n become the "previous" ones the corrector needs
   const auto n = static_cast<std::int64_t>(p.owned());
-  for (int k = 0; k < P.dim; ++k) {
-    float* x = p.pos[k].data();
-    float* v = p.vel[k].data();
-    const float* a = p.acc_prev[k].data();
-    const std::uint8_t* kind = p.kind.data();
-#pragma omp parallel for schedule(static)
-    for (std::int64_t i = 0; i < n; ++i)
-      if (is_fluid(kind[i])) predict_component(x[i], v[i], a[i], dt);
-  }
-  if (P.density_mode == DensityMode::Continuity) {
-#pragma omp parallel for schedule(static)
-    for (std::int64_t i = 0; i < n; ++i)
-      if (is_fluid(p.kind[i])) predict_density(p.density[i], p.density_rate_prev[i], dt);
+  const int d = P.dim;
+  const bool continuity = P.density_mode == DensityMode::Continuity;
+#pragma omp parallel for schedule(static) if (n > kCheapGrain)
+  for (std::int64_t i = 0; i < n; ++i) {
+    if (!is_fluid(p.kind[i])) continue;
+    for (int k = 0; k < d; ++k) predict_component(p.pos[k][i], p.vel[k][i], p.acc_prev[k][i], dt);
+    if (continuity) predict_density(p.density[i], p.density_rate_prev[i], dt);
   }
 }
 
 void correct(ParticleStore& p, const PhysicsParams& P, float dt) {
   const auto n = static_cast<std::int64_t>(p.owned());
-  for (int k = 0; k < P.dim; ++k) {
-    float* v = p.vel[k].data();
-    const float* a = p.acc[k].data();
-    const float* a_old = p.acc_prev[k].data();
-#pragma omp parallel for schedule(static)
-    for (std::int64_t i = 0; i < n; ++i)
-      if (is_fluid(p.kind[i])) spate::correct(v[i], a[i], a_old[i], dt);
-  }
-  if (P.density_mode == DensityMode::Continuity) {
-#pragma omp parallel for schedule(static)
-    for (std::int64_t i = 0; i < n; ++i)
-      if (is_fluid(p.kind[i])) spate::correct(p.density[i], p.density_rate[i], p.density_rate_prev[i], dt);
+  const int d = P.dim;
+  const bool continuity = P.density_mode == DensityMode::Continuity;
+#pragma omp parallel for schedule(static) if (n > kCheapGrain)
+  for (std::int64_t i = 0; i < n; ++i) {
+    if (!is_fluid(p.kind[i])) continue;
+    for (int k = 0; k < d; ++k) spate::correct(p.vel[k][i], p.acc[k][i], p.acc_prev[k][i], dt);
+    if (continuity) spate::correct(p.density[i], p.density_rate[i], p.density_rate_prev[i], dt);
   }
 }
 
 void equation_of_state(ParticleStore& p, const PhysicsParams& P) {
   const auto n = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > kCheapGrain)
   for (std::int64_t i = 0; i < n; ++i)
     if (is_fluid(p.kind[i])) p.pressure[i] = tait_pressure(p.density[i], P.rho0, P.tait_b);
 }
@@ -143,7 +135,7 @@ float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeSt
   float dt = std::numeric_limits<float>::infinity();
   const auto n = static_cast<std::int64_t>(p.owned());
   const int d = P.dim;
-#pragma omp parallel for schedule(static) reduction(min : dt)
+#pragma omp parallel for schedule(static) reduction(min : dt) if (n > kCheapGrain)
   for (std::int64_t i = 0; i < n; ++i) {
     if (!is_fluid(p.kind[i])) continue;
     float v2 = 0.0f, a2 = 0.0f;
