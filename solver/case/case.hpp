@@ -29,12 +29,12 @@ struct SolidSpec {
   bool hollow = true;  // only `wall_layers` layers under its surface are particles
 };
 
-enum class ProbeType { Pressure, Height, Force, Front };
+enum class ProbeType { Pressure, Velocity, Height, Force, Front };
 
 struct ProbeSpec {
   std::string name;
   ProbeType type = ProbeType::Pressure;
-  Vec3d position{0, 0, 0};  // pressure: the point; height: the gauge (x, y) in 3D, (x) in 2D
+  Vec3d position{0, 0, 0};  // pressure/velocity: the point; height: the gauge (x, y) in 3D, (x) in 2D
   std::string solid;        // force: the solid's name
   int axis = 0;             // front: the axis along which the front advances
 };

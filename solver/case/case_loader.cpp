@@ -321,10 +321,11 @@ Case read(Section& root, const std::string& file) {
     ProbeSpec probe;
     probe.name = p.text("name");
     probe.type = p.choice<ProbeType>("type", ProbeType::Pressure,
-                                     {{"pressure", ProbeType::Pressure}, {"height", ProbeType::Height},
+                                     {{"pressure", ProbeType::Pressure}, {"velocity", ProbeType::Velocity}, {"height", ProbeType::Height},
                                       {"force", ProbeType::Force}, {"front", ProbeType::Front}});
     switch (probe.type) {
-      case ProbeType::Pressure: probe.position = p.vector("position", d); break;
+      case ProbeType::Pressure:
+      case ProbeType::Velocity: probe.position = p.vector("position", d); break;
       case ProbeType::Height: probe.position = p.vector("position", d - 1); break;
       case ProbeType::Force:
         probe.solid = p.text("solid");

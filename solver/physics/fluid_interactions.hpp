@@ -70,9 +70,10 @@ SPATE_HD void accumulate_fluid_pair(const PhysicsParams& P, const ParticleState<
     const float pi_ij = -P.artificial_viscosity * P.c0 * mu_ij / (0.5f * (i.rho + j.rho));
     radial += -P.mass * pi_ij * F;
   }
-  // Eq. 8 with mu_i = mu_j = mu: 4 mu_i mu_j / (m_i (mu_i + mu_j)) = 2 mu / m.
-  const float laminar = 2.0f * P.viscosity / P.mass * (volume_i * volume_i + volume_j * volume_j) *
-                        (r2 * F) / r2_eta;
+  // Eq. 8, inter-particle-averaged viscosity of Hu & Adams (2006): 2 mu_i mu_j / (mu_i + mu_j) = mu
+  // for one fluid. The paper prints 4 mu_i mu_j / (mu_i + mu_j), twice the Hu & Adams (and Morris
+  // 1997) value; with it the Poiseuille test settles at half the analytic velocity (docs/physics.md).
+  const float laminar = P.viscosity / P.mass * (volume_i * volume_i + volume_j * volume_j) * (r2 * F) / r2_eta;
 
   for (int k = 0; k < Dim; ++k) out.acc[k] += radial * r[k] + laminar * v_ij_visc[k];
   out.density_rate += drho;

@@ -52,6 +52,19 @@ double sample_pressure(SlabWorker& w, const Vec3d& at) {
   return out;
 }
 
+std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at) {
+  const int d = w.lattice().dim;
+  std::vector<double> v(d, kNaN);
+  if (!owns_point(w, at)) return v;
+  dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
+    for (int k = 0; k < Dim; ++k) {
+      const auto s = shepard<Kernel, Dim>(w, at, &w.particles().vel[k]);
+      v[k] = s.weight > 0 ? s.value / s.weight : 0.0;
+    }
+  });
+  return v;
+}
+
 // The highest point of the gauge's vertical line where the fluid fill fraction reaches 0.5,
 // sampled every dp/4 from the tank floor; 0 when dry.
 double sample_height(SlabWorker& w, const Vec3d& gauge, const Case& c) {
@@ -147,6 +160,7 @@ ProbeSet::ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool wri
       *f << "time,step,";
       switch (p.type) {
         case ProbeType::Pressure: *f << "pressure\n"; break;
+        case ProbeType::Velocity: *f << (c.dim == 2 ? "vx,vy\n" : "vx,vy,vz\n"); break;
         case ProbeType::Height: *f << "height\n"; break;
         case ProbeType::Force: *f << (c.dim == 2 ? "fx,fy\n" : "fx,fy,fz\n"); break;
         case ProbeType::Front: *f << "front\n"; break;
@@ -163,18 +177,20 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
     std::vector<double> row;
     switch (p.type) {
       case ProbeType::Pressure:
+      case ProbeType::Velocity:
       case ProbeType::Height: {
-        const double mine = p.type == ProbeType::Pressure ? sample_pressure(w, p.position) : sample_height(w, p.position, case_);
-        // Exactly one slab owns the point; NaN elsewhere. max() ignores nothing, so share by gather.
-        Bytes b(sizeof mine);
-        std::memcpy(b.data(), &mine, sizeof mine);
-        double value = 0.0;
+        // Exactly one slab owns the point and has numbers; the others send NaN.
+        std::vector<double> mine;
+        if (p.type == ProbeType::Velocity) mine = sample_velocity(w, p.position);
+        else mine.push_back(p.type == ProbeType::Pressure ? sample_pressure(w, p.position) : sample_height(w, p.position, case_));
+        Bytes b(mine.size() * sizeof(double));
+        std::memcpy(b.data(), mine.data(), b.size());
+        row.assign(mine.size(), 0.0);
         for (auto& part : t.allgather(b)) {
-          double v;
-          std::memcpy(&v, part.data(), sizeof v);
-          if (!std::isnan(v)) value = v;
+          std::vector<double> theirs(mine.size());
+          std::memcpy(theirs.data(), part.data(), std::min(part.size(), b.size()));
+          if (!theirs.empty() && !std::isnan(theirs[0])) row = theirs;
         }
-        row.push_back(value);
         break;
       }
       case ProbeType::Force: {

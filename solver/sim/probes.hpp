@@ -29,6 +29,8 @@ class ProbeSet {
 
 // Single probe evaluations on one slab (exposed for tests). NaN when this slab does not own the point.
 double sample_pressure(SlabWorker& w, const Vec3d& at);
+// Shepard-averaged fluid velocity (dim components), NaN components when not owned.
+std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at);
 double sample_height(SlabWorker& w, const Vec3d& gauge, const Case& c);
 double local_front(SlabWorker& w, int axis);
 
