@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <thread>
 #include <unistd.h>
@@ -46,7 +47,6 @@ int run_command(const RunArgs& a) {
   check_backend(a.backend);
   if (!a.pipelines.empty() || a.insitu_every || !a.live.empty())
     throw BadInput("--pipeline/--insitu-every/--live: this spate was built without ParaView Catalyst");
-  if (!a.steering_log.empty()) throw BadInput("--steering-log: steering needs ParaView Catalyst, which this build lacks");
   if (a.steps && *a.steps < 0) throw BadInput("--steps: must be >= 0");
   if (a.until && !(*a.until > 0)) throw BadInput("--until: must be > 0");
   if (a.threads < 0) throw BadInput("--threads: must be >= 0 (0: all cores)");
@@ -62,6 +62,15 @@ int run_command(const RunArgs& a) {
   o.checkpoint_every = a.checkpoint_every;
   if (!a.restart.empty()) o.restart = a.restart;
   o.quiet = a.quiet;
+  std::unique_ptr<SteeringReplay> replay;
+  if (!a.steering_log.empty()) {
+    try {
+      replay = std::make_unique<SteeringReplay>(read_log(a.steering_log));
+    } catch (const std::exception& e) {
+      throw BadInput(std::string("--steering-log: ") + e.what());
+    }
+    o.steering = replay.get();
+  }
 
   RunResult r;
   try {

@@ -40,6 +40,7 @@ void write_summary(const std::filesystem::path& path, const Case& c, const Physi
   j["ghost_particles"] = r.ghosts;
   j["last_checkpoint"] = r.last_checkpoint.string();
   j["insitu_failures"] = r.insitu_failures;
+  j["steering"] = {{"accepted", r.steering_accepted}, {"rejected", r.steering_rejected}, {"stopped", r.stopped_by_steering}};
   j["exit_status"] = r.exit_status;
   j["exit_code"] = r.exit_code;
   if (!r.message.empty()) j["message"] = r.message;

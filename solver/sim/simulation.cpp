@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <mutex>
 #include <numeric>
+#include <fstream>
 #include <thread>
 
 #include "../comm/in_process_transport.hpp"
@@ -44,7 +45,22 @@ struct Shared {
   RunResult result;
   std::mutex result_mutex;
   std::vector<SlabWorker*> workers;  // local slabs, for in-situ views
+  std::vector<SteeringChange> steering_history;  // accepted so far (from the checkpoint, then live)
 };
+
+// Slab 0's list of changes, on every slab (collective).
+std::vector<SteeringChange> share_changes(SlabTransport& t, const std::vector<SteeringChange>& mine) {
+  std::string text;
+  for (auto& c : mine) text += to_log_line(c) + "\n";
+  const auto all = t.allgather(Bytes(text.begin(), text.end()));
+  return parse_log(std::string(all[0].begin(), all[0].end()), "steering request");
+}
+
+std::string history_text(const std::vector<SteeringChange>& history) {
+  std::string s;
+  for (auto& c : history) s += to_log_line(c) + "\n";
+  return s;
+}
 
 // Gathers every particle, ordered by id, on every slab (collective). Checkpoints and comparisons
 // are independent of the split because of this order.
@@ -144,7 +160,50 @@ class Worker {
 
     if (!s_.restarted) output(false);
     std::string unstable;
+    PhysicsParams params = s_.params;
+    int insitu_every = 1;
+    SteeringTarget steer{&params, &insitu_every};
+    for (auto& change : s_.steering_history) apply(change, steer);  // a restart continues steered
+    steer.checkpoint_now = steer.stop = false;
+    w_.set_params(params);
+    std::ofstream steering_log;
+    if (writer && s_.opts.steering) {
+      steering_log.open(s_.opts.out_dir / "steering.log", std::ios::trunc);
+      steering_log << "# spate steering log: <step> <time> <name> <values>; replay with --steering-log\n"
+                   << history_text(s_.steering_history);
+      steering_log.flush();
+    }
+    // Step boundary: poll the source on slab 0, share, validate and apply everywhere identically.
+    auto steer_now = [&]() {
+      if (!s_.opts.steering) return;
+      std::vector<SteeringChange> asked;
+      if (t_.slab() == 0) asked = s_.opts.steering->poll(step, time);
+      for (auto& change : share_changes(t_, asked)) {
+        change.step = step;
+        change.time = time;
+        if (auto why = validate(change, s_.c.dim)) {
+          if (writer) std::fprintf(stderr, "spate: steering: rejected %s at step %lld: %s\n", change.name.c_str(),
+                                   static_cast<long long>(step), why->c_str());
+          if (writer) ++s_.result.steering_rejected;
+          continue;
+        }
+        apply(change, steer);
+        if (writer) {
+          s_.steering_history.push_back(change);
+          ++s_.result.steering_accepted;
+          steering_log << to_log_line(change) << '\n';
+          steering_log.flush();
+          if (!s_.opts.quiet) std::printf("\nspate: steering: %s applied from step %lld\n", to_log_line(change).c_str(), static_cast<long long>(step + 1));
+        }
+      }
+      w_.set_params(params);
+    };
+    steer_now();
     while (true) {
+      if (steer.stop) {
+        s_.result.stopped_by_steering = true;
+        break;
+      }
       if (s_.opts.steps ? taken >= *s_.opts.steps : time >= end_time - 1e-12) break;
       if (s_.c.balance_every > 0 && t_.slab_count() > 1 && taken > 0 && step % s_.c.balance_every == 0)
         imbalance_log.push_back(w_.rebalance(kMinColumnsPerSlab));
@@ -168,7 +227,11 @@ class Worker {
       }
       const bool last = s_.opts.steps ? taken >= *s_.opts.steps : time >= end_time - 1e-12;
       output(last);
-      if (checkpoint_every > 0 && step % checkpoint_every == 0) last_checkpoint = write_checkpoint_now(time, step, dt);
+      steer_now();
+      if ((checkpoint_every > 0 && step % checkpoint_every == 0) || steer.checkpoint_now) {
+        last_checkpoint = write_checkpoint_now(time, step, dt);
+        steer.checkpoint_now = false;
+      }
       progress.update(taken, time, end_time, s_.start.time);
     }
     progress.finish();
@@ -232,7 +295,7 @@ class Worker {
     const auto dir = s_.opts.out_dir / "checkpoints";
     const auto path = dir / ("checkpoint_" + step_name(step) + ".h5");
     if (t_.slab() == 0) {
-      CheckpointMeta meta{step, time, dt, s_.c.name, s_.c.source_yaml, {}};
+      CheckpointMeta meta{step, time, dt, s_.c.name, s_.c.source_yaml, history_text(s_.steering_history)};
       write_checkpoint(path, meta, all);
       prune_checkpoints(dir);
     }
@@ -259,7 +322,7 @@ class Worker {
 Simulation::Simulation(Case c, RunOptions options) : case_(std::move(c)), options_(std::move(options)) {}
 
 RunResult Simulation::run() {
-  Shared s{case_, options_, make_lattice(case_), physics_params(case_), ParticleStore(case_.dim), {}, false, {}, 1, {}, {}, {}};
+  Shared s{case_, options_, make_lattice(case_), physics_params(case_), ParticleStore(case_.dim), {}, false, {}, 1, {}, {}, {}, {}};
   if (options_.devices < 1) throw InputError(fmt::format("--devices {}: must be at least 1", options_.devices));
   const ParticleCounts expected = count_particles(case_);
   if (options_.restart) {
@@ -273,6 +336,11 @@ RunResult Simulation::run() {
                                    options_.restart->string(), s.initial.size(), s.initial.dim(), s.start.case_name,
                                    case_.file, expected.total(), case_.dim));
     s.restarted = true;
+    try {
+      s.steering_history = parse_log(s.start.steering_log, options_.restart->string() + " (steering_log)");
+    } catch (const std::exception& e) {
+      throw InputError(e.what());
+    }
   } else {
     s.initial = generate_particles(case_);
   }

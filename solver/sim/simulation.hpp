@@ -11,6 +11,7 @@
 
 #include "../case/case.hpp"
 #include "../case/generator.hpp"
+#include "steering.hpp"
 
 namespace spate {
 
@@ -24,6 +25,7 @@ struct RunOptions {
   std::optional<std::filesystem::path> restart;
   bool quiet = false;
   int keep_checkpoints = 2;               // periodic checkpoints kept on disk (the newest)
+  SteeringSource* steering = nullptr;     // live requests or a replayed log; polled every step
 };
 
 struct RunResult {
@@ -42,6 +44,8 @@ struct RunResult {
   double bytes_per_particle = 0.0;         // solver arrays (owned + ghosts + cell grid) / particles
   std::vector<double> imbalance_history;   // max/mean before each balancing pass
   std::vector<std::string> insitu_failures;
+  std::int64_t steering_accepted = 0, steering_rejected = 0;
+  bool stopped_by_steering = false;
 };
 
 class Simulation {

@@ -1,0 +1,108 @@
+#include "steering.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+namespace spate {
+
+const std::vector<SteeringParameter>& steering_parameters() {
+  static const std::vector<SteeringParameter> p = {
+      {"gravity", 3, 0.0, 100.0, "m/s2", "gravity vector (its magnitude at most 100 m/s2); tilt it to start sloshing"},
+      {"viscosity", 1, 0.0, 10.0, "Pa s", "dynamic viscosity mu of eq. 8"},
+      {"artificial_viscosity", 1, 0.0, 1.0, "", "Monaghan alpha (0 switches it off)"},
+      {"insitu_every", 1, 1.0, 1.0e6, "steps", "steps between in-situ pipeline executions"},
+      {"write_checkpoint", 1, 0.0, 1.0, "", "1: write a checkpoint at the next step boundary"},
+      {"stop", 1, 0.0, 1.0, "", "1: write a checkpoint and stop cleanly (exit 0)"},
+  };
+  return p;
+}
+
+std::optional<std::string> validate(const SteeringChange& c, int dim) {
+  const SteeringParameter* spec = nullptr;
+  for (auto& p : steering_parameters())
+    if (p.name == c.name) spec = &p;
+  if (!spec) return "unknown parameter '" + c.name + "'";
+  if (static_cast<int>(c.value.size()) != spec->components)
+    return c.name + " takes " + std::to_string(spec->components) + " value(s), got " + std::to_string(c.value.size());
+  for (double v : c.value)
+    if (!std::isfinite(v)) return c.name + ": value is not finite";
+  if (c.name == "gravity") {
+    double m2 = 0;
+    for (double v : c.value) m2 += v * v;
+    if (std::sqrt(m2) > spec->max) return "gravity: magnitude " + std::to_string(std::sqrt(m2)) + " m/s2 exceeds 100";
+    if (dim == 2 && c.value[2] != 0.0) return "gravity: a 2D case has no z component (third value must be 0)";
+    return std::nullopt;
+  }
+  const double v = c.value[0];
+  if (v < spec->min || v > spec->max) {
+    std::ostringstream s;
+    s << c.name << ": " << v << " is outside [" << spec->min << ", " << spec->max << "]" << (spec->unit.empty() ? "" : " " + spec->unit);
+    return s.str();
+  }
+  if (c.name == "insitu_every" && v != std::floor(v)) return "insitu_every: must be a whole number of steps";
+  return std::nullopt;
+}
+
+void apply(const SteeringChange& c, SteeringTarget& t) {
+  if (c.name == "gravity") {
+    for (int k = 0; k < 3; ++k) t.params->gravity[k] = static_cast<float>(c.value[k]);
+  } else if (c.name == "viscosity") {
+    t.params->viscosity = static_cast<float>(c.value[0]);
+  } else if (c.name == "artificial_viscosity") {
+    t.params->artificial_viscosity = static_cast<float>(c.value[0]);
+  } else if (c.name == "insitu_every") {
+    if (t.insitu_every) *t.insitu_every = static_cast<int>(c.value[0]);
+  } else if (c.name == "write_checkpoint") {
+    t.checkpoint_now = t.checkpoint_now || c.value[0] != 0.0;
+  } else if (c.name == "stop") {
+    t.stop = t.stop || c.value[0] != 0.0;
+  }
+}
+
+std::string to_log_line(const SteeringChange& c) {
+  std::ostringstream s;
+  s << c.step << ' ' << std::setprecision(17) << c.time << ' ' << c.name;
+  for (double v : c.value) s << ' ' << v;
+  return s.str();
+}
+
+std::vector<SteeringChange> parse_log(const std::string& text, const std::string& file) {
+  std::vector<SteeringChange> out;
+  std::istringstream in(text);
+  int line_no = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++line_no;
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    std::istringstream s(line);
+    SteeringChange c;
+    if (!(s >> c.step)) continue;  // blank or comment line
+    if (!(s >> c.time >> c.name)) throw std::runtime_error(file + ":" + std::to_string(line_no) + ": expected '<step> <time> <name> <values>'");
+    for (double v; s >> v;) c.value.push_back(v);
+    if (!s.eof()) throw std::runtime_error(file + ":" + std::to_string(line_no) + ": a value is not a number");
+    if (!out.empty() && c.step < out.back().step)
+      throw std::runtime_error(file + ":" + std::to_string(line_no) + ": steps must not decrease");
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+std::vector<SteeringChange> read_log(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot read the steering log");
+  std::stringstream s;
+  s << in.rdbuf();
+  return parse_log(s.str(), path);
+}
+
+std::vector<SteeringChange> SteeringReplay::poll(std::int64_t step, double) {
+  std::vector<SteeringChange> now;
+  while (next_ < log_.size() && log_[next_].step < step) ++next_;  // older entries: already in the state
+  while (next_ < log_.size() && log_[next_].step == step) now.push_back(log_[next_++]);
+  return now;
+}
+
+}  // namespace spate

@@ -1,0 +1,108 @@
+// Physics against analytic solutions: hydrostatic pressure, Poiseuille flow, walls that hold.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+
+#include "case/generator.hpp"
+#include "comm/in_process_transport.hpp"
+#include "run_helpers.hpp"
+#include "sim/probes.hpp"
+#include "sim/slab_worker.hpp"
+
+namespace spate {
+namespace {
+
+struct HydrostaticResult {
+  std::vector<double> mean_pressure;   // per probe, averaged over the settled window
+  std::vector<double> expected;        // rho0 g depth
+  std::int64_t fluid_before = 0, fluid_after = 0;
+  std::size_t escapes = 0;             // fluid particles seen outside the tank interior, any step
+};
+
+// Runs a hydrostatic case one step at a time, checking every fluid particle against the tank's
+// interior at every step, and averages the pressure probes once the column has settled.
+HydrostaticResult run_hydrostatic(const std::string& file, double end_time, double settle_time) {
+  omp_set_num_threads(2);
+  const Case c = load_case(test::case_path(file));
+  const Lattice L = make_lattice(c);
+  InProcessHub hub(1);
+  auto t = hub.endpoint(0, false);
+  SlabWorker w(L, physics_params(c), *t);
+  ParticleStore all = generate_particles(c);
+  HydrostaticResult r;
+  for (auto k : all.kind) r.fluid_before += k == kFluid;
+  w.take_share(all, SlabLayout::uniform(L.cells[0], 1));
+  w.prepare(true);
+  TimeStepControl ctl;
+  const int v = c.dim - 1;
+  const double surface = c.fluid_blocks[0].max[v];
+  const double g = std::fabs(c.gravity[v]);
+  std::vector<std::int64_t> samples(c.probes.size(), 0);
+  r.mean_pressure.assign(c.probes.size(), 0.0);
+  for (auto& p : c.probes) r.expected.push_back(c.rho0 * g * (surface - p.position[v]));
+  double time = 0.0;
+  for (std::int64_t step = 0; time < end_time; ++step) {
+    const float dt = w.local_time_step(ctl);
+    EXPECT_FALSE(w.step(dt).has_value());
+    time += dt;
+    const ParticleStore& p = w.particles();
+    for (std::size_t i = 0; i < p.owned(); ++i) {
+      if (p.kind[i] != kFluid) continue;
+      for (int a = 0; a < c.dim; ++a) {
+        const double lo = c.tank_origin[a], hi = c.tank_origin[a] + c.tank_size[a] * (a == v ? 2.0 : 1.0);
+        if (p.pos[a][i] < lo || p.pos[a][i] > hi) ++r.escapes;
+      }
+    }
+    if (time > settle_time && step % 10 == 0)
+      for (std::size_t k = 0; k < c.probes.size(); ++k)
+        if (c.probes[k].type == ProbeType::Pressure) {
+          r.mean_pressure[k] += sample_pressure(w, c.probes[k].position);
+          ++samples[k];
+        }
+  }
+  for (std::size_t k = 0; k < samples.size(); ++k)
+    if (samples[k]) r.mean_pressure[k] /= static_cast<double>(samples[k]);
+  for (auto k : w.particles().kind) r.fluid_after += k == kFluid;
+  return r;
+}
+
+void expect_hydrostatic(const HydrostaticResult& r, const Case& c) {
+  EXPECT_EQ(r.escapes, 0u) << "fluid particles passed through a wall";
+  EXPECT_EQ(r.fluid_before, r.fluid_after) << "mass (particle count x particle mass) must be conserved exactly";
+  for (std::size_t k = 0; k < c.probes.size(); ++k) {
+    if (c.probes[k].type != ProbeType::Pressure) continue;
+    const double err = (r.mean_pressure[k] - r.expected[k]) / r.expected[k];
+    EXPECT_LT(std::fabs(err), 0.03) << c.probes[k].name << ": " << r.mean_pressure[k] << " Pa vs rho g d = " << r.expected[k];
+  }
+}
+
+TEST(Hydrostatic, Pressure2DWithinThreePercent) {
+  const auto r = run_hydrostatic("hydrostatic_2d.yaml", 1.5, 0.7);
+  expect_hydrostatic(r, load_case(test::case_path("hydrostatic_2d.yaml")));
+}
+
+TEST(Hydrostatic, Pressure3DWithinThreePercent) {
+  const auto r = run_hydrostatic("hydrostatic_3d.yaml", 0.8, 0.4);
+  expect_hydrostatic(r, load_case(test::case_path("hydrostatic_3d.yaml")));
+}
+
+// Plane Poiseuille flow: u(y) = F / (2 nu) y (L - y); centreline F L^2 / (8 nu).
+TEST(Poiseuille, SteadyCentrelineWithinThreePercent) {
+  const Case c = load_case(test::case_path("poiseuille_2d.yaml"));
+  const auto out = test::scratch("poiseuille");
+  const RunResult r = test::run_case(c, out);
+  ASSERT_EQ(r.exit_code, 0) << r.message;
+  const double nu = c.viscosity / c.rho0, F = c.body_force[0], L = c.tank_size[1];
+  const auto centre = test::read_probe(out / "probes" / "centreline.csv", 2);
+  const auto quarter = test::read_probe(out / "probes" / "quarter.csv", 2);
+  const double u_max = F * L * L / (8 * nu);
+  const double u_quarter = F / (2 * nu) * 0.25 * L * 0.75 * L;
+  EXPECT_NEAR(centre.back().second, u_max, 0.03 * u_max);
+  EXPECT_NEAR(quarter.back().second, u_quarter, 0.03 * u_quarter);
+  // Steady: the last tenth of the run changes the centreline by well under 1%.
+  EXPECT_NEAR(centre[centre.size() * 9 / 10].second, centre.back().second, 0.01 * u_max);
+}
+
+}  // namespace
+}  // namespace spate
