@@ -83,7 +83,7 @@ TEST(Hydrostatic, Pressure2DWithinThreePercent) {
 }
 
 TEST(Hydrostatic, Pressure3DWithinThreePercent) {
-  const auto r = run_hydrostatic("hydrostatic_3d.yaml", 0.8, 0.4);
+  const auto r = run_hydrostatic("hydrostatic_3d.yaml", 0.6, 0.3);
   expect_hydrostatic(r, load_case(test::case_path("hydrostatic_3d.yaml")));
 }
 
