@@ -8,7 +8,7 @@ namespace spate {
 template <int Dim>
 inline Vec<Dim> load_vec(const std::vector<float> (&a)[3], std::size_t i) {
   Vec<Dim> v;
-  for (int k = 0; k < Dim; ++k) v[k] = a[k][i];
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) v[k] = a[k][i];
   return v;
 }
 

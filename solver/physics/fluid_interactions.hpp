@@ -24,65 +24,76 @@ struct FluidRates {
   float density_rate = 0.0f;
 };
 
+// The contribution of neighbour j to fluid particle i. Branch-free, so that the CPU driver's inner
+// loop vectorises: beyond the support the kernel gradient is exactly 0, and for j = i the offset r
+// is 0, so every term vanishes by itself and adds +0 to the sums (which leaves them unchanged).
 template <class Kernel, int Dim>
-SPATE_HD void accumulate_fluid_pair(const PhysicsParams& P, const ParticleState<Dim>& i,
-                                    const ParticleState<Dim>& j, FluidRates<Dim>& out) {
+SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const ParticleState<Dim>& i,
+                                          const ParticleState<Dim>& j) {
   const Vec<Dim> r = i.x - j.x;  // r_ij
   const float r2 = dot(r, r);
-  if (r2 >= P.support2 || r2 == 0.0f) return;  // outside the support, or i itself
-  const float q = sqrtf(r2) * P.inv_h;
-  const float F = Kernel::gradient_factor(q, P.gradient_norm, P.inv_h2);  // grad_i W_ij = F r_ij
-  const bool j_fluid = is_fluid(j.kind);
-  const float volume_i = P.mass / i.rho;
-  const float volume_j = P.mass / j.rho;
-  const float r2_eta = r2 + P.eta2;
+  const float F = Kernel::gradient_factor(sqrtf(r2) * P.inv_h, P.gradient_norm, P.inv_h2);  // grad_i W_ij = F r_ij
+  const float j_fluid = is_fluid(j.kind) ? 1.0f : 0.0f;
+  const float inv_rho_i = 1.0f / i.rho;
+  const float inv_rho_j = 1.0f / j.rho;
+  const float volume_i = P.mass * inv_rho_i;
+  const float volume_j = P.mass * inv_rho_j;
+  const float inv_r2_eta = 1.0f / (r2 + P.eta2);
 
   // Walls are static: continuity and artificial viscosity see their real (zero) velocity, the
   // laminar term their extrapolated no-slip velocity (Adami et al. 2012).
-  const Vec<Dim> v_ij_wall = j_fluid ? i.v - j.v : i.v;
-  const Vec<Dim> v_ij_visc = i.v - j.v;
+  Vec<Dim> v_ij_wall, v_ij_visc;
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
+    v_ij_visc[k] = i.v[k] - j.v[k];
+    v_ij_wall[k] = i.v[k] - j_fluid * j.v[k];
+  }
   const float vr = dot(v_ij_wall, r);
 
   // Eq. 6 (normalised continuity; the same as d rho/dt = rho_i sum V_j v_ij . grad W).
   float drho = i.rho * volume_j * vr * F;
-  // Density diffusion between fluid particles (delta-SPH). r_ji . grad_i W = -r2 F.
-  if (P.diffusion != DensityDiffusion::None && j_fluid) {
-    float drho_ji = j.rho - i.rho;
-    if (P.diffusion == DensityDiffusion::Fourtakas) {
-      // Subtract the hydrostatic part (Fourtakas et al. 2019): rho^H_ji = rho0 g.r_ji / c^2 over one
-      // pair distance. c^2 = dp/drho of eq. 9 at the pair's mean density, c0^2 (rho/rho0)^6, not
-      // c0^2: at depth the Tait hydrostatic density gradient is a few percent below the linear one,
-      // and diffusing towards the linear profile biases deep pressures upward.
-      float g_dot_rji = 0.0f;
-      for (int k = 0; k < Dim; ++k) g_dot_rji -= P.gravity[k] * r[k];
-      const float s = 0.5f * (i.rho + j.rho) / P.rho0;
-      const float s2 = s * s;
-      drho_ji -= P.rho0 * g_dot_rji / (P.c0 * P.c0 * s2 * s2 * s2);
-    }
-    drho += P.delta * P.h * P.c0 * 2.0f * drho_ji * (-r2 * F) / r2_eta * volume_j;
-  }
+  // Density diffusion between fluid particles (delta-SPH, Molteni & Colagrossi 2009); r_ji . grad_i W
+  // = -r2 F. The Fourtakas et al. (2019) variant first subtracts the hydrostatic part
+  // rho^H_ji = rho0 g.r_ji / c^2 over one pair distance, with c^2 = dp/drho of eq. 9 at the pair's
+  // mean density, c0^2 (rho/rho0)^6, not c0^2: at depth the Tait hydrostatic density gradient is a
+  // few percent below the linear one, and diffusing towards the linear profile biases deep pressures
+  // upward. Switches are factors, not branches, so the loop stays vectorisable.
+  const float diffusion = P.diffusion == DensityDiffusion::None ? 0.0f : P.delta * P.h * P.c0 * 2.0f;
+  const float hydrostatic = P.diffusion == DensityDiffusion::Fourtakas ? P.rho0 / (P.c0 * P.c0) : 0.0f;
+  float g_dot_rji = 0.0f;
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) g_dot_rji -= P.gravity[k] * r[k];
+  const float s = 0.5f * (i.rho + j.rho) / P.rho0;
+  const float s2 = s * s;
+  const float drho_ji = (j.rho - i.rho) - hydrostatic * g_dot_rji / (s2 * s2 * s2);
+  drho += j_fluid * diffusion * drho_ji * (-r2 * F) * inv_r2_eta * volume_j;
 
-  // Eq. 7, pressure force.
-  float radial = -P.mass * (i.p + j.p) / (i.rho * j.rho) * F;
-  // Monaghan (1992) artificial viscosity, only for approaching pairs.
-  if (P.artificial_viscosity > 0.0f && vr < 0.0f) {
-    const float mu_ij = P.h * vr / r2_eta;
-    const float pi_ij = -P.artificial_viscosity * P.c0 * mu_ij / (0.5f * (i.rho + j.rho));
-    radial += -P.mass * pi_ij * F;
-  }
+  // Eq. 7, pressure force, and Monaghan (1992) artificial viscosity for approaching pairs (vr < 0;
+  // alpha = 0 switches it off).
+  const float mu_ij = P.h * (vr < 0.0f ? vr : 0.0f) * inv_r2_eta;
+  const float pi_ij = -P.artificial_viscosity * P.c0 * mu_ij / (0.5f * (i.rho + j.rho));
+  const float radial = -P.mass * ((i.p + j.p) * inv_rho_i * inv_rho_j + pi_ij) * F;
   // Eq. 8, inter-particle-averaged viscosity of Hu & Adams (2006): 2 mu_i mu_j / (mu_i + mu_j) = mu
   // for one fluid. The paper prints 4 mu_i mu_j / (mu_i + mu_j), twice the Hu & Adams (and Morris
   // 1997) value; with it the Poiseuille test settles at half the analytic velocity (docs/physics.md).
-  const float laminar = P.viscosity / P.mass * (volume_i * volume_i + volume_j * volume_j) * (r2 * F) / r2_eta;
+  const float laminar = P.viscosity / P.mass * (volume_i * volume_i + volume_j * volume_j) * (r2 * F) * inv_r2_eta;
 
-  for (int k = 0; k < Dim; ++k) out.acc[k] += radial * r[k] + laminar * v_ij_visc[k];
-  out.density_rate += drho;
+  FluidRates<Dim> out;
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) out.acc[k] = radial * r[k] + laminar * v_ij_visc[k];
+  out.density_rate = drho;
+  return out;
+}
+
+template <class Kernel, int Dim>
+SPATE_HD void accumulate_fluid_pair(const PhysicsParams& P, const ParticleState<Dim>& i,
+                                    const ParticleState<Dim>& j, FluidRates<Dim>& out) {
+  const FluidRates<Dim> t = fluid_pair_terms<Kernel, Dim>(P, i, j);
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) out.acc[k] += t.acc[k];
+  out.density_rate += t.density_rate;
 }
 
 // Body forces added once per fluid particle after the pair sum.
 template <int Dim>
 SPATE_HD void add_body_forces(const PhysicsParams& P, FluidRates<Dim>& out) {
-  for (int k = 0; k < Dim; ++k) out.acc[k] += P.gravity[k] + P.body_force[k];
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) out.acc[k] += P.gravity[k] + P.body_force[k];
 }
 
 // Mass summation, eq. 5 (times rho0): rho_i = sum_j m_j W_ij, self included by the caller's loop.

@@ -6,3 +6,12 @@
 #else
 #define SPATE_HD inline
 #endif
+
+// Loops over vector components (2 or 3) must disappear before the vectoriser looks at a pair loop.
+#if defined(__CUDACC__) || defined(__clang__)
+#define SPATE_UNROLL _Pragma("unroll")
+#elif defined(__GNUC__)
+#define SPATE_UNROLL _Pragma("GCC unroll 4")
+#else
+#define SPATE_UNROLL
+#endif

@@ -26,10 +26,11 @@ struct WendlandC2 {
     const float t2 = t * t;
     return norm * t2 * t2 * (2.0f * q + 1.0f);
   }
-  // dW/dr = norm * (-5 q / h) (1 - q/2)^3, so F = dW/dr / r = -5 norm (1 - q/2)^3 / h^2
+  // dW/dr = norm * (-5 q / h) (1 - q/2)^3, so F = dW/dr / r = -5 norm (1 - q/2)^3 / h^2.
+  // Branch-free (exactly 0 for q >= 2) so that pair loops vectorise.
   SPATE_HD static float gradient_factor(float q, float norm, float inv_h2) {
-    if (q >= 2.0f) return 0.0f;
-    const float t = 1.0f - 0.5f * q;
+    const float u = 1.0f - 0.5f * q;
+    const float t = u > 0.0f ? u : 0.0f;
     return -5.0f * norm * t * t * t * inv_h2;
   }
 };
@@ -48,12 +49,13 @@ struct CubicSpline {
     return norm * 0.25f * t * t * t;
   }
   // dW/dq = alpha (-3q + 2.25 q^2) for q<1, -0.75 alpha (2-q)^2 otherwise; F = dW/dq / (h r) = dW/dq / (q h^2)
+  // Branch-free (selects), exactly 0 for q >= 2.
   SPATE_HD static float gradient_factor(float q, float norm, float inv_h2) {
-    if (q >= 2.0f) return 0.0f;
-    if (q < 1.0f) return norm * (-3.0f + 2.25f * q) * inv_h2;
-    if (q <= 0.0f) return 0.0f;
-    const float t = 2.0f - q;
-    return -0.75f * norm * t * t / q * inv_h2;
+    const float inner = norm * (-3.0f + 2.25f * q) * inv_h2;
+    const float u = 2.0f - q;
+    const float t = u > 0.0f ? u : 0.0f;
+    const float outer = -0.75f * norm * t * t / (q > 1.0f ? q : 1.0f) * inv_h2;
+    return q < 1.0f ? inner : outer;
   }
 };
 

@@ -14,36 +14,36 @@ struct Vec {
 template <int Dim>
 SPATE_HD Vec<Dim> operator-(const Vec<Dim>& a, const Vec<Dim>& b) {
   Vec<Dim> r;
-  for (int k = 0; k < Dim; ++k) r[k] = a[k] - b[k];
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) r[k] = a[k] - b[k];
   return r;
 }
 template <int Dim>
 SPATE_HD Vec<Dim> operator+(const Vec<Dim>& a, const Vec<Dim>& b) {
   Vec<Dim> r;
-  for (int k = 0; k < Dim; ++k) r[k] = a[k] + b[k];
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) r[k] = a[k] + b[k];
   return r;
 }
 template <int Dim>
 SPATE_HD Vec<Dim> operator*(float s, const Vec<Dim>& a) {
   Vec<Dim> r;
-  for (int k = 0; k < Dim; ++k) r[k] = s * a[k];
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) r[k] = s * a[k];
   return r;
 }
 template <int Dim>
 SPATE_HD Vec<Dim>& operator+=(Vec<Dim>& a, const Vec<Dim>& b) {
-  for (int k = 0; k < Dim; ++k) a[k] += b[k];
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) a[k] += b[k];
   return a;
 }
 template <int Dim>
 SPATE_HD float dot(const Vec<Dim>& a, const Vec<Dim>& b) {
   float s = 0.0f;
-  for (int k = 0; k < Dim; ++k) s += a[k] * b[k];
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) s += a[k] * b[k];
   return s;
 }
 template <int Dim>
 SPATE_HD Vec<Dim> zero_vec() {
   Vec<Dim> r;
-  for (int k = 0; k < Dim; ++k) r[k] = 0.0f;
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) r[k] = 0.0f;
   return r;
 }
 

@@ -101,7 +101,7 @@ void wall_state(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) 
         const WallState<Dim> s = finish_wall(P, sums);
         p.pressure[w] = s.p;
         p.density[w] = s.rho;
-        for (int k = 0; k < Dim; ++k) p.vel[k][w] = s.v[k];
+        SPATE_UNROLL for (int k = 0; k < Dim; ++k) p.vel[k][w] = s.v[k];
       }
     });
   });
@@ -113,18 +113,17 @@ void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P)
     for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
       for (std::uint32_t i = b; i < e; ++i) {
         if (!is_fluid(p.kind[i])) {
-          for (int k = 0; k < Dim; ++k) p.acc[k][i] = 0.0f;
+          SPATE_UNROLL for (int k = 0; k < Dim; ++k) p.acc[k][i] = 0.0f;
           p.density_rate[i] = 0.0f;
           continue;
         }
         const ParticleState<Dim> si = load_state<Dim>(p, i);
         FluidRates<Dim> rates;
         v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
-          for (std::uint32_t j = jb; j < je; ++j)
-            accumulate_fluid_pair<Kernel, Dim>(P, si, load_state<Dim>(p, j), rates);
+          for (std::uint32_t j = jb; j < je; ++j) accumulate_fluid_pair<Kernel, Dim>(P, si, load_state<Dim>(p, j), rates);
         });
         add_body_forces(P, rates);
-        for (int k = 0; k < Dim; ++k) p.acc[k][i] = rates.acc[k];
+        SPATE_UNROLL for (int k = 0; k < Dim; ++k) p.acc[k][i] = rates.acc[k];
         p.density_rate[i] = P.density_mode == DensityMode::Continuity ? rates.density_rate : 0.0f;
       }
     });
