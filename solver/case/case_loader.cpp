@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -64,7 +65,10 @@ class Section {
     std::ostringstream s;
     s << ctx_.file;
     const std::string* set = ctx_.set_by(full(key));
-    if (!set && at && at.Mark().line >= 0) s << ':' << at.Mark().line + 1 << ':' << at.Mark().column + 1;
+    // The position of the node at fault; none for a key missing at the top level (the document's
+    // first line would only mislead) or a value given with --set.
+    const bool top_level_map = path_.empty() && at.IsDefined() && at.is(node_);
+    if (!set && !top_level_map && at && at.Mark().line >= 0) s << ':' << at.Mark().line + 1 << ':' << at.Mark().column + 1;
     s << ": key '" << full(key) << "'";
     if (set) s << " (from --set " << *set << ")";
     s << ": " << what;
@@ -444,6 +448,8 @@ Case parse_case(const std::string& yaml_text, const std::string& file_name, cons
 }
 
 Case load_case(const std::string& path, const std::vector<std::string>& overrides) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw CaseError(path + ": cannot read the case file (it is a folder)");
   std::ifstream in(path);
   if (!in) throw CaseError(path + ": cannot read the case file (" + std::string(std::strerror(errno)) + ")");
   std::stringstream s;

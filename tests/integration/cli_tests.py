@@ -107,7 +107,7 @@ def bad_case_is_a_folder(env):
     os.makedirs(folder)
     p = env.run("run", folder, "--out", env.path("out_must_not_exist"))
     check(p.returncode == 2, f"exit {p.returncode}")
-    check(folder in p.stderr, "the message does not name the path")
+    check(folder in p.stderr and "cannot read" in p.stderr, "the message does not name the path and the reason")
     check(not os.path.exists(env.path("out_must_not_exist")), "output folder created")
 
 
