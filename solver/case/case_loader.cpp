@@ -318,6 +318,10 @@ Case read(Section& root, const std::string& file) {
     if (c.delta < 0 || c.delta > 1) s.fail(s.raw("delta"), "delta", "must be between 0 and 1");
     c.density_min_ratio = s.number("min_ratio", 0.5);
     c.density_max_ratio = s.number("max_ratio", 2.0);
+    // Outside these limits the run stops as unstable; limits that exclude rho0 would stop it at once.
+    if (!(c.density_min_ratio >= 0 && c.density_min_ratio < 1))
+      s.fail(s.raw("min_ratio"), "min_ratio", "must be in [0, 1) (a fraction of the reference density)");
+    if (!(c.density_max_ratio > 1)) s.fail(s.raw("max_ratio"), "max_ratio", "must be > 1 (a multiple of the reference density)");
     s.finish();
   }
   if (auto t = root.child("time")) {
@@ -344,6 +348,7 @@ Case read(Section& root, const std::string& file) {
   if (c.wall_layers < 1 || c.wall_layers > 8) tank->fail(tank->raw("wall_layers"), "wall_layers", "must be between 1 and 8");
   c.open_top = tank->boolean("open_top", true);
   c.headroom = tank->number("headroom", 0.5);
+  if (c.headroom < 0) tank->fail(tank->raw("headroom"), "headroom", "must be >= 0 (a fraction of the tank height)");
   if (tank->has("periodic")) {
     YAML::Node p = tank->raw("periodic");
     if (!p.IsSequence()) tank->fail(p, "periodic", "expected a list of axes, e.g. [x]");
@@ -386,6 +391,9 @@ Case read(Section& root, const std::string& file) {
   for (auto& p : root.list("probes")) {
     ProbeSpec probe;
     probe.name = p.text("name");
+    // Each probe writes probes/<name>.csv.
+    for (auto& other : c.probes)
+      if (other.name == probe.name) p.fail(p.raw("name"), "name", "probe '" + probe.name + "' is defined twice");
     probe.type = p.choice<ProbeType>("type", ProbeType::Pressure,
                                      {{"pressure", ProbeType::Pressure}, {"velocity", ProbeType::Velocity}, {"height", ProbeType::Height},
                                       {"force", ProbeType::Force}, {"front", ProbeType::Front}});

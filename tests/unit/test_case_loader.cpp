@@ -226,6 +226,12 @@ TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
       {"--set through a scalar", {"dp.x=1"}, {"--set 'dp.x=1'", "not a map"}},
       {"min above max", {"fluid_blocks=[{min: [0.1, 0], max: [0.05, 0.05]}]"}, {"fluid_blocks[0].max", "greater than min"}},
       {"vertical periodic", {"tank.periodic=[y]"}, {"'tank.periodic'", "vertical"}},
+      {"density limits excluding rho0", {"density.max_ratio=0.9"}, {"'density.max_ratio'", "> 1"}},
+      {"negative density limit", {"density.min_ratio=-0.5"}, {"'density.min_ratio'", "[0, 1)"}},
+      {"negative headroom", {"tank.headroom=-1"}, {"'tank.headroom'", ">= 0"}},
+      {"probe defined twice", {"probes=[{name: p, position: [0.01, 0.01]}, {name: p, position: [0.02, 0.01]}]"},
+       {"probes[1].name", "defined twice"}},
+      {"probe on a missing solid", {"probes=[{name: f, type: force, solid: nope}]"}, {"probes[0].solid", "no solid named 'nope'"}},
   };
   for (const BadCase& b : cases) {
     const std::string message = error_of(kMinimal2D, b.overrides);
