@@ -340,6 +340,26 @@ def compare_split_independent(env):
     check(p.returncode == 0, "1 and 2 devices must give bit-identical results")
 
 
+@test
+def compare_restart_bit_identical(env):
+    # 10 steps in one go against 5 steps + a restart for 5 more (on two devices).
+    p = env.run("run", env.tiny, "--steps", "10", "--out", env.path("straight"), "--quiet")
+    check(p.returncode == 0, f"exit {p.returncode}")
+    straight = final_checkpoint(env, env.path("straight"), 10)
+    p = env.run("run", env.tiny, "--steps", "5", "--out", env.path("first"), "--quiet")
+    half = final_checkpoint(env, env.path("first"), 5)
+    p = env.run("run", env.tiny, "--restart", half, "--steps", "5", "--devices", "2", "--out", env.path("second"), "--quiet")
+    check(p.returncode == 0, f"restart: exit {p.returncode}")
+    resumed = final_checkpoint(env, env.path("second"), 10)
+    p = env.run("compare", straight, resumed)
+    check(p.returncode == 0, "a restarted run must be bit-identical to an uninterrupted one")
+    # A checkpoint of another case is bad input.
+    other = os.path.join(env.shipped, "dam_break_2d.yaml")
+    p = env.run("run", other, "--restart", half, "--steps", "1", "--out", env.path("wrong"), "--quiet")
+    check(p.returncode == 2 and "checkpoint holds" in p.stderr, f"restart with another case: exit {p.returncode}")
+    check(not os.path.exists(env.path("wrong")), "output folder created for a bad restart")
+
+
 # ---- instability --------------------------------------------------------------------------------
 
 @test
