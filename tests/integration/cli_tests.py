@@ -396,6 +396,23 @@ def unstable_run(env):
     check(m.group(0) in p.stderr, f"the replay fails differently: {p.stderr.strip()}")
 
 
+@test
+def unstable_kinds(env):
+    # The other two kinds of instability: a particle thrown out of the domain, and NaN (an absurd
+    # sound speed overflows the Tait coefficient). Each: exit 3, the particle named, a diagnostic.
+    case = os.path.join(env.shipped, "dam_break_2d.yaml")
+    for label, setting, needle in [("left", "time.dt=0.01", "left the domain along"),
+                                   ("nan", "fluid.sound_speed=1e20", "non-finite")]:
+        out = env.path(label)
+        p = env.run("run", case, "--set", setting, "--steps", "50", "--out", out, "--quiet")
+        check(p.returncode == 3, f"{setting}: exit {p.returncode}, expected 3")
+        with open(os.path.join(out, "summary.json")) as f:
+            s = json.load(f)
+        check(s["exit_status"] == "unstable", f"{setting}: summary {s['exit_status']}")
+        check(re.search(r"step \d+, t = \S+ s: particle \d+ .*" + needle, s["message"]), f"{setting}: {s['message']}")
+        check(any(n.endswith(".vtm") for n in os.listdir(os.path.join(out, "diagnostic"))), "no diagnostic snapshot")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--spate", required=True)
