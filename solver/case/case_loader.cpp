@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -201,13 +202,18 @@ std::string leaf(const std::string& path) {
   return dot == std::string::npos ? path : path.substr(dot + 1);
 }
 
-// Fails on the first key (in reading order of the sections) that no section asked for, suggesting
-// the closest valid key: of the same section first, else of any section.
+// Fails on the first key (in reading order of the sections) that is given twice (YAML parsers
+// silently keep one of them) or that no section asked for, suggesting the closest valid key: of the
+// same section first, else of any section.
 void reject_unknown_keys(ReadContext& ctx) {
   for (auto& f : ctx.finished) {
     Section section(f.node, f.path, ctx);
+    std::map<std::string, int> first_line;
     for (auto it = f.node.begin(); it != f.node.end(); ++it) {
       const std::string k = it->first.Scalar();
+      if (auto [at, fresh] = first_line.emplace(k, it->first.Mark().line + 1); !fresh)
+        section.fail(it->first, k, at->second > 0 ? "is given twice (first on line " + std::to_string(at->second) + ")"
+                                                  : "is given twice");
       if (f.known.count(k)) continue;
       std::string best;
       std::size_t best_d = 1000;
