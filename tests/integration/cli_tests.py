@@ -138,6 +138,13 @@ def bad_unknown_key(env):
 
 
 @test
+def bad_duplicate_key(env):
+    # YAML parsers keep one of two equal keys silently; spate refuses the case.
+    path = env.variant("dup.yaml", "dp: 0.005", "dp: 0.005\ndp: 0.01")
+    expect_bad_input(env, [path], re.compile(re.escape(path) + r":\d+:1: key 'dp'"), "given twice")
+
+
+@test
 def bad_wrong_type(env):
     path = env.variant("type.yaml", "dp: 0.005", "dp: fine")
     expect_bad_input(env, [path], re.compile(re.escape(path) + r":\d+:\d+: key 'dp'"), "expected a number", "fine")
