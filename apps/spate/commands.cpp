@@ -47,11 +47,12 @@ int run_command(const RunArgs& a) {
   check_backend(a.backend);
   if (!a.pipelines.empty() || a.insitu_every || !a.live.empty())
     throw BadInput("--pipeline/--insitu-every/--live: this spate was built without ParaView Catalyst");
-  if (a.steps && *a.steps < 0) throw BadInput("--steps: must be >= 0");
-  if (a.until && !(*a.until > 0)) throw BadInput("--until: must be > 0");
-  if (a.threads < 0) throw BadInput("--threads: must be >= 0 (0: all cores)");
+  if (a.steps && *a.steps < 0) throw BadInput(fmt::format("--steps {}: must be >= 0", *a.steps));
+  if (a.until && !(*a.until > 0)) throw BadInput(fmt::format("--until {}: must be > 0", *a.until));
+  if (a.threads < 0) throw BadInput(fmt::format("--threads {}: must be >= 0 (0: all cores)", a.threads));
   if (a.devices < 1) throw BadInput(fmt::format("--devices {}: must be at least 1", a.devices));
-  if (a.checkpoint_every && *a.checkpoint_every < 0) throw BadInput("--checkpoint-every: must be >= 0");
+  if (a.checkpoint_every && *a.checkpoint_every < 0)
+    throw BadInput(fmt::format("--checkpoint-every {}: must be >= 0", *a.checkpoint_every));
 
   RunOptions o;
   o.out_dir = a.out.empty() ? std::filesystem::path("out") / c.name : std::filesystem::path(a.out);
@@ -137,6 +138,7 @@ int info_command(const InfoArgs& a) {
 }
 
 int compare_command(const CompareArgs& a) {
+  if (!(a.tolerance >= 0)) throw BadInput(fmt::format("--tolerance {}: must be >= 0", a.tolerance));
   ParticleStore pa, pb;
   CheckpointMeta ma, mb;
   try {
@@ -186,7 +188,7 @@ int bench_command(const BenchArgs& a) {
   overrides.push_back("output.interval=0");
   overrides.push_back("probes=[]");
   Case c = load(a.case_file, overrides);
-  if (a.steps < 1) throw BadInput("--steps: must be >= 1");
+  if (a.steps < 1) throw BadInput(fmt::format("--steps {}: must be >= 1", a.steps));
   // Neighbour interactions per step: fluid-particle pairs inside the support at the initial state.
   std::int64_t interactions = 0;
   {

@@ -16,6 +16,10 @@ int main(int argc, char** argv) {
       "Exit codes: 0 done; 1 compare found differences; 2 bad input (case file, options, restart file);\n"
       "            3 the run went unstable (diagnostic snapshot written, last good checkpoint kept); 4 internal error.");
   app.require_subcommand(1);
+  // Parse errors look like every other bad-input message (and exit 2, below).
+  app.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return fmt::format("spate: error: {}\nRun 'spate --help' or 'spate COMMAND --help' for more information.\n", e.what());
+  });
 
   RunArgs run;
   auto* run_cmd = app.add_subcommand("run", "Run a case");

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -16,40 +18,71 @@ namespace spate {
 
 namespace {
 
+// Edits (insert, delete, substitute, swap two neighbours) between a and b: the optimal string
+// alignment distance, so that the usual typo `edn` is one edit from `end`.
 std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  std::vector<std::size_t> before(b.size() + 1), prev(b.size() + 1), row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
   for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diag = row[0];
     row[0] = i;
     for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diag = up;
+      row[j] = std::min({prev[j] + 1, row[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) row[j] = std::min(row[j], before[j - 2] + 1);
     }
+    std::swap(before, prev);
+    std::swap(prev, row);
   }
-  return row[b.size()];
+  return prev[b.size()];
 }
+
+// What one read of a case shares between its sections.
+struct ReadContext {
+  std::string file;
+  // Keys replaced by --set: their nodes carry positions inside the option's text, not in the file,
+  // so messages about them quote the option instead of a line and column.
+  std::vector<std::pair<std::string, std::string>> overridden;  // key path, the whole --set text
+  // Every key the reader asked for, as a full path, so that an unknown key can be matched against
+  // the keys of every section (a top-level `viscocity` suggests `fluid.viscosity`).
+  std::set<std::string> valid_paths;
+  struct Finished {
+    YAML::Node node;
+    std::string path;
+    std::set<std::string> known;
+  };
+  std::vector<Finished> finished;  // checked for unknown keys once every section has been read
+
+  const std::string* set_by(const std::string& path) const {
+    for (auto& [key, assignment] : overridden)
+      if (path == key || path.starts_with(key + ".") || path.starts_with(key + "[")) return &assignment;
+    return nullptr;
+  }
+};
 
 class Section {
  public:
-  Section(YAML::Node node, std::string path, const std::string& file) : node_(node), path_(std::move(path)), file_(file) {}
+  Section(YAML::Node node, std::string path, ReadContext& ctx) : node_(node), path_(std::move(path)), ctx_(ctx) {}
 
   [[noreturn]] void fail(const YAML::Node& at, const std::string& key, const std::string& what) const {
     std::ostringstream s;
-    s << file_;
-    if (at && at.Mark().line >= 0) s << ':' << at.Mark().line + 1 << ':' << at.Mark().column + 1;
-    s << ": key '" << full(key) << "': " << what;
+    s << ctx_.file;
+    const std::string* set = ctx_.set_by(full(key));
+    // The position of the node at fault; none for a key missing at the top level (the document's
+    // first line would only mislead) or a value given with --set.
+    const bool top_level_map = path_.empty() && at.IsDefined() && at.is(node_);
+    if (!set && !top_level_map && at && at.Mark().line >= 0) s << ':' << at.Mark().line + 1 << ':' << at.Mark().column + 1;
+    s << ": key '" << full(key) << "'";
+    if (set) s << " (from --set " << *set << ")";
+    s << ": " << what;
     throw CaseError(s.str());
   }
   std::string full(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
 
   bool has(const std::string& key) {
-    known_.insert(key);
+    remember(key);
     return node_[key].IsDefined() && !node_[key].IsNull();
   }
   YAML::Node raw(const std::string& key) {
-    known_.insert(key);
+    remember(key);
     return node_[key];
   }
 
@@ -126,7 +159,13 @@ class Section {
     YAML::Node n = raw(key);
     if (!n.IsDefined() || n.IsNull()) return std::nullopt;
     if (!n.IsMap()) fail(n, key, "expected a map of keys");
-    return Section(n, full(key), file_);
+    return Section(n, full(key), ctx_);
+  }
+  // A map of optional keys: read whether it is there or not (absent, every key takes its default),
+  // so its keys are valid names for the unknown-key suggestions either way.
+  Section optional_child(const std::string& key) {
+    if (auto s = child(key)) return *s;
+    return Section(YAML::Node(YAML::NodeType::Map), full(key), ctx_);
   }
   std::vector<Section> list(const std::string& key) {
     YAML::Node n = raw(key);
@@ -135,36 +174,66 @@ class Section {
     if (!n.IsSequence()) fail(n, key, "expected a list");
     for (std::size_t i = 0; i < n.size(); ++i) {
       if (!n[i].IsMap()) fail(n[i], key, "each entry must be a map of keys");
-      out.emplace_back(n[i], full(key) + "[" + std::to_string(i) + "]", file_);
+      out.emplace_back(n[i], full(key) + "[" + std::to_string(i) + "]", ctx_);
     }
     return out;
   }
-  // Every key must have been read by now.
-  void finish() const {
-    for (auto it = node_.begin(); it != node_.end(); ++it) {
-      const std::string k = it->first.Scalar();
-      if (known_.count(k)) continue;
-      std::string best;
-      std::size_t best_d = 1000;
-      for (auto& cand : known_) {
-        const std::size_t d = edit_distance(k, cand);
-        if (d < best_d) best_d = d, best = cand;
-      }
-      std::string msg = "unknown key";
-      if (!best.empty() && best_d <= std::max<std::size_t>(2, k.size() / 3)) msg += " (did you mean '" + full(best) + "'?)";
-      fail(it->first, k, msg);
-    }
-  }
+  // Every key of this section must have been read by now; the check itself waits for
+  // reject_unknown_keys(), when every valid key of the case is known.
+  void finish() const { ctx_.finished.push_back({node_, path_, known_}); }
   const YAML::Node& node() const { return node_; }
+  const std::set<std::string>& known() const { return known_; }
 
  private:
+  void remember(const std::string& key) {
+    known_.insert(key);
+    ctx_.valid_paths.insert(full(key));
+  }
+
   YAML::Node node_;
   std::string path_;
-  const std::string& file_;
+  ReadContext& ctx_;
   std::set<std::string> known_;
 };
 
-void apply_override(YAML::Node root, const std::string& file, const std::string& assignment) {
+// The last part of a key path: "fluid_blocks[0].min" -> "min".
+std::string leaf(const std::string& path) {
+  const auto dot = path.rfind('.');
+  return dot == std::string::npos ? path : path.substr(dot + 1);
+}
+
+// Fails on the first key (in reading order of the sections) that is given twice (YAML parsers
+// silently keep one of them) or that no section asked for, suggesting the closest valid key: of the
+// same section first, else of any section.
+void reject_unknown_keys(ReadContext& ctx) {
+  for (auto& f : ctx.finished) {
+    Section section(f.node, f.path, ctx);
+    std::map<std::string, int> first_line;
+    for (auto it = f.node.begin(); it != f.node.end(); ++it) {
+      const std::string k = it->first.Scalar();
+      if (auto [at, fresh] = first_line.emplace(k, it->first.Mark().line + 1); !fresh)
+        section.fail(it->first, k, at->second > 0 ? "is given twice (first on line " + std::to_string(at->second) + ")"
+                                                  : "is given twice");
+      if (f.known.count(k)) continue;
+      std::string best;
+      std::size_t best_d = 1000;
+      for (auto& cand : f.known) {
+        const std::size_t d = edit_distance(k, cand);
+        if (d < best_d) best_d = d, best = section.full(cand);
+      }
+      for (auto& path : ctx.valid_paths) {
+        const std::size_t d = edit_distance(k, leaf(path));
+        if (d < best_d) best_d = d, best = path;
+      }
+      std::string msg = "unknown key";
+      if (!best.empty() && best_d <= std::max<std::size_t>(2, k.size() / 3)) msg += " (did you mean '" + best + "'?)";
+      section.fail(it->first, k, msg);
+    }
+  }
+}
+
+// Returns the key path that was set.
+std::string apply_override(YAML::Node root, const std::string& file, const std::string& assignment) {
   const auto eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0)
     throw CaseError(file + ": --set '" + assignment + "': expected key.path=value");
@@ -187,6 +256,7 @@ void apply_override(YAML::Node root, const std::string& file, const std::string&
     chain.push_back(next);
   }
   chain.back()[parts.back()] = value;
+  return path;
 }
 
 Box read_box(Section& s, int dim) {
@@ -228,31 +298,37 @@ Case read(Section& root, const std::string& file) {
   g_default[d - 1] = -9.81;
   c.gravity = root.vector("gravity", d, g_default);
 
-  if (auto f = root.child("fluid")) {
-    c.rho0 = f->number("density", 1000.0);
-    if (!(c.rho0 > 0)) f->fail(f->raw("density"), "density", "must be > 0");
-    c.viscosity = f->number("viscosity", 1.0e-3);
-    if (c.viscosity < 0) f->fail(f->raw("viscosity"), "viscosity", "must be >= 0");
-    if (f->has("sound_speed") && !(f->raw("sound_speed").IsScalar() && f->raw("sound_speed").Scalar() == "auto")) {
-      c.sound_speed = f->number("sound_speed");
-      if (!(*c.sound_speed > 0)) f->fail(f->raw("sound_speed"), "sound_speed", "must be > 0 or 'auto'");
+  {
+    auto f = root.optional_child("fluid");
+    c.rho0 = f.number("density", 1000.0);
+    if (!(c.rho0 > 0)) f.fail(f.raw("density"), "density", "must be > 0");
+    c.viscosity = f.number("viscosity", 1.0e-3);
+    if (c.viscosity < 0) f.fail(f.raw("viscosity"), "viscosity", "must be >= 0");
+    if (f.has("sound_speed") && !(f.raw("sound_speed").IsScalar() && f.raw("sound_speed").Scalar() == "auto")) {
+      c.sound_speed = f.number("sound_speed");
+      if (!(*c.sound_speed > 0)) f.fail(f.raw("sound_speed"), "sound_speed", "must be > 0 or 'auto'");
     }
-    c.artificial_viscosity = f->number("artificial_viscosity", 0.0);
-    if (c.artificial_viscosity < 0) f->fail(f->raw("artificial_viscosity"), "artificial_viscosity", "must be >= 0");
-    c.body_force = f->vector("body_force", d, Vec3d{0, 0, 0});
-    f->finish();
+    c.artificial_viscosity = f.number("artificial_viscosity", 0.0);
+    if (c.artificial_viscosity < 0) f.fail(f.raw("artificial_viscosity"), "artificial_viscosity", "must be >= 0");
+    c.body_force = f.vector("body_force", d, Vec3d{0, 0, 0});
+    f.finish();
   }
-  if (auto s = root.child("density")) {
-    c.density_mode = s->choice<DensityMode>("mode", DensityMode::Continuity,
+  {
+    auto s = root.optional_child("density");
+    c.density_mode = s.choice<DensityMode>("mode", DensityMode::Continuity,
                                             {{"continuity", DensityMode::Continuity}, {"summation", DensityMode::Summation}});
-    c.diffusion = s->choice<DensityDiffusion>(
+    c.diffusion = s.choice<DensityDiffusion>(
         "diffusion", DensityDiffusion::Fourtakas,
         {{"fourtakas", DensityDiffusion::Fourtakas}, {"molteni_colagrossi", DensityDiffusion::MolteniColagrossi}, {"none", DensityDiffusion::None}});
-    c.delta = s->number("delta", 0.1);
-    if (c.delta < 0 || c.delta > 1) s->fail(s->raw("delta"), "delta", "must be between 0 and 1");
-    c.density_min_ratio = s->number("min_ratio", 0.5);
-    c.density_max_ratio = s->number("max_ratio", 2.0);
-    s->finish();
+    c.delta = s.number("delta", 0.1);
+    if (c.delta < 0 || c.delta > 1) s.fail(s.raw("delta"), "delta", "must be between 0 and 1");
+    c.density_min_ratio = s.number("min_ratio", 0.5);
+    c.density_max_ratio = s.number("max_ratio", 2.0);
+    // Outside these limits the run stops as unstable; limits that exclude rho0 would stop it at once.
+    if (!(c.density_min_ratio >= 0 && c.density_min_ratio < 1))
+      s.fail(s.raw("min_ratio"), "min_ratio", "must be in [0, 1) (a fraction of the reference density)");
+    if (!(c.density_max_ratio > 1)) s.fail(s.raw("max_ratio"), "max_ratio", "must be > 1 (a multiple of the reference density)");
+    s.finish();
   }
   if (auto t = root.child("time")) {
     c.end_time = t->number("end");
@@ -278,6 +354,7 @@ Case read(Section& root, const std::string& file) {
   if (c.wall_layers < 1 || c.wall_layers > 8) tank->fail(tank->raw("wall_layers"), "wall_layers", "must be between 1 and 8");
   c.open_top = tank->boolean("open_top", true);
   c.headroom = tank->number("headroom", 0.5);
+  if (c.headroom < 0) tank->fail(tank->raw("headroom"), "headroom", "must be >= 0 (a fraction of the tank height)");
   if (tank->has("periodic")) {
     YAML::Node p = tank->raw("periodic");
     if (!p.IsSequence()) tank->fail(p, "periodic", "expected a list of axes, e.g. [x]");
@@ -320,6 +397,9 @@ Case read(Section& root, const std::string& file) {
   for (auto& p : root.list("probes")) {
     ProbeSpec probe;
     probe.name = p.text("name");
+    // Each probe writes probes/<name>.csv.
+    for (auto& other : c.probes)
+      if (other.name == probe.name) p.fail(p.raw("name"), "name", "probe '" + probe.name + "' is defined twice");
     probe.type = p.choice<ProbeType>("type", ProbeType::Pressure,
                                      {{"pressure", ProbeType::Pressure}, {"velocity", ProbeType::Velocity}, {"height", ProbeType::Height},
                                       {"force", ProbeType::Force}, {"front", ProbeType::Front}});
@@ -341,19 +421,21 @@ Case read(Section& root, const std::string& file) {
     p.finish();
     c.probes.push_back(probe);
   }
-  if (auto o = root.child("output")) {
-    c.output_interval = o->number("interval", 0.0);
-    c.probe_interval = o->number("probe_interval", 0.0);
-    c.checkpoint_every = o->integer("checkpoint_every", 0);
-    if (c.output_interval < 0) o->fail(o->raw("interval"), "interval", "must be >= 0");
-    if (c.probe_interval < 0) o->fail(o->raw("probe_interval"), "probe_interval", "must be >= 0");
-    if (c.checkpoint_every < 0) o->fail(o->raw("checkpoint_every"), "checkpoint_every", "must be >= 0");
-    o->finish();
+  {
+    auto o = root.optional_child("output");
+    c.output_interval = o.number("interval", 0.0);
+    c.probe_interval = o.number("probe_interval", 0.0);
+    c.checkpoint_every = o.integer("checkpoint_every", 0);
+    if (c.output_interval < 0) o.fail(o.raw("interval"), "interval", "must be >= 0");
+    if (c.probe_interval < 0) o.fail(o.raw("probe_interval"), "probe_interval", "must be >= 0");
+    if (c.checkpoint_every < 0) o.fail(o.raw("checkpoint_every"), "checkpoint_every", "must be >= 0");
+    o.finish();
   }
-  if (auto dcmp = root.child("decomposition")) {
-    c.balance_every = dcmp->integer("balance_every", 100);
-    if (c.balance_every < 0) dcmp->fail(dcmp->raw("balance_every"), "balance_every", "must be >= 0 (0: never)");
-    dcmp->finish();
+  {
+    auto dcmp = root.optional_child("decomposition");
+    c.balance_every = dcmp.integer("balance_every", 100);
+    if (c.balance_every < 0) dcmp.fail(dcmp.raw("balance_every"), "balance_every", "must be >= 0 (0: never)");
+    dcmp.finish();
   }
   root.finish();
   return c;
@@ -370,14 +452,18 @@ Case parse_case(const std::string& yaml_text, const std::string& file_name, cons
                     ": YAML syntax error: " + e.msg);
   }
   if (!root.IsMap()) throw CaseError(file_name + ": expected a YAML map of case keys at the top level");
-  for (auto& o : overrides) apply_override(root, file_name, o);
-  Section top(root, "", file_name);
+  ReadContext ctx{file_name, {}, {}, {}};
+  for (auto& o : overrides) ctx.overridden.emplace_back(apply_override(root, file_name, o), o);
+  Section top(root, "", ctx);
   Case c = read(top, file_name);
+  reject_unknown_keys(ctx);
   c.source_yaml = YAML::Dump(root);
   return c;
 }
 
 Case load_case(const std::string& path, const std::vector<std::string>& overrides) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw CaseError(path + ": cannot read the case file (it is a folder)");
   std::ifstream in(path);
   if (!in) throw CaseError(path + ": cannot read the case file (" + std::string(std::strerror(errno)) + ")");
   std::stringstream s;

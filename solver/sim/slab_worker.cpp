@@ -62,10 +62,14 @@ std::optional<ParticleFault> SlabWorker::wrap_and_check_domain() {
         if (x[i] >= hi) x[i] -= lattice_.period[a];
         else if (x[i] < lo) x[i] += lattice_.period[a];
       }
-      const int c = lattice_.cell_of(x[i], a);
-      if (!(c >= 0 && c < lattice_.cells[a]) && (!fault || particles_.id[i] < fault->id)) {
+      // A NaN or infinite position is reported as such (and never converted to a cell index).
+      const bool finite = std::isfinite(x[i]);
+      const bool inside = finite && x[i] >= lo - lattice_.cell_size[a] && x[i] <= hi + lattice_.cell_size[a] &&
+                          lattice_.cell_of(x[i], a) >= 0 && lattice_.cell_of(x[i], a) < lattice_.cells[a];
+      if (!inside && (!fault || particles_.id[i] < fault->id)) {
         std::ostringstream s;
-        s << "left the domain along " << "xyz"[a] << " (position " << x[i] << " m, domain [" << lo << ", " << hi << "] m)";
+        if (!finite) s << "has a non-finite position along " << "xyz"[a] << " (" << x[i] << ")";
+        else s << "left the domain along " << "xyz"[a] << " (position " << x[i] << " m, domain [" << lo << ", " << hi << "] m)";
         fault = ParticleFault{particles_.id[i], s.str()};
       }
     }

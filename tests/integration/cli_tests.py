@@ -1,0 +1,450 @@
+#!/usr/bin/env python3
+"""Integration tests of the real `spate` program: bad input (exit 2, a message naming the file, key
+and reason, nothing written), `info --json`, `compare`, and an unstable run (exit 3).
+
+    cli_tests.py --spate build/bin/spate --cases tests/cases --shipped cases --work DIR NAME
+    cli_tests.py ... --list          prints the test names (CTest registers one test per name)
+
+Each test gets an empty folder DIR/NAME; the output folder of a bad run is a path inside it that
+must still not exist afterwards.
+"""
+import argparse
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+TESTS = {}
+
+
+def test(fn):
+    TESTS[fn.__name__] = fn
+    return fn
+
+
+class Failure(Exception):
+    pass
+
+
+def check(cond, what):
+    if not cond:
+        raise Failure(what)
+
+
+class Env:
+    def __init__(self, args, name):
+        self.spate = os.path.abspath(args.spate)
+        self.cases = os.path.abspath(args.cases)
+        self.shipped = os.path.abspath(args.shipped)
+        self.work = os.path.join(os.path.abspath(args.work), name)
+        shutil.rmtree(self.work, ignore_errors=True)
+        os.makedirs(self.work)
+        self.tiny = os.path.join(self.cases, "tiny_2d.yaml")
+
+    def run(self, *argv, timeout=120):
+        env = dict(os.environ, OMP_NUM_THREADS=os.environ.get("OMP_NUM_THREADS", "1"))
+        p = subprocess.run([self.spate, *argv], capture_output=True, text=True, timeout=timeout,
+                           cwd=self.work, env=env)
+        print("$ spate " + " ".join(argv))
+        print(f"  exit {p.returncode}")
+        for line in (p.stdout + p.stderr).strip().splitlines()[:30]:
+            print("  | " + line)
+        return p
+
+    def path(self, *parts):
+        return os.path.join(self.work, *parts)
+
+    def write_case(self, name, text):
+        path = self.path(name)
+        with open(path, "w") as f:
+            f.write(text)
+        return path
+
+    def tiny_text(self):
+        with open(self.tiny) as f:
+            return f.read()
+
+    def variant(self, name, old, new):
+        """The tiny case with one piece of text replaced (checked to be there)."""
+        text = self.tiny_text()
+        check(old in text, f"test bug: '{old}' not in tiny_2d.yaml")
+        return self.write_case(name, text.replace(old, new, 1))
+
+
+def expect_bad_input(env, argv, *needles, command="run"):
+    """Runs `spate COMMAND argv --out OUT`: exit 2, every needle in stderr, OUT never created."""
+    out = env.path("out_must_not_exist")
+    full = [command, *argv] + (["--out", out, "--quiet"] if command == "run" else [])
+    p = env.run(*full)
+    check(p.returncode == 2, f"exit code {p.returncode}, expected 2 (bad input)")
+    message = p.stderr
+    check(message.strip() != "", "no message on stderr")
+    for needle in needles:
+        if isinstance(needle, re.Pattern):
+            check(needle.search(message), f"message does not match /{needle.pattern}/: {message.strip()}")
+        else:
+            check(needle in message, f"'{needle}' not in the message: {message.strip()}")
+    check(not os.path.exists(out), f"{out} was created by a run with bad input")
+    check(sorted(os.listdir(env.work)) == sorted(f for f in os.listdir(env.work) if f.endswith(".yaml")),
+          f"files written into the working folder: {os.listdir(env.work)}")
+    return message
+
+
+# ---- bad input: the case file -------------------------------------------------------------------
+
+@test
+def bad_unreadable_file(env):
+    missing = env.path("no_such_case.yaml")
+    expect_bad_input(env, [missing], missing, "cannot read")
+    expect_bad_input(env, [missing], missing, "cannot read", command="info")
+
+
+@test
+def bad_case_is_a_folder(env):
+    folder = env.path("folder.yaml")
+    os.makedirs(folder)
+    p = env.run("run", folder, "--out", env.path("out_must_not_exist"))
+    check(p.returncode == 2, f"exit {p.returncode}")
+    check(folder in p.stderr and "cannot read" in p.stderr, "the message does not name the path and the reason")
+    check(not os.path.exists(env.path("out_must_not_exist")), "output folder created")
+
+
+@test
+def bad_yaml_syntax(env):
+    # An unclosed flow list breaks the document; the parser reports where it noticed.
+    path = env.variant("syntax.yaml", "  size: [0.1, 0.05]", "  size: [0.1, 0.05")
+    msg = expect_bad_input(env, [path], "YAML syntax error")
+    check(re.search(re.escape(path) + r":\d+:\d+: ", msg), f"no file:line:column in: {msg}")
+    expect_bad_input(env, [path], re.compile(re.escape(path) + r":\d+:\d+: "), command="info")
+
+
+@test
+def bad_yaml_not_a_map(env):
+    path = env.write_case("list.yaml", "- 1\n- 2\n")
+    expect_bad_input(env, [path], path, "map")
+
+
+@test
+def bad_unknown_key(env):
+    # A misspelt key in the right section, and a key in the wrong section.
+    path = env.variant("typo.yaml", "  viscosity: 0.001", "  viscocity: 0.001")
+    expect_bad_input(env, [path], f"{path}:", "'fluid.viscocity'", "unknown key", "did you mean 'fluid.viscosity'")
+    path = env.variant("misplaced.yaml", "dp: 0.005", "dp: 0.005\nviscocity: 0.001")
+    expect_bad_input(env, [path], f"{path}:", "'viscocity'", "unknown key", "did you mean 'fluid.viscosity'")
+    # The same through --set: the message quotes the option.
+    expect_bad_input(env, [env.tiny, "--set", "time.edn=1"], "'time.edn'", "--set time.edn=1", "did you mean 'time.end'")
+
+
+@test
+def bad_duplicate_key(env):
+    # YAML parsers keep one of two equal keys silently; spate refuses the case.
+    path = env.variant("dup.yaml", "dp: 0.005", "dp: 0.005\ndp: 0.01")
+    expect_bad_input(env, [path], re.compile(re.escape(path) + r":\d+:1: key 'dp'"), "given twice")
+
+
+@test
+def bad_wrong_type(env):
+    path = env.variant("type.yaml", "dp: 0.005", "dp: fine")
+    expect_bad_input(env, [path], re.compile(re.escape(path) + r":\d+:\d+: key 'dp'"), "expected a number", "fine")
+    path = env.variant("type_list.yaml", "  size: [0.1, 0.05]", "  size: 0.1")
+    expect_bad_input(env, [path], "'tank.size'", "list of 2 numbers")
+    path = env.variant("type_bool.yaml", "  wall_layers: 3", "  wall_layers: 3\n  open_top: maybe")
+    expect_bad_input(env, [path], "'tank.open_top'", "true or false")
+    expect_bad_input(env, [env.tiny, "--set", "tank.wall_layers=2.5"], "'tank.wall_layers'", "integer")
+    expect_bad_input(env, [env.tiny, "--set", "kernel=gaussian"], "'kernel'", "wendland_c2")
+
+
+@test
+def bad_missing_required_key(env):
+    path = env.variant("no_dp.yaml", "dp: 0.005\n", "")
+    expect_bad_input(env, [path], path, "'dp'", "required")
+    path = env.variant("no_tank.yaml", "tank:\n  origin: [0, 0]\n  size: [0.1, 0.05]\n  wall_layers: 3\n", "")
+    expect_bad_input(env, [path], path, "'tank'", "required")
+    path = env.variant("no_name.yaml", "name: tiny_2d\n", "")
+    expect_bad_input(env, [path], path, "'name'", "required")
+
+
+@test
+def bad_dp_not_positive(env):
+    path = env.variant("dp0.yaml", "dp: 0.005", "dp: 0")
+    expect_bad_input(env, [path], re.compile(re.escape(path) + r":\d+:\d+: key 'dp'"), "> 0")
+    expect_bad_input(env, [env.tiny, "--set", "dp=-0.005"], "'dp'", "--set dp=-0.005", "> 0")
+
+
+@test
+def bad_negative_density(env):
+    path = env.variant("rho.yaml", "  density: 1000", "  density: -1000")
+    expect_bad_input(env, [path], path, "'fluid.density'", "> 0")
+
+
+@test
+def bad_negative_viscosity(env):
+    path = env.variant("mu.yaml", "  viscosity: 0.001", "  viscosity: -0.001")
+    expect_bad_input(env, [path], path, "'fluid.viscosity'", ">= 0")
+
+
+@test
+def bad_fluid_outside_tank(env):
+    path = env.variant("outside.yaml", "    max: [0.05, 0.03]", "    max: [0.15, 0.03]")
+    expect_bad_input(env, [path], path, "fluid_blocks[0]", "outside the tank")
+
+
+@test
+def bad_solid_outside_tank(env):
+    path = env.write_case("solid_out.yaml", env.tiny_text() +
+                          "solids:\n  - name: post\n    min: [0.08, 0]\n    max: [0.12, 0.02]\n")
+    expect_bad_input(env, [path], path, "solids[0]", "outside the tank")
+
+
+@test
+def bad_fluid_overlaps_solid(env):
+    path = env.write_case("overlap.yaml", env.tiny_text() +
+                          "solids:\n  - name: post\n    min: [0.04, 0]\n    max: [0.06, 0.02]\n")
+    expect_bad_input(env, [path], path, "solids[0]", "post", "overlaps a fluid block")
+
+
+@test
+def bad_zero_particles(env):
+    # A block between two rows of site centres holds no particle; and no fluid at all.
+    path = env.variant("thin.yaml", "  - min: [0, 0]\n    max: [0.05, 0.03]",
+                       "  - min: [0.0051, 0]\n    max: [0.0074, 0.03]")
+    expect_bad_input(env, [path], path, "no fluid particles")
+    expect_bad_input(env, [path], path, "no fluid particles", command="info")
+    expect_bad_input(env, [env.tiny, "--set", "fluid_blocks=[]"], "'fluid_blocks'", "no fluid")
+
+
+@test
+def bad_set_syntax(env):
+    expect_bad_input(env, [env.tiny, "--set", "dp"], "--set 'dp'", "key.path=value")
+    expect_bad_input(env, [env.tiny, "--set", "dp.x=1"], "--set 'dp.x=1'", "not a map")
+
+
+# ---- bad input: command-line options ------------------------------------------------------------
+
+@test
+def bad_cli_options(env):
+    expect_bad_input(env, [env.tiny, "--devices", "0"], "--devices 0", "at least 1")
+    expect_bad_input(env, [env.tiny, "--steps", "-1"], "--steps -1", ">= 0")
+    expect_bad_input(env, [env.tiny, "--backend", "opencl"], "--backend opencl", "'cpu' or 'cuda'")
+    expect_bad_input(env, [env.tiny, "--until", "-1"], "--until -1", "> 0")
+    expect_bad_input(env, [env.tiny, "--threads", "-2"], "--threads -2", ">= 0")
+    expect_bad_input(env, [env.tiny, "--checkpoint-every", "-5"], "--checkpoint-every -5", ">= 0")
+    expect_bad_input(env, [env.tiny, "--devices", "50"], "--devices 50", "at most")
+    expect_bad_input(env, [env.tiny, "--steps", "many"], "spate: error:", "--steps")
+    expect_bad_input(env, [env.tiny, "--no-such-option"], "spate: error:", "--no-such-option")
+    expect_bad_input(env, [env.tiny, "--devices", "0"], "--devices 0", "at least 1", command="info")
+    expect_bad_input(env, [env.tiny, "--restart", env.path("missing.h5")], "missing.h5")
+    p = env.run("frobnicate")
+    check(p.returncode == 2, f"unknown subcommand: exit {p.returncode}")
+
+
+@test
+def help_lists_exit_codes(env):
+    p = env.run("--help")
+    check(p.returncode == 0, f"exit {p.returncode}")
+    for needle in ["Exit codes", "0 done", "2 bad input", "3 the run went unstable", "run", "info", "compare"]:
+        check(needle in p.stdout, f"'{needle}' not in spate --help")
+
+
+# ---- info ---------------------------------------------------------------------------------------
+
+@test
+def info_json(env):
+    p = env.run("info", env.tiny, "--json")
+    check(p.returncode == 0, f"exit {p.returncode}")
+    j = json.loads(p.stdout)
+    for key in ["case", "dimensions", "particles", "dp", "smoothing_length", "sound_speed",
+                "sound_speed_automatic", "dt", "dt_adaptive", "cells", "bytes_per_particle",
+                "memory_bytes", "backend"]:
+        check(key in j, f"info --json lacks '{key}'")
+    check(j["case"] == "tiny_2d" and j["dimensions"] == 2, "case name or dimensions")
+    # 20 x 10 interior sites, 10 x 6 of water; walls: 26 x 13 sites (3 layers, open top) minus 200.
+    check(j["particles"] == {"fluid": 60, "wall": 138, "total": 198}, f"particles: {j['particles']}")
+    check(abs(j["dp"] - 0.005) < 1e-12, "dp")
+    check(abs(j["smoothing_length"] - 1.3 * 0.005) < 1e-8, "h = 1.3 dp")
+    c0 = 10 * (9.81 * 0.03) ** 0.5  # automatic: 10 sqrt(g H), H = 0.03 m
+    check(abs(j["sound_speed"] - c0) < 1e-5 * c0 and j["sound_speed_automatic"] is True, f"c0 {j['sound_speed']} vs {c0}")
+    check(j["dt_adaptive"] is True and 0 < j["dt"] < 0.2 * 0.0065 / c0 * 1.0001, f"dt {j['dt']}")
+    check(len(j["cells"]) == 3 and j["cells"][2] == 1, f"cells {j['cells']}")
+    check(j["memory_bytes"] == j["bytes_per_particle"] * 198, "memory = bytes/particle x particles")
+    check(not os.listdir(env.work), "info wrote files")
+
+    p = env.run("info", env.tiny, "--json", "--set", "fluid.sound_speed=30", "--set", "time.dt=1e-4",
+                "--set", "tank.open_top=false")
+    j = json.loads(p.stdout)
+    check(j["sound_speed"] == 30 and j["sound_speed_automatic"] is False, "sound speed from the case")
+    check(j["dt"] == 1e-4 and j["dt_adaptive"] is False, "fixed dt")
+    check(j["particles"]["wall"] == 26 * 16 - 200, f"closed top walls: {j['particles']}")
+
+    p = env.run("info", env.tiny)
+    check(p.returncode == 0 and "60 fluid" in p.stdout and "138 wall" in p.stdout, "text info")
+
+
+@test
+def info_shipped_cases(env):
+    for name in sorted(os.listdir(env.shipped)):
+        if not name.endswith(".yaml"):
+            continue
+        p = env.run("info", os.path.join(env.shipped, name), "--json")
+        check(p.returncode == 0, f"{name}: exit {p.returncode}")
+        j = json.loads(p.stdout)
+        check(j["particles"]["fluid"] > 0 and j["particles"]["total"] == j["particles"]["fluid"] + j["particles"]["wall"],
+              f"{name}: {j['particles']}")
+
+
+# ---- compare ------------------------------------------------------------------------------------
+
+def final_checkpoint(env, out, steps):
+    path = os.path.join(out, "checkpoints", f"checkpoint_step_{steps:08d}.h5")
+    check(os.path.isfile(path), f"no final checkpoint {path}")
+    with open(os.path.join(out, "summary.json")) as f:
+        summary = json.load(f)
+    check(summary["exit_status"] == "done" and summary["exit_code"] == 0, f"summary: {summary.get('exit_status')}")
+    check(summary["last_checkpoint"] == path, f"summary last_checkpoint {summary['last_checkpoint']}")
+    return path
+
+
+@test
+def compare_checkpoints(env):
+    runs = {}
+    for label, steps in [("a", 6), ("b", 6), ("c", 7)]:
+        out = env.path(label)
+        p = env.run("run", env.tiny, "--steps", str(steps), "--out", out, "--quiet")
+        check(p.returncode == 0, f"run {label}: exit {p.returncode}")
+        runs[label] = final_checkpoint(env, out, steps)
+    p = env.run("compare", runs["a"], runs["b"])
+    check(p.returncode == 0 and "MATCH" in p.stdout, "two identical runs must compare equal (exit 0)")
+    check(re.search(r"^x\s+0\s", p.stdout, re.M), "the largest difference per field is printed")
+    p = env.run("compare", runs["a"], runs["a"])
+    check(p.returncode == 0, "a checkpoint equals itself")
+    p = env.run("compare", runs["a"], runs["c"])
+    check(p.returncode == 1 and "DIFFERENT" in p.stdout, f"6 vs 7 steps must differ (exit 1), got {p.returncode}")
+    worst = {m.group(1): float(m.group(2)) for m in re.finditer(r"^(\w+)\s+([-+0-9.eE]+|inf)\s+\d+$", p.stdout, re.M)}
+    check(worst.get("y", 0) > 0, f"positions differ after one more step: {worst}")
+    p = env.run("compare", runs["a"], runs["c"], "--tolerance", "1e9")
+    check(p.returncode == 0, f"within a huge tolerance: exit {p.returncode}")
+    p = env.run("compare", runs["a"], runs["b"], "--tolerance", "-1")
+    check(p.returncode == 2 and "--tolerance -1" in p.stderr, f"negative tolerance: exit {p.returncode}")
+    p = env.run("compare", runs["a"], env.path("missing.h5"))
+    check(p.returncode == 2 and "missing.h5" in p.stderr, f"missing checkpoint: exit {p.returncode}")
+    not_h5 = env.write_case("not_a_checkpoint.yaml", "x: 1\n")
+    p = env.run("compare", runs["a"], not_h5)
+    check(p.returncode == 2 and "not_a_checkpoint.yaml" in p.stderr, f"not a checkpoint: exit {p.returncode}")
+
+
+@test
+def compare_split_independent(env):
+    # The same run on one and on two device slabs: bit-identical checkpoints.
+    paths = []
+    for devices in (1, 2):
+        out = env.path(f"d{devices}")
+        p = env.run("run", env.tiny, "--steps", "10", "--devices", str(devices), "--out", out, "--quiet")
+        check(p.returncode == 0, f"--devices {devices}: exit {p.returncode}")
+        paths.append(final_checkpoint(env, out, 10))
+    p = env.run("compare", *paths)
+    check(p.returncode == 0, "1 and 2 devices must give bit-identical results")
+
+
+@test
+def compare_restart_bit_identical(env):
+    # 10 steps in one go against 5 steps + a restart for 5 more (on two devices).
+    p = env.run("run", env.tiny, "--steps", "10", "--out", env.path("straight"), "--quiet")
+    check(p.returncode == 0, f"exit {p.returncode}")
+    straight = final_checkpoint(env, env.path("straight"), 10)
+    p = env.run("run", env.tiny, "--steps", "5", "--out", env.path("first"), "--quiet")
+    half = final_checkpoint(env, env.path("first"), 5)
+    p = env.run("run", env.tiny, "--restart", half, "--steps", "5", "--devices", "2", "--out", env.path("second"), "--quiet")
+    check(p.returncode == 0, f"restart: exit {p.returncode}")
+    resumed = final_checkpoint(env, env.path("second"), 10)
+    p = env.run("compare", straight, resumed)
+    check(p.returncode == 0, "a restarted run must be bit-identical to an uninterrupted one")
+    # A checkpoint of another case is bad input.
+    other = os.path.join(env.shipped, "dam_break_2d.yaml")
+    p = env.run("run", other, "--restart", half, "--steps", "1", "--out", env.path("wrong"), "--quiet")
+    check(p.returncode == 2 and "checkpoint holds" in p.stderr, f"restart with another case: exit {p.returncode}")
+    check(not os.path.exists(env.path("wrong")), "output folder created for a bad restart")
+
+
+# ---- instability --------------------------------------------------------------------------------
+
+@test
+def unstable_run(env):
+    # The 2D dam break with a fixed step 10x above its CFL limit blows up within a few steps.
+    out = env.path("unstable")
+    case = os.path.join(env.shipped, "dam_break_2d.yaml")
+    p = env.run("run", case, "--set", "time.dt=0.0005", "--steps", "200", "--checkpoint-every", "1",
+                "--out", out, "--quiet")
+    check(p.returncode == 3, f"exit {p.returncode}, expected 3 (unstable)")
+    check("unstable" in p.stderr, "stderr does not say the run went unstable")
+    with open(os.path.join(out, "summary.json")) as f:
+        s = json.load(f)
+    check(s["exit_status"] == "unstable" and s["exit_code"] == 3, f"summary: {s['exit_status']} {s['exit_code']}")
+    m = re.search(r"step (\d+), t = ([0-9.eE+-]+) s: particle (\d+) ", s["message"])
+    check(m, f"message does not name step, time and particle: {s['message']}")
+    step = int(m.group(1))
+    check(abs(float(m.group(2)) - step * 0.0005) < 1e-9, "time = step x dt")
+    check(s["final_step"] == step, "final_step is the failing step")
+    # Diagnostic snapshot of the failing state.
+    diag = os.path.join(out, "diagnostic", f"step_{step:08d}.vtm")
+    check(os.path.isfile(diag), f"no diagnostic snapshot {diag}")
+    check(os.path.isfile(os.path.join(out, "diagnostic", f"step_{step:08d}", "slab_0.vtp")), "no diagnostic piece")
+    # The last good checkpoint is the step before, and readable.
+    good = s["last_checkpoint"]
+    check(good.endswith(f"checkpoint_step_{step - 1:08d}.h5") and os.path.isfile(good), f"last good checkpoint {good}")
+    check(good in s["message"] and good in p.stderr, "the message names the last good checkpoint")
+    p = env.run("compare", good, good)
+    check(p.returncode == 0, "the last good checkpoint must be readable")
+    # Restarting from it replays the failure exactly: same step, time and particle (a debugging aid).
+    p = env.run("run", case, "--set", "time.dt=0.0005", "--restart", good, "--steps", "200", "--out",
+                env.path("replay"), "--quiet")
+    check(p.returncode == 3, f"replay from the last good checkpoint: exit {p.returncode}")
+    check(m.group(0) in p.stderr, f"the replay fails differently: {p.stderr.strip()}")
+
+
+@test
+def unstable_kinds(env):
+    # The other two kinds of instability: a particle thrown out of the domain, and NaN (an absurd
+    # sound speed overflows the Tait coefficient). Each: exit 3, the particle named, a diagnostic.
+    case = os.path.join(env.shipped, "dam_break_2d.yaml")
+    for label, setting, needle in [("left", "time.dt=0.01", "left the domain along"),
+                                   ("nan", "fluid.sound_speed=1e20", "non-finite")]:
+        out = env.path(label)
+        p = env.run("run", case, "--set", setting, "--steps", "50", "--out", out, "--quiet")
+        check(p.returncode == 3, f"{setting}: exit {p.returncode}, expected 3")
+        with open(os.path.join(out, "summary.json")) as f:
+            s = json.load(f)
+        check(s["exit_status"] == "unstable", f"{setting}: summary {s['exit_status']}")
+        check(re.search(r"step \d+, t = \S+ s: particle \d+ .*" + needle, s["message"]), f"{setting}: {s['message']}")
+        check(any(n.endswith(".vtm") for n in os.listdir(os.path.join(out, "diagnostic"))), "no diagnostic snapshot")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--spate", required=True)
+    ap.add_argument("--cases", required=True, help="tests/cases")
+    ap.add_argument("--shipped", required=True, help="the shipped cases/ folder")
+    ap.add_argument("--work", required=True)
+    ap.add_argument("--list", action="store_true")
+    ap.add_argument("names", nargs="*")
+    args = ap.parse_args()
+    if args.list:
+        print("\n".join(TESTS))
+        return 0
+    failed = []
+    for name in args.names or list(TESTS):
+        if name not in TESTS:
+            print(f"unknown test {name}")
+            return 2
+        try:
+            TESTS[name](Env(args, name))
+            print(f"PASS {name}")
+        except (Failure, subprocess.TimeoutExpired, json.JSONDecodeError) as e:
+            print(f"FAIL {name}: {e}")
+            failed.append(name)
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

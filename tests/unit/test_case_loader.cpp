@@ -1,0 +1,285 @@
+// Case loader (solver/case/case_loader.cpp): a valid case parses with its defaults, --set
+// overrides any key (nested, new, lists), and every class of bad input is a CaseError that names
+// the file, the key and the reason. The program-level behaviour (exit 2, nothing written) is in
+// tests/integration.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "case/case.hpp"
+
+namespace spate {
+namespace {
+
+const char* kMinimal2D = R"(name: tiny
+dimensions: 2
+dp: 0.01
+time:
+  end: 0.1
+tank:
+  size: [0.2, 0.1]
+fluid_blocks:
+  - min: [0, 0]
+    max: [0.05, 0.06]
+)";
+
+const char* kFull3D = R"(name: full
+dimensions: 3
+dp: 0.02
+smoothing_ratio: 1.5
+kernel: cubic_spline
+gravity: [0, 0, -10]
+fluid:
+  density: 998
+  viscosity: 0.002
+  sound_speed: 30
+  artificial_viscosity: 0.05
+  body_force: [0.1, 0, 0]
+density:
+  mode: summation
+  diffusion: molteni_colagrossi
+  delta: 0.2
+  min_ratio: 0.8
+  max_ratio: 1.2
+time:
+  end: 2
+  dt: 1.0e-4
+  cfl: 0.3
+tank:
+  origin: [1, 2, 3]
+  size: [1, 0.5, 0.4]
+  wall_layers: 2
+  open_top: false
+  headroom: 0.25
+  periodic: [y]
+fluid_blocks:
+  - min: [1, 2, 3]
+    max: [1.4, 2.5, 3.2]
+wet_bed: 0.04
+solids:
+  - name: post
+    min: [1.6, 2.1, 3]
+    max: [1.7, 2.2, 3.4]
+    hollow: false
+probes:
+  - name: p1
+    type: pressure
+    position: [1.1, 2.2, 3.05]
+  - name: gauge
+    type: height
+    position: [1.2, 2.2]
+  - name: load
+    type: force
+    solid: post
+  - name: front
+    type: front
+    axis: x
+output:
+  interval: 0.05
+  probe_interval: 0.01
+  checkpoint_every: 500
+decomposition:
+  balance_every: 20
+)";
+
+std::string error_of(const std::string& yaml, const std::vector<std::string>& overrides = {}) {
+  try {
+    parse_case(yaml, "case.yaml", overrides);
+  } catch (const CaseError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(CaseLoader, MinimalCaseGetsDefaults) {
+  const Case c = parse_case(kMinimal2D, "tiny.yaml");
+  EXPECT_EQ(c.file, "tiny.yaml");
+  EXPECT_EQ(c.name, "tiny");
+  EXPECT_EQ(c.dim, 2);
+  EXPECT_DOUBLE_EQ(c.dp, 0.01);
+  EXPECT_DOUBLE_EQ(c.smoothing_ratio, 1.3);
+  EXPECT_EQ(c.kernel, KernelType::WendlandC2);
+  EXPECT_DOUBLE_EQ(c.gravity[0], 0.0);
+  EXPECT_DOUBLE_EQ(c.gravity[1], -9.81);  // the last axis is vertical
+  EXPECT_DOUBLE_EQ(c.rho0, 1000.0);
+  EXPECT_DOUBLE_EQ(c.viscosity, 1e-3);
+  EXPECT_FALSE(c.sound_speed.has_value());
+  EXPECT_FALSE(c.fixed_dt.has_value());
+  EXPECT_DOUBLE_EQ(c.cfl, 0.2);
+  EXPECT_EQ(c.density_mode, DensityMode::Continuity);
+  EXPECT_EQ(c.diffusion, DensityDiffusion::Fourtakas);
+  EXPECT_EQ(c.wall_layers, 3);
+  EXPECT_TRUE(c.open_top);
+  EXPECT_EQ(c.balance_every, 100);
+  ASSERT_EQ(c.fluid_blocks.size(), 1u);
+  EXPECT_DOUBLE_EQ(c.fluid_blocks[0].max[1], 0.06);
+  // Automatic sound speed: 10 sqrt(g H) with H the highest fluid column.
+  EXPECT_DOUBLE_EQ(highest_fluid_column(c), 0.06);
+  EXPECT_NEAR(sound_speed(c), 10.0 * std::sqrt(9.81 * 0.06), 1e-12);
+  const PhysicsParams P = physics_params(c);
+  EXPECT_FLOAT_EQ(P.h, 0.013f);
+  EXPECT_FLOAT_EQ(P.support2, 4.0f * 0.013f * 0.013f);
+  EXPECT_FLOAT_EQ(P.mass, 1000.0f * 0.01f * 0.01f);
+  EXPECT_FLOAT_EQ(P.tait_b, P.c0 * P.c0 * 1000.0f / 7.0f);
+}
+
+TEST(CaseLoader, EveryKeyIsRead) {
+  const Case c = parse_case(kFull3D, "full.yaml");
+  EXPECT_EQ(c.kernel, KernelType::CubicSpline);
+  EXPECT_DOUBLE_EQ(c.smoothing_ratio, 1.5);
+  EXPECT_DOUBLE_EQ(c.gravity[2], -10.0);
+  EXPECT_DOUBLE_EQ(c.rho0, 998.0);
+  EXPECT_DOUBLE_EQ(c.viscosity, 0.002);
+  EXPECT_DOUBLE_EQ(sound_speed(c), 30.0);
+  EXPECT_DOUBLE_EQ(c.artificial_viscosity, 0.05);
+  EXPECT_DOUBLE_EQ(c.body_force[0], 0.1);
+  EXPECT_EQ(c.density_mode, DensityMode::Summation);
+  EXPECT_EQ(c.diffusion, DensityDiffusion::MolteniColagrossi);
+  EXPECT_DOUBLE_EQ(c.delta, 0.2);
+  EXPECT_DOUBLE_EQ(c.density_min_ratio, 0.8);
+  EXPECT_DOUBLE_EQ(c.density_max_ratio, 1.2);
+  EXPECT_DOUBLE_EQ(c.end_time, 2.0);
+  ASSERT_TRUE(c.fixed_dt.has_value());
+  EXPECT_DOUBLE_EQ(*c.fixed_dt, 1e-4);
+  EXPECT_DOUBLE_EQ(c.cfl, 0.3);
+  EXPECT_DOUBLE_EQ(c.tank_origin[2], 3.0);
+  EXPECT_EQ(c.wall_layers, 2);
+  EXPECT_FALSE(c.open_top);
+  EXPECT_DOUBLE_EQ(c.headroom, 0.25);
+  EXPECT_FALSE(c.periodic[0]);
+  EXPECT_TRUE(c.periodic[1]);
+  EXPECT_DOUBLE_EQ(c.wet_bed, 0.04);
+  ASSERT_EQ(c.solids.size(), 1u);
+  EXPECT_EQ(c.solids[0].name, "post");
+  EXPECT_FALSE(c.solids[0].hollow);
+  ASSERT_EQ(c.probes.size(), 4u);
+  EXPECT_EQ(c.probes[1].type, ProbeType::Height);
+  EXPECT_EQ(c.probes[2].solid, "post");
+  EXPECT_EQ(c.probes[3].axis, 0);
+  EXPECT_DOUBLE_EQ(c.output_interval, 0.05);
+  EXPECT_DOUBLE_EQ(c.probe_interval, 0.01);
+  EXPECT_EQ(c.checkpoint_every, 500);
+  EXPECT_EQ(c.balance_every, 20);
+  EXPECT_DOUBLE_EQ(highest_fluid_column(c), 3.2 - 3.0);
+}
+
+TEST(CaseLoader, SetOverridesTopLevelNestedAndNewKeys) {
+  const Case c = parse_case(kMinimal2D, "tiny.yaml",
+                            {"dp=0.005", "fluid.viscosity=0.01", "time.dt=2.5e-5", "tank.size=[0.3, 0.2]",
+                             "output.interval=0.02", "kernel=cubic_spline", "fluid_blocks=[{min: [0, 0], max: [0.1, 0.1]}]"});
+  EXPECT_DOUBLE_EQ(c.dp, 0.005);
+  EXPECT_DOUBLE_EQ(c.viscosity, 0.01);  // `fluid` did not exist: created
+  ASSERT_TRUE(c.fixed_dt.has_value());
+  EXPECT_DOUBLE_EQ(*c.fixed_dt, 2.5e-5);
+  EXPECT_DOUBLE_EQ(c.end_time, 0.1);    // a sibling of the overridden key is kept
+  EXPECT_DOUBLE_EQ(c.tank_size[0], 0.3);
+  EXPECT_DOUBLE_EQ(c.output_interval, 0.02);
+  EXPECT_EQ(c.kernel, KernelType::CubicSpline);
+  ASSERT_EQ(c.fluid_blocks.size(), 1u);
+  EXPECT_DOUBLE_EQ(c.fluid_blocks[0].max[0], 0.1);
+  // The effective case (stored in checkpoints) holds the overrides and parses to the same case.
+  const Case again = parse_case(c.source_yaml, "again.yaml");
+  EXPECT_DOUBLE_EQ(again.dp, 0.005);
+  EXPECT_DOUBLE_EQ(again.viscosity, 0.01);
+}
+
+TEST(CaseLoader, SetAutoRestoresAdaptiveValues) {
+  const Case c = parse_case(kFull3D, "full.yaml", {"time.dt=auto", "fluid.sound_speed=auto"});
+  EXPECT_FALSE(c.fixed_dt.has_value());
+  EXPECT_FALSE(c.sound_speed.has_value());
+}
+
+TEST(CaseLoader, LoadCaseReadsShippedCases) {
+  for (const char* name : {"dam_break_2d.yaml", "dam_break_column_3d.yaml"}) {
+    const Case c = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/" + name);
+    EXPECT_FALSE(c.name.empty()) << name;
+    EXPECT_FALSE(c.fluid_blocks.empty()) << name;
+  }
+}
+
+// Bad input: each message names the file, the key (with its position where there is one) and why.
+struct BadCase {
+  const char* what;
+  std::vector<std::string> overrides;
+  std::vector<std::string> expected;  // substrings of the message
+};
+
+TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
+  const std::vector<BadCase> cases = {
+      {"dp <= 0", {"dp=0"}, {"case.yaml", "'dp'", "> 0"}},
+      {"negative dp", {"dp=-0.01"}, {"'dp'", "> 0"}},
+      {"negative density", {"fluid.density=-1000"}, {"'fluid.density'", "> 0"}},
+      {"negative viscosity", {"fluid.viscosity=-0.001"}, {"'fluid.viscosity'", ">= 0"}},
+      {"wrong type", {"dp=abc"}, {"'dp'", "expected a number", "abc"}},
+      {"wrong type integer", {"dimensions=two"}, {"'dimensions'", "integer"}},
+      {"wrong type list", {"tank.size=0.2"}, {"'tank.size'", "list of 2 numbers"}},
+      {"bad choice", {"kernel=gaussian"}, {"'kernel'", "wendland_c2", "cubic_spline"}},
+      {"fluid outside the tank", {"fluid_blocks=[{min: [0, 0], max: [0.3, 0.05]}]"}, {"fluid_blocks[0]", "outside the tank"}},
+      {"solid outside the tank", {"solids=[{name: s, min: [0.15, 0], max: [0.25, 0.05]}]"}, {"solids[0]", "outside the tank"}},
+      {"fluid overlapping a solid", {"solids=[{name: s, min: [0.04, 0], max: [0.08, 0.05]}]"}, {"solids[0]", "overlaps a fluid block"}},
+      {"no fluid at all", {"fluid_blocks=[]"}, {"'fluid_blocks'", "no fluid"}},
+      {"unknown top-level key", {"dq=0.01"}, {"'dq'", "unknown key", "did you mean 'dp'"}},
+      {"unknown nested key", {"fluid.viscocity=0.001"}, {"'fluid.viscocity'", "unknown key", "did you mean 'fluid.viscosity'"}},
+      {"misplaced key", {"viscocity=0.001"}, {"'viscocity'", "unknown key", "did you mean 'fluid.viscosity'"}},
+      {"bad --set syntax", {"dp"}, {"--set 'dp'", "key.path=value"}},
+      {"--set through a scalar", {"dp.x=1"}, {"--set 'dp.x=1'", "not a map"}},
+      {"min above max", {"fluid_blocks=[{min: [0.1, 0], max: [0.05, 0.05]}]"}, {"fluid_blocks[0].max", "greater than min"}},
+      {"vertical periodic", {"tank.periodic=[y]"}, {"'tank.periodic'", "vertical"}},
+      {"density limits excluding rho0", {"density.max_ratio=0.9"}, {"'density.max_ratio'", "> 1"}},
+      {"negative density limit", {"density.min_ratio=-0.5"}, {"'density.min_ratio'", "[0, 1)"}},
+      {"negative headroom", {"tank.headroom=-1"}, {"'tank.headroom'", ">= 0"}},
+      {"probe defined twice", {"probes=[{name: p, position: [0.01, 0.01]}, {name: p, position: [0.02, 0.01]}]"},
+       {"probes[1].name", "defined twice"}},
+      {"probe on a missing solid", {"probes=[{name: f, type: force, solid: nope}]"}, {"probes[0].solid", "no solid named 'nope'"}},
+  };
+  for (const BadCase& b : cases) {
+    const std::string message = error_of(kMinimal2D, b.overrides);
+    for (const std::string& part : b.expected)
+      EXPECT_NE(message.find(part), std::string::npos) << b.what << ": '" << part << "' not in: " << message;
+  }
+}
+
+TEST(CaseLoader, MissingRequiredKeys) {
+  std::string no_dp = kMinimal2D;
+  no_dp.erase(no_dp.find("dp: 0.01\n"), 9);
+  const std::string m = error_of(no_dp);
+  EXPECT_NE(m.find("'dp'"), std::string::npos) << m;
+  EXPECT_NE(m.find("required"), std::string::npos) << m;
+  std::string no_time = kMinimal2D;
+  no_time.erase(no_time.find("time:\n  end: 0.1\n"), 17);
+  EXPECT_NE(error_of(no_time).find("'time'"), std::string::npos) << error_of(no_time);
+  std::string no_tank = kMinimal2D;
+  no_tank.erase(no_tank.find("tank:\n  size: [0.2, 0.1]\n"), 26);
+  EXPECT_NE(error_of(no_tank).find("'tank'"), std::string::npos) << error_of(no_tank);
+}
+
+TEST(CaseLoader, SyntaxErrorGivesLineAndColumn) {
+  const std::string broken = "name: x\ndp: 0.01\ntank:\n  size: [0.2, 0.1\ntime: {end: 1}\n";
+  const std::string m = error_of(broken);
+  EXPECT_EQ(m.rfind("case.yaml:", 0), 0u) << m;
+  EXPECT_NE(m.find("YAML syntax error"), std::string::npos) << m;
+  // file:line:column with numbers.
+  EXPECT_TRUE(std::isdigit(static_cast<unsigned char>(m[std::string("case.yaml:").size()]))) << m;
+}
+
+TEST(CaseLoader, ValueErrorsPointAtTheLine) {
+  std::string bad = kMinimal2D;
+  bad.replace(bad.find("dp: 0.01"), 8, "dp: -0.01");
+  const std::string m = error_of(bad);
+  EXPECT_EQ(m.rfind("case.yaml:3:", 0), 0u) << m;  // dp is on line 3
+}
+
+TEST(CaseLoader, UnreadableFile) {
+  try {
+    load_case("/nonexistent/spate/case.yaml");
+    FAIL() << "no error";
+  } catch (const CaseError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("/nonexistent/spate/case.yaml"), std::string::npos) << m;
+    EXPECT_NE(m.find("cannot read"), std::string::npos) << m;
+  }
+}
+
+}  // namespace
+}  // namespace spate

@@ -1,0 +1,135 @@
+// Domain (solver/domain/halo.hpp): a halo refresh brings every ghost the current value of its
+// source particle; migration sends every particle to the slab that owns its column, losing none.
+#include <gtest/gtest.h>
+
+#include <mutex>
+#include <random>
+#include <set>
+#include <thread>
+
+#include "comm/in_process_transport.hpp"
+#include "domain/halo.hpp"
+#include "domain/slab_layout.hpp"
+#include "grid/cell_grid.hpp"
+#include "physics/params.hpp"
+
+namespace spate {
+namespace {
+
+Lattice periodic_lattice(int dim) {
+  Lattice L;
+  L.dim = dim;
+  for (int a = 0; a < dim; ++a) {
+    L.cells[a] = a == 0 ? 9 : 4;
+    L.cell_size[a] = 0.03f;
+    L.inv_cell[a] = 1.0f / L.cell_size[a];
+    L.periodic[a] = a < dim - 1;  // every axis but the vertical one
+    L.period[a] = L.periodic[a] ? L.cells[a] * L.cell_size[a] : 0.0f;
+  }
+  return L;
+}
+
+ParticleStore random_store(const Lattice& L, std::size_t n, unsigned seed, std::uint32_t first_id = 0) {
+  std::mt19937 rng(seed);
+  ParticleStore p(L.dim);
+  p.resize(n);
+  for (int a = 0; a < L.dim; ++a) {
+    // The non-periodic vertical axis keeps its outermost cells empty, as generated cases do.
+    const float lo = L.periodic[a] ? 0.0f : L.cell_size[a];
+    const float hi = L.periodic[a] ? L.period[a] : L.upper(a) - L.cell_size[a];
+    std::uniform_real_distribution<float> u(lo, hi);
+    for (std::size_t i = 0; i < n; ++i) p.pos[a][i] = std::min(u(rng), std::nextafter(hi, lo));
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    p.id[i] = first_id + static_cast<std::uint32_t>(i);
+    p.kind[i] = kFluid;
+    p.density[i] = 1000.0f;
+  }
+  p.set_owned(n);
+  return p;
+}
+
+// Three slabs on three threads; `body(slab, transport)` runs on each; failures are collected.
+template <class Body>
+void on_three_slabs(bool periodic_x, Body body) {
+  InProcessHub hub(3);
+  std::vector<std::string> errors(3);
+  std::vector<std::thread> threads;
+  for (int s = 0; s < 3; ++s)
+    threads.emplace_back([&, s] {
+      try {
+        auto t = hub.endpoint(s, periodic_x);
+        body(s, *t);
+      } catch (const std::exception& e) {
+        errors[s] = e.what();
+        hub.abandon();
+      }
+    });
+  for (auto& t : threads) t.join();
+  for (auto& e : errors) EXPECT_TRUE(e.empty()) << e;
+}
+
+TEST(Halo, RefreshBringsCurrentValuesToEveryGhost) {
+  for (int dim : {2, 3}) {
+    const Lattice L = periodic_lattice(dim);
+    const ParticleStore all = random_store(L, dim == 2 ? 400 : 900, 7u + dim);
+    const SlabLayout layout = SlabLayout::uniform(L.cells[0], 3);
+    on_three_slabs(true, [&](int s, SlabTransport& t) {
+      ParticleStore p(dim);
+      for (std::size_t i = 0; i < all.size(); ++i)
+        if (layout.owner_of(L.cell_of(all.pos[0][i], 0)) == s) p.append_from(all, i);
+      p.set_owned(p.size());
+      CellGrid grid;
+      grid.configure(L, layout.faces[s], layout.faces[s + 1]);
+      grid.sort_owned(p);
+      Halo halo;
+      halo.build(p, grid, t);
+      EXPECT_GT(p.ghosts(), 0u);
+      // New values on the owners after the halo was built (as wall pressures are each step).
+      for (std::size_t i = 0; i < p.owned(); ++i) {
+        p.pressure[i] = 10.0f * static_cast<float>(p.id[i]);
+        p.density[i] = 1000.0f + static_cast<float>(p.id[i]);
+      }
+      for (std::size_t g = p.owned(); g < p.size(); ++g) p.pressure[g] = -1.0f;
+      halo.refresh(p, t);
+      for (std::size_t g = p.owned(); g < p.size(); ++g) {
+        EXPECT_EQ(p.pressure[g], 10.0f * static_cast<float>(p.id[g])) << "ghost of particle " << p.id[g];
+        EXPECT_EQ(p.density[g], 1000.0f + static_cast<float>(p.id[g])) << "ghost of particle " << p.id[g];
+      }
+    });
+  }
+}
+
+TEST(Migrate, EveryParticleEndsOnItsOwnerAndNoneIsLost) {
+  for (bool periodic_x : {false, true}) {
+    Lattice L = periodic_lattice(3);
+    L.periodic[0] = periodic_x;
+    if (!periodic_x) L.period[0] = 0.0f;
+    const SlabLayout layout = SlabLayout::uniform(L.cells[0], 3);
+    std::mutex m;
+    std::multiset<std::uint32_t> ids_after;
+    std::int64_t moved_seen = -1;
+    on_three_slabs(periodic_x, [&](int s, SlabTransport& t) {
+      // Each slab starts with particles anywhere in the domain, as after faces moved a long way.
+      ParticleStore p = random_store(L, 300, 100u + s, static_cast<std::uint32_t>(1000 * s));
+      const std::int64_t moved = migrate(p, layout.faces, L, t);
+      EXPECT_EQ(p.owned(), p.size());
+      for (std::size_t i = 0; i < p.owned(); ++i)
+        EXPECT_EQ(layout.owner_of(L.cell_of(p.pos[0][i], 0)), s) << "particle " << p.id[i] << " on slab " << s;
+      std::lock_guard lock(m);
+      ids_after.insert(p.id.begin(), p.id.end());
+      if (moved_seen >= 0) {
+        EXPECT_EQ(moved, moved_seen);  // the same global count on every slab
+      }
+      moved_seen = moved;
+    });
+    std::multiset<std::uint32_t> expected;
+    for (std::uint32_t s = 0; s < 3; ++s)
+      for (std::uint32_t i = 0; i < 300; ++i) expected.insert(1000 * s + i);
+    EXPECT_EQ(ids_after, expected);
+    EXPECT_GT(moved_seen, 300);  // about two thirds of the 900 particles had to move
+  }
+}
+
+}  // namespace
+}  // namespace spate
