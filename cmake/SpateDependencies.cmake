@@ -44,6 +44,7 @@ if(SPATE_ENABLE_CUDA)
     list(APPEND CMAKE_CUDA_COMPILE_FEATURES cuda_std_20)
   endif()
   set(SPATE_WITH_CUDA ON)
+  message(STATUS "spate CUDA backend: nvcc ${CMAKE_CUDA_COMPILER_VERSION}, architectures ${CMAKE_CUDA_ARCHITECTURES}")
 endif()
 
 option(SPATE_ENABLE_CATALYST "Build the ParaView Catalyst adaptor (on when ParaView is found)" ON)
