@@ -220,6 +220,7 @@ int bench_command(const BenchArgs& a) {
   overrides.push_back("probes=[]");
   Case c = load(a.case_file, overrides);
   if (a.steps < 1) throw BadInput("--steps: must be >= 1");
+  check_backend(a.backend);
   // Neighbour interactions per step: fluid-particle pairs inside the support at the initial state.
   std::int64_t interactions = 0;
   {
@@ -236,6 +237,7 @@ int bench_command(const BenchArgs& a) {
   o.steps = a.steps;
   o.threads = a.threads;
   o.devices = a.devices;
+  o.backend = a.backend;
   o.quiet = true;
   const RunResult r = Simulation(c, o).run();
   std::filesystem::remove_all(o.out_dir);
@@ -248,6 +250,7 @@ int bench_command(const BenchArgs& a) {
     j["particles"] = {{"fluid", r.particles.fluid}, {"wall", r.particles.wall}, {"total", r.particles.total()}};
     j["threads"] = threads;
     j["devices"] = a.devices;
+    j["backend"] = a.backend;
     j["steps"] = r.steps;
     j["wall_seconds"] = r.wall_seconds;
     j["seconds_per_step"] = r.wall_seconds / r.steps;
