@@ -23,6 +23,14 @@ if(SPATE_ENABLE_MPI)
 endif()
 
 include(CheckLanguage)
+# nvcc on the PATH, in the system prefixes or in the toolkit's default place counts as found (CI
+# shells often lack /usr/local/cuda/bin on the PATH; check_language alone looks only at the PATH).
+if(NOT DEFINED CMAKE_CUDA_COMPILER AND "$ENV{CUDACXX}" STREQUAL "")
+  find_program(SPATE_NVCC nvcc PATHS /usr/local/cuda/bin)
+  if(SPATE_NVCC)
+    set(CMAKE_CUDA_COMPILER "${SPATE_NVCC}" CACHE FILEPATH "CUDA compiler")
+  endif()
+endif()
 check_language(CUDA)
 set(_cuda_default OFF)
 if(CMAKE_CUDA_COMPILER)
@@ -45,6 +53,8 @@ if(SPATE_ENABLE_CUDA)
   endif()
   set(SPATE_WITH_CUDA ON)
   message(STATUS "spate CUDA backend: nvcc ${CMAKE_CUDA_COMPILER_VERSION}, architectures ${CMAKE_CUDA_ARCHITECTURES}")
+else()
+  message(STATUS "spate CUDA backend: off (SPATE_ENABLE_CUDA=${SPATE_ENABLE_CUDA}; nvcc found: ${_cuda_default})")
 endif()
 
 option(SPATE_ENABLE_CATALYST "Build the ParaView Catalyst adaptor (on when ParaView is found)" ON)
