@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -11,6 +12,8 @@
 #include <unistd.h>
 
 #include "backend/cpu/cpu_backend.hpp"
+#include "backend/cuda/device_plan.hpp"
+#include "backend/cuda/device_runtime.hpp"
 #include "case/case.hpp"
 #include "case/generator.hpp"
 #include "comm/in_process_transport.hpp"
@@ -33,8 +36,14 @@ Case load(const std::string& file, const std::vector<std::string>& overrides) {
 
 void check_backend(const std::string& backend) {
   if (backend == "cpu") return;
-  if (backend == "cuda")
-    throw BadInput("--backend cuda: this spate was built without a usable CUDA device path (no CUDA device found)");
+  if (backend == "cuda") {
+    try {
+      gpu::require_device();
+    } catch (const std::runtime_error& e) {
+      throw BadInput(fmt::format("--backend cuda: {}", e.what()));
+    }
+    return;
+  }
   throw BadInput(fmt::format("--backend {}: expected 'cpu' or 'cuda'", backend));
 }
 
@@ -60,6 +69,7 @@ int run_command(const RunArgs& a) {
   o.until = a.until;
   o.threads = a.threads;
   o.devices = a.devices;
+  o.backend = a.backend;
   o.checkpoint_every = a.checkpoint_every;
   if (!a.restart.empty()) o.restart = a.restart;
   o.quiet = a.quiet;
@@ -84,6 +94,7 @@ int run_command(const RunArgs& a) {
   SummaryExtras x;
   x.threads = a.threads > 0 ? a.threads : hardware_threads();
   x.devices = a.devices;
+  x.backend = a.backend;
   write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
   if (r.exit_code == 3) {
     std::fprintf(stderr, "spate: the run went unstable: %s\n", r.message.c_str());
@@ -107,6 +118,11 @@ int info_command(const InfoArgs& a) {
   const double dt = c.fixed_dt ? *c.fixed_dt : c.cfl * P.h / P.c0;
   const std::size_t bpp = ParticleStore(c.dim).bytes_per_particle();
   const double memory = static_cast<double>(n.total()) * bpp;
+  // The GPU estimate needs no device: it is arithmetic on the case (backend/cuda/device_plan.hpp).
+  std::vector<gpu::SlabMemory> per_gpu;
+  if (a.backend == "cuda") per_gpu = gpu::device_memory_per_slab(L, n.total(), a.devices);
+  std::size_t gpu_peak = 0;
+  for (auto& m : per_gpu) gpu_peak = std::max(gpu_peak, m.bytes);
   if (a.json) {
     nlohmann::ordered_json j;
     j["case"] = c.name;
@@ -122,6 +138,15 @@ int info_command(const InfoArgs& a) {
     j["bytes_per_particle"] = bpp;
     j["memory_bytes"] = memory;
     j["backend"] = a.backend;
+    if (a.backend == "cuda") {
+      j["device_bytes_per_particle"] = gpu::device_footprint(c.dim).per_particle();
+      j["devices"] = a.devices;
+      nlohmann::ordered_json slabs = nlohmann::ordered_json::array();
+      for (auto& m : per_gpu)
+        slabs.push_back({{"device", m.slab}, {"owned", m.owned}, {"ghosts", m.ghosts}, {"capacity", m.capacity}, {"bytes", m.bytes}});
+      j["device_memory"] = slabs;
+      j["device_memory_max_bytes"] = gpu_peak;
+    }
     std::printf("%s\n", j.dump(2).c_str());
   } else {
     std::printf("case            %s (%dD, %s)\n", c.name.c_str(), c.dim, c.file.c_str());
@@ -133,6 +158,14 @@ int info_command(const InfoArgs& a) {
     std::printf("cell lattice    %d x %d x %d\n", L.cells[0], L.cells[1], L.cells[2]);
     std::printf("memory          %zu bytes/particle, %.1f MiB for the particles (%s backend)\n", bpp, memory / 1048576.0,
                 a.backend.c_str());
+    if (a.backend == "cuda") {
+      std::printf("device memory   %zu bytes/particle slot; per GPU with --devices %d: at most %.1f MiB (%.0f bytes per owned particle)\n",
+                  gpu::device_footprint(c.dim).per_particle(), a.devices, gpu_peak / 1048576.0,
+                  per_gpu.empty() || per_gpu[0].owned == 0 ? 0.0 : static_cast<double>(per_gpu[0].bytes) / per_gpu[0].owned);
+      for (auto& m : per_gpu)
+        std::printf("  GPU %-3d       %lld owned + %lld ghosts, %zu slots, %.1f MiB\n", m.slab, static_cast<long long>(m.owned),
+                    static_cast<long long>(m.ghosts), m.capacity, m.bytes / 1048576.0);
+    }
   }
   return 0;
 }
@@ -189,6 +222,7 @@ int bench_command(const BenchArgs& a) {
   overrides.push_back("probes=[]");
   Case c = load(a.case_file, overrides);
   if (a.steps < 1) throw BadInput(fmt::format("--steps {}: must be >= 1", a.steps));
+  check_backend(a.backend);
   // Neighbour interactions per step: fluid-particle pairs inside the support at the initial state.
   std::int64_t interactions = 0;
   {
@@ -205,6 +239,7 @@ int bench_command(const BenchArgs& a) {
   o.steps = a.steps;
   o.threads = a.threads;
   o.devices = a.devices;
+  o.backend = a.backend;
   o.quiet = true;
   const RunResult r = Simulation(c, o).run();
   std::filesystem::remove_all(o.out_dir);
@@ -217,6 +252,7 @@ int bench_command(const BenchArgs& a) {
     j["particles"] = {{"fluid", r.particles.fluid}, {"wall", r.particles.wall}, {"total", r.particles.total()}};
     j["threads"] = threads;
     j["devices"] = a.devices;
+    j["backend"] = a.backend;
     j["steps"] = r.steps;
     j["wall_seconds"] = r.wall_seconds;
     j["seconds_per_step"] = r.wall_seconds / r.steps;

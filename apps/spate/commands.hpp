@@ -31,7 +31,7 @@ struct CompareArgs {
   double tolerance = 0.0;
 };
 struct BenchArgs {
-  std::string case_file;
+  std::string case_file, backend = "cpu";
   std::vector<std::string> overrides;
   int steps = 10, threads = 0, devices = 1;
   bool json = false;

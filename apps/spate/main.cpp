@@ -60,6 +60,7 @@ int main(int argc, char** argv) {
   bench_cmd->add_option("--steps", bench.steps, "Timed steps (after warm-up)");
   bench_cmd->add_option("--threads", bench.threads, "CPU threads in all");
   bench_cmd->add_option("--devices", bench.devices, "Device workers");
+  bench_cmd->add_option("--backend", bench.backend, "cpu or cuda");
   bench_cmd->add_flag("--json", bench.json, "Print one JSON object");
 
   try {

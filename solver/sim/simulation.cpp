@@ -14,6 +14,8 @@
 #include <fstream>
 #include <thread>
 
+#include "../backend/cuda/device_plan.hpp"
+#include "../backend/cuda/device_runtime.hpp"
 #include "../comm/in_process_transport.hpp"
 #include "../io/checkpoint.hpp"
 #include "../io/vtk_snapshot.hpp"
@@ -118,6 +120,11 @@ class Worker {
   void run() {
     omp_set_num_threads(s_.omp_threads);
     const bool writer = t_.slab() == 0;
+    if (s_.opts.backend == "cuda") {
+      const int worker = t_.slab() % s_.opts.devices;
+      const int gpu = gpu::device_for_worker(worker, s_.opts.devices, gpu::node_local_rank(), gpu::device_count());
+      w_.use_kernels(gpu::make_cuda_kernels(gpu, s_.lattice.dim));
+    }
     w_.take_share(s_.initial, s_.layout);
     {
       std::lock_guard lock(s_.result_mutex);
@@ -324,6 +331,15 @@ Simulation::Simulation(Case c, RunOptions options) : case_(std::move(c)), option
 RunResult Simulation::run() {
   Shared s{case_, options_, make_lattice(case_), physics_params(case_), ParticleStore(case_.dim), {}, false, {}, 1, {}, {}, {}, {}};
   if (options_.devices < 1) throw InputError(fmt::format("--devices {}: must be at least 1", options_.devices));
+  if (options_.backend != "cpu" && options_.backend != "cuda")
+    throw InputError(fmt::format("--backend {}: expected 'cpu' or 'cuda'", options_.backend));
+  if (options_.backend == "cuda") {
+    try {
+      gpu::require_device();
+    } catch (const std::runtime_error& e) {
+      throw InputError(fmt::format("--backend cuda: {}", e.what()));
+    }
+  }
   const ParticleCounts expected = count_particles(case_);
   if (options_.restart) {
     try {

@@ -21,6 +21,7 @@ struct RunOptions {
   std::optional<double> until;            // or until this simulated time (default: the case's end)
   int threads = 0;                        // 0: all hardware threads
   int devices = 1;                        // slabs in this process
+  std::string backend = "cpu";            // "cpu" or "cuda" (one GPU per device worker)
   std::optional<int> checkpoint_every;    // overrides the case's output.checkpoint_every
   std::optional<std::filesystem::path> restart;
   bool quiet = false;

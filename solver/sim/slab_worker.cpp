@@ -9,7 +9,10 @@
 namespace spate {
 
 SlabWorker::SlabWorker(const Lattice& lattice, const PhysicsParams& params, SlabTransport& transport)
-    : lattice_(lattice), params_(params), transport_(transport), particles_(lattice.dim) {}
+    : lattice_(lattice), params_(params), transport_(transport), particles_(lattice.dim),
+      kernels_(std::make_unique<cpu::Kernels>()) {}
+
+SlabWorker::~SlabWorker() = default;
 
 void SlabWorker::take_share(const ParticleStore& global, const SlabLayout& layout) {
   layout_ = layout;
@@ -27,17 +30,26 @@ void SlabWorker::rebuild() {
   migrate(particles_, layout_.faces, lattice_, transport_);
   grid_.sort_owned(particles_);
   halo_.build(particles_, grid_, transport_);
+  kernels_->publish(particles_, grid_);
+}
+
+// Ghosts travel through the host store: the owners' Refresh fields come back from the backend, the
+// halo moves them, the ghosts' copies go back (no-ops on the CPU backend).
+void SlabWorker::refresh_halo() {
+  kernels_->fetch(particles_, FieldSet::Refresh, 0, particles_.owned());
+  halo_.refresh(particles_, transport_);
+  kernels_->publish_fields(particles_, FieldSet::Refresh, particles_.owned(), particles_.size());
 }
 
 void SlabWorker::compute_rates() {
   if (params_.density_mode == DensityMode::Summation) {
-    cpu::summation_density(particles_, grid_, params_);
-    halo_.refresh(particles_, transport_);
+    kernels_->summation_density(particles_, grid_, params_);
+    refresh_halo();
   }
-  cpu::equation_of_state(particles_, params_);
-  cpu::wall_state(particles_, grid_, params_);
-  halo_.refresh(particles_, transport_);
-  cpu::fluid_rates(particles_, grid_, params_);
+  kernels_->equation_of_state(particles_, params_);
+  kernels_->wall_state(particles_, grid_, params_);
+  refresh_halo();
+  kernels_->fluid_rates(particles_, grid_, params_);
 }
 
 void SlabWorker::prepare(bool rates) {
@@ -46,10 +58,11 @@ void SlabWorker::prepare(bool rates) {
     compute_rates();
   } else {
     // The wall state and pressures still have to exist for outputs and probes.
-    cpu::equation_of_state(particles_, params_);
-    cpu::wall_state(particles_, grid_, params_);
-    halo_.refresh(particles_, transport_);
+    kernels_->equation_of_state(particles_, params_);
+    kernels_->wall_state(particles_, grid_, params_);
+    refresh_halo();
   }
+  kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
 }
 
 std::optional<ParticleFault> SlabWorker::wrap_and_check_domain() {
@@ -77,12 +90,16 @@ std::optional<ParticleFault> SlabWorker::wrap_and_check_domain() {
   return fault;
 }
 
+// Between steps the host store holds the owned particles' whole state (health checks, probes, output
+// and the next rebuild read it), whichever backend computed it.
 std::optional<ParticleFault> SlabWorker::step(float dt) {
-  cpu::predict(particles_, params_, dt);
+  kernels_->predict(particles_, params_, dt);
+  kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
   if (auto fault = first_fault(transport_, wrap_and_check_domain())) return fault;
   rebuild();
   compute_rates();
-  cpu::correct(particles_, params_, dt);
+  kernels_->correct(particles_, params_, dt);
+  kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
   return std::nullopt;
 }
 
@@ -108,7 +125,7 @@ std::optional<ParticleFault> SlabWorker::health(float min_ratio, float max_ratio
   return fault;
 }
 
-float SlabWorker::local_time_step(const TimeStepControl& c) const { return cpu::min_time_step(particles_, params_, c); }
+float SlabWorker::local_time_step(const TimeStepControl& c) const { return kernels_->min_time_step(particles_, params_, c); }
 
 std::vector<std::int64_t> SlabWorker::slab_particle_counts() {
   std::vector<std::int64_t> counts(transport_.slab_count(), 0);
@@ -135,7 +152,7 @@ double SlabWorker::rebalance(int min_columns) {
 }
 
 std::size_t SlabWorker::allocated_bytes() const {
-  return particles_.size() * particles_.bytes_per_particle() + grid_.bytes();
+  return particles_.size() * particles_.bytes_per_particle() + grid_.bytes() + kernels_->device_bytes();
 }
 
 std::optional<ParticleFault> first_fault(SlabTransport& t, const std::optional<ParticleFault>& mine) {

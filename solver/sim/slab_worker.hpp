@@ -3,10 +3,12 @@
 // and the step pieces in the order the design prescribes. The CPU backend's driver does the
 // arithmetic; the worker only sequences it and talks to the neighbours through the transport.
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "../backend/step_kernels.hpp"
 #include "../comm/transport.hpp"
 #include "../domain/halo.hpp"
 #include "../domain/slab_layout.hpp"
@@ -26,6 +28,9 @@ struct ParticleFault {
 class SlabWorker {
  public:
   SlabWorker(const Lattice& lattice, const PhysicsParams& params, SlabTransport& transport);
+  ~SlabWorker();
+  // The physics loops (default: the CPU backend). Set before take_share().
+  void use_kernels(std::unique_ptr<StepKernels> kernels) { kernels_ = std::move(kernels); }
 
   // Takes the particles of `global` that lie in this slab's columns.
   void take_share(const ParticleStore& global, const SlabLayout& layout);
@@ -54,6 +59,7 @@ class SlabWorker {
  private:
   void rebuild();        // migrate, sort, halos
   void compute_rates();  // EOS, walls, fluid rates
+  void refresh_halo();   // the ghosts' Refresh fields, through the host store
   std::optional<ParticleFault> wrap_and_check_domain();
 
   Lattice lattice_;
@@ -63,6 +69,7 @@ class SlabWorker {
   ParticleStore particles_;
   CellGrid grid_;
   Halo halo_;
+  std::unique_ptr<StepKernels> kernels_;
 };
 
 // The fault with the lowest particle id over all slabs (collective), or none.

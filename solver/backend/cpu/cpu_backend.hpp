@@ -28,3 +28,24 @@ namespace spate::cpu {
 // Pairs (fluid i, any j) inside the support: the neighbour interactions one rate evaluation does.
 std::int64_t count_fluid_interactions(const ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 }  // namespace spate::cpu
+
+#include "../step_kernels.hpp"
+
+namespace spate::cpu {
+// The OpenMP loops behind the StepKernels interface; the host store is the only copy.
+class Kernels final : public StepKernels {
+ public:
+  const char* name() const override { return "cpu"; }
+  void predict(ParticleStore& p, const PhysicsParams& P, float dt) override { cpu::predict(p, P, dt); }
+  void correct(ParticleStore& p, const PhysicsParams& P, float dt) override { cpu::correct(p, P, dt); }
+  void equation_of_state(ParticleStore& p, const PhysicsParams& P) override { cpu::equation_of_state(p, P); }
+  void summation_density(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override {
+    cpu::summation_density(p, g, P);
+  }
+  void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::wall_state(p, g, P); }
+  void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::fluid_rates(p, g, P); }
+  float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) override {
+    return cpu::min_time_step(p, P, c);
+  }
+};
+}  // namespace spate::cpu

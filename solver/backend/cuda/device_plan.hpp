@@ -1,0 +1,68 @@
+#pragma once
+// The host-side arithmetic of the CUDA backend, kept free of CUDA so that the CPU test suite covers
+// it: kernel launch shapes, device buffer capacities, the device memory a case needs per GPU, and
+// which GPU each device worker drives.
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "../../grid/lattice.hpp"
+
+namespace spate::gpu {
+
+// One thread per particle (or per item), `threads` per block.
+struct LaunchShape {
+  unsigned blocks = 0;
+  unsigned threads = 0;
+};
+constexpr unsigned kThreadsPerBlock = 128;
+// blocks = ceil(items / threads); zero items gives zero blocks (the caller skips the launch).
+// Throws std::length_error beyond the 2^31 - 1 blocks a grid's x dimension allows.
+LaunchShape launch_shape(std::size_t items, unsigned threads = kThreadsPerBlock);
+
+// Device arrays grow with headroom (particles migrate in, ghosts vary step to step) so that a
+// reallocation, which costs a cudaMalloc and a copy, is rare: at least needed + needed/8, rounded
+// up to a multiple of kCapacityQuantum. They never shrink.
+constexpr std::size_t kCapacityQuantum = 4096;
+std::size_t grown_capacity(std::size_t needed, std::size_t current);
+
+// What the device store holds per particle slot, in bytes (the fields mirror ParticleStore's).
+struct DeviceFootprint {
+  std::size_t field_bytes = 0;    // pos, vel, acc, acc_prev, density, pressure, rates, id, kind
+  std::size_t scratch_bytes = 0;  // per-particle time-step limits for the min-reduction
+  std::size_t per_particle() const { return field_bytes + scratch_bytes; }
+};
+DeviceFootprint device_footprint(int dim);
+
+// The device memory one GPU needs for its slab: its share of the particles (uniform split of the
+// x columns, particles spread evenly over columns: an estimate, balancing moves faces), the two
+// ghost columns, the cell table, capacity headroom and the CUB reduction scratch.
+struct SlabMemory {
+  int slab = 0;
+  int columns = 0;
+  std::int64_t owned = 0;
+  std::int64_t ghosts = 0;
+  std::int64_t cells = 0;
+  std::size_t capacity = 0;  // particle slots allocated
+  std::size_t bytes = 0;
+};
+std::vector<SlabMemory> device_memory_per_slab(const Lattice& lattice, std::int64_t particles, int devices);
+
+// CUDA_VISIBLE_DEVICES as the CUDA runtime reads it: a comma-separated list of indices or
+// GPU-/MIG- UUIDs; the runtime ignores everything from the first entry it cannot parse (so "-1"
+// or "" hides every device). Unset: nullopt (every device is visible).
+std::optional<std::vector<std::string>> visible_devices(const char* env);
+// A sentence for the "no CUDA device" error that says why none may be visible.
+std::string no_device_reason(const char* env);
+
+// The GPU (an index among the visible ones) that device worker `worker` of this process drives:
+// processes on one node take consecutive blocks of devices (local_rank * workers_per_process),
+// wrapping around when there are more workers than GPUs (shared GPUs: correct, but slower).
+int device_for_worker(int worker, int workers_per_process, int local_rank, int visible_devices);
+// This process's rank among the processes of its node, from the launcher's environment (Open MPI,
+// MPICH/Hydra, MVAPICH2, Slurm); 0 when started without one. `getenv` is injectable for tests.
+int node_local_rank(const char* (*getenv)(const char*) = nullptr);
+
+}  // namespace spate::gpu

@@ -1,0 +1,133 @@
+// The host-side arithmetic of the CUDA backend (backend/cuda/device_plan.hpp), on the CPU.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <string>
+
+#include "backend/cuda/device_plan.hpp"
+#include "particles/particle_store.hpp"
+
+namespace spate::gpu {
+
+TEST(CudaLaunchShape, CoversEveryItemWithTheFewestBlocks) {
+  EXPECT_EQ(launch_shape(0).blocks, 0u);
+  EXPECT_EQ(launch_shape(1).blocks, 1u);
+  EXPECT_EQ(launch_shape(128).blocks, 1u);
+  EXPECT_EQ(launch_shape(129).blocks, 2u);
+  EXPECT_EQ(launch_shape(1000, 256).blocks, 4u);
+  EXPECT_EQ(launch_shape(1000, 256).threads, 256u);
+  for (std::size_t n : {1u, 127u, 128u, 129u, 100000u}) {
+    const LaunchShape s = launch_shape(n);
+    EXPECT_GE(static_cast<std::size_t>(s.blocks) * s.threads, n);
+    EXPECT_LT(static_cast<std::size_t>(s.blocks - 1) * s.threads, n);
+  }
+  EXPECT_THROW(launch_shape(std::size_t{1} << 40, 128), std::length_error);  // 2^33 blocks
+  EXPECT_THROW(launch_shape(10, 0), std::invalid_argument);
+}
+
+TEST(CudaCapacity, GrowsWithHeadroomInQuantaAndNeverShrinks) {
+  EXPECT_EQ(grown_capacity(0, 0), 0u);
+  EXPECT_EQ(grown_capacity(1, 0), kCapacityQuantum);
+  const std::size_t c = grown_capacity(100000, 0);
+  EXPECT_GE(c, 100000u + 100000u / 8);
+  EXPECT_EQ(c % kCapacityQuantum, 0u);
+  EXPECT_EQ(grown_capacity(100000, c), c);       // fits: no reallocation
+  EXPECT_EQ(grown_capacity(10, c), c);           // never shrinks
+  EXPECT_GT(grown_capacity(c + 1, c), c + 1);    // grows past the request
+}
+
+TEST(CudaFootprint, DeviceFieldsMatchTheHostStoreAndStayUnderBudget) {
+  for (int dim : {2, 3}) {
+    const DeviceFootprint f = device_footprint(dim);
+    // The device holds exactly the host store's per-particle fields plus one scratch float.
+    ParticleStore host(dim);
+    std::size_t host_fields = 0;
+    for (auto& field : host.fields()) host_fields += field.elem_size;
+    EXPECT_EQ(f.field_bytes, host_fields) << dim << "D";
+    EXPECT_EQ(f.scratch_bytes, sizeof(float));
+  }
+  EXPECT_EQ(device_footprint(3).per_particle(), 73u);  // 69 bytes of fields + 4 of scratch
+  // The budget: <= 150 bytes per particle on the device, headroom and ghosts included.
+  Lattice L;
+  L.dim = 3;
+  L.cells[0] = 120;
+  L.cells[1] = 40;
+  L.cells[2] = 40;
+  const std::int64_t n = 4'000'000;
+  for (int devices : {1, 2, 4}) {
+    std::int64_t owned = 0;
+    std::size_t bytes = 0;
+    for (auto& m : device_memory_per_slab(L, n, devices)) {
+      owned += m.owned;
+      bytes = std::max(bytes, m.bytes);
+      EXPECT_GE(m.capacity, static_cast<std::size_t>(m.owned + m.ghosts));
+      EXPECT_LE(static_cast<double>(m.bytes) / static_cast<double>(m.owned), 150.0) << devices << " GPUs";
+    }
+    EXPECT_GE(owned, n);
+    EXPECT_LT(owned, n + devices);
+    EXPECT_GT(bytes, static_cast<std::size_t>(n / devices) * 73);
+  }
+}
+
+TEST(CudaFootprint, GhostColumnsOnlyWhereThereIsANeighbour) {
+  Lattice L;
+  L.dim = 2;
+  L.cells[0] = 90;
+  L.cells[1] = 30;
+  const auto one = device_memory_per_slab(L, 9000, 1);
+  ASSERT_EQ(one.size(), 1u);
+  EXPECT_EQ(one[0].ghosts, 0);
+  EXPECT_EQ(one[0].owned, 9000);
+  const auto three = device_memory_per_slab(L, 9000, 3);
+  EXPECT_EQ(three[0].ghosts, 100);  // one neighbour: one column of 100 particles
+  EXPECT_EQ(three[1].ghosts, 200);
+  EXPECT_EQ(three[2].ghosts, 100);
+  L.periodic[0] = true;
+  EXPECT_EQ(device_memory_per_slab(L, 9000, 3)[0].ghosts, 200);
+  EXPECT_THROW(device_memory_per_slab(L, 9000, 0), std::invalid_argument);
+}
+
+TEST(CudaVisibleDevices, ParsedAsTheRuntimeDoes) {
+  EXPECT_FALSE(visible_devices(nullptr).has_value());
+  EXPECT_TRUE(visible_devices("")->empty());
+  EXPECT_TRUE(visible_devices("-1")->empty());
+  EXPECT_EQ(*visible_devices("0,1"), (std::vector<std::string>{"0", "1"}));
+  EXPECT_EQ(*visible_devices(" 2 , 3"), (std::vector<std::string>{"2", "3"}));
+  // Everything from the first invalid entry on is ignored.
+  EXPECT_EQ(*visible_devices("0,-1,1"), (std::vector<std::string>{"0"}));
+  EXPECT_EQ(*visible_devices("GPU-8932f937,MIG-abc"), (std::vector<std::string>{"GPU-8932f937", "MIG-abc"}));
+  EXPECT_NE(no_device_reason("").find("hides every device"), std::string::npos);
+  EXPECT_NE(no_device_reason("-1").find("hides every device"), std::string::npos);
+  EXPECT_NE(no_device_reason("0").find("found none"), std::string::npos);
+  EXPECT_NE(no_device_reason(nullptr).find("no GPU"), std::string::npos);
+}
+
+TEST(CudaDeviceAssignment, WorkersTakeConsecutiveDevicesPerNodeRank) {
+  EXPECT_EQ(device_for_worker(0, 1, 0, 4), 0);
+  EXPECT_EQ(device_for_worker(3, 4, 0, 4), 3);
+  EXPECT_EQ(device_for_worker(1, 2, 1, 4), 3);  // rank 1 of the node drives GPUs 2 and 3
+  EXPECT_EQ(device_for_worker(2, 4, 0, 2), 0);  // more workers than GPUs: shared, wrapping
+  EXPECT_THROW(device_for_worker(0, 1, 0, 0), std::invalid_argument);
+  EXPECT_THROW(device_for_worker(2, 2, 0, 4), std::invalid_argument);
+}
+
+namespace {
+std::map<std::string, std::string> fake_env;
+const char* fake_getenv(const char* name) {
+  auto it = fake_env.find(name);
+  return it == fake_env.end() ? nullptr : it->second.c_str();
+}
+}  // namespace
+
+TEST(CudaDeviceAssignment, NodeLocalRankFromTheLauncher) {
+  fake_env.clear();
+  EXPECT_EQ(node_local_rank(fake_getenv), 0);
+  fake_env["SLURM_LOCALID"] = "3";
+  EXPECT_EQ(node_local_rank(fake_getenv), 3);
+  fake_env["OMPI_COMM_WORLD_LOCAL_RANK"] = "1";  // Open MPI's own variable wins
+  EXPECT_EQ(node_local_rank(fake_getenv), 1);
+  fake_env["OMPI_COMM_WORLD_LOCAL_RANK"] = "x";  // unparsable: the next launcher's
+  EXPECT_EQ(node_local_rank(fake_getenv), 3);
+}
+
+}  // namespace spate::gpu
