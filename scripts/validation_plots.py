@@ -1,0 +1,98 @@
+"""Plots spate's validation runs against experiment and theory (called by scripts/validation-report)."""
+import csv
+import math
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+work, data, images = (Path(a) for a in sys.argv[1:4])
+
+
+def probe(path, column):
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    return [float(r["time"]) for r in rows], [float(r[column]) for r in rows]
+
+
+def experiment(name):
+    pts = []
+    for line in open(data / name):
+        if line.startswith("#") or line.startswith("T"):
+            continue
+        t, z = line.strip().split(",")
+        pts.append((float(t), float(z)))
+    return pts
+
+
+# Dam break surge front: Z = front / a against T = t sqrt(2 g / a).
+a, g = 0.0572, 9.81
+t, x = probe(work / "dam_break_2d/probes/front.csv", "front")
+T = [ti * math.sqrt(2 * g / a) for ti in t]
+Z = [xi / a for xi in x]
+fig, ax = plt.subplots(figsize=(6, 4))
+ax.plot(T, Z, "k-", label="spate, dp = a/28.6")
+for name, style, label in [("martin_moyce_1952_a2.25in.csv", "o", "Martin & Moyce 1952, a = 2.25 in"),
+                           ("martin_moyce_1952_a1.125in.csv", "s", "Martin & Moyce 1952, a = 1.125 in"),
+                           ("koshizuka_oka_1996_front.csv", "^", "Koshizuka & Oka 1996")]:
+    pts = experiment(name)
+    ax.plot([p[0] for p in pts], [p[1] for p in pts], style, mfc="none", label=label)
+ax.set_xlim(0, 3.5)
+ax.set_ylim(1, 5)
+ax.set_xlabel("T = t sqrt(2g/a)")
+ax.set_ylabel("Z = front / a")
+ax.legend()
+ax.grid(alpha=0.3)
+fig.tight_layout()
+fig.savefig(images / "validation_dam_break_front.png", dpi=110)
+print("surge front (error against Martin & Moyce a = 2.25 in):")
+for Te, Ze in experiment("martin_moyce_1952_a2.25in.csv"):
+    if Te > 3.0:
+        break
+    k = min(range(len(T)), key=lambda i: abs(T[i] - Te))
+    print(f"  T = {Te:.2f}: experiment {Ze:.3f}, spate {Z[k]:.3f}, error {100 * (Z[k] - Ze) / Ze:+.1f}%")
+
+# Hydrostatic pressure against rho g d.
+fig, ax = plt.subplots(figsize=(6, 4))
+for name, depth in [("p_bottom", 0.45), ("p_middle", 0.25), ("p_upper", 0.1)]:
+    t, p = probe(work / f"hydrostatic_2d/probes/{name}.csv", "pressure")
+    ax.plot(t, [pi / (1000 * g * depth) for pi in p], label=f"depth {depth} m")
+    late = [pi for ti, pi in zip(t, p) if ti > 0.7]
+    print(f"hydrostatic {name}: mean over t > 0.7 s {sum(late) / len(late):.1f} Pa, rho g d = {1000 * g * depth:.1f} Pa, "
+          f"error {100 * (sum(late) / len(late) / (1000 * g * depth) - 1):+.2f}%")
+ax.axhline(1.0, color="k", lw=0.8)
+ax.set_ylim(0.9, 1.1)
+ax.set_xlabel("t [s]")
+ax.set_ylabel("p / (rho g d)")
+ax.legend()
+ax.grid(alpha=0.3)
+fig.tight_layout()
+fig.savefig(images / "validation_hydrostatic.png", dpi=110)
+
+# Poiseuille: centreline against the transient series solution (Morris et al. 1997).
+F, nu, L = 2e-4, 1e-6, 1e-3
+t, u = probe(work / "poiseuille_2d/probes/centreline.csv", "vx")
+
+
+def series(time, y):
+    s = F / (2 * nu) * y * (L - y)
+    for n in range(200):
+        k = 2 * n + 1
+        s -= 4 * F * L * L / (nu * math.pi ** 3 * k ** 3) * math.sin(math.pi * y * k / L) * math.exp(-(k * math.pi / L) ** 2 * nu * time)
+    return s
+
+
+fig, ax = plt.subplots(figsize=(6, 4))
+ax.plot(t, [ui * 1e5 for ui in u], "k-", label="spate centreline")
+ax.plot(t, [series(ti, L / 2) * 1e5 for ti in t], "r--", label="series solution")
+ax.set_xlabel("t [s]")
+ax.set_ylabel("u [1e-5 m/s]")
+ax.legend()
+ax.grid(alpha=0.3)
+fig.tight_layout()
+fig.savefig(images / "validation_poiseuille.png", dpi=110)
+print(f"poiseuille: centreline at t = {t[-1]:.2f} s: {u[-1]:.4g} m/s, analytic {F * L * L / (8 * nu):.4g} m/s, "
+      f"error {100 * (u[-1] / (F * L * L / (8 * nu)) - 1):+.2f}%")
