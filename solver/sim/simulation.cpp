@@ -87,7 +87,7 @@ class Progress {
     if (!enabled_) return;
     const auto now = Clock::now();
     const double since = std::chrono::duration<double>(now - last_).count();
-    if (!force && since < (tty_ ? 1.0 : 10.0)) return;
+    if (!force && since < (tty_ ? 1.0 : 5.0)) return;
     last_ = now;
     const double wall = std::chrono::duration<double>(now - begin_).count();
     const double sps = wall > 0 ? steps / wall : 0.0;
