@@ -111,12 +111,13 @@ std::optional<ParticleFault> SlabWorker::health(float min_ratio, float max_ratio
     if (fault && p.id[i] >= fault->id) continue;
     bool finite = std::isfinite(p.density[i]);
     for (int a = 0; a < lattice_.dim; ++a) finite = finite && std::isfinite(p.pos[a][i]) && std::isfinite(p.vel[a][i]);
+    const float ratio = p.density[i] / params_.rho0;
+    if (finite && ratio >= min_ratio && ratio <= max_ratio) continue;
+    // Only a faulty particle pays for building its message.
     std::ostringstream s;
     if (!finite) {
       s << "has a non-finite position, velocity or density";
     } else {
-      const float ratio = p.density[i] / params_.rho0;
-      if (ratio >= min_ratio && ratio <= max_ratio) continue;
       s << "has density " << p.density[i] << " kg/m3, outside [" << min_ratio * params_.rho0 << ", "
         << max_ratio * params_.rho0 << "] (density.min_ratio/max_ratio)";
     }
