@@ -1,20 +1,23 @@
 #pragma once
-// Reading one particle of a host ParticleStore as the physics structs (vectors, ParticleState).
+// Reading one particle as the physics structs (vectors, ParticleState), from any structure of
+// arrays with the field names of ParticleStore: the host store (std::vector fields) or the CUDA
+// backend's device fields (raw pointers). One definition for both backends.
+#include <cstddef>
+
 #include "../physics/fluid_interactions.hpp"
-#include "particle_store.hpp"
 
 namespace spate {
 
-template <int Dim>
-inline Vec<Dim> load_vec(const std::vector<float> (&a)[3], std::size_t i) {
+template <int Dim, class Array>
+SPATE_HD Vec<Dim> load_vec(const Array (&a)[3], std::size_t i) {
   Vec<Dim> v;
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) v[k] = a[k][i];
   return v;
 }
 
-template <int Dim>
-inline ParticleState<Dim> load_state(const ParticleStore& p, std::size_t i) {
-  return ParticleState<Dim>{load_vec<Dim>(p.pos, i), load_vec<Dim>(p.vel, i), p.density[i], p.pressure[i], p.kind[i]};
+template <int Dim, class Fields>
+SPATE_HD ParticleState<Dim> load_state(const Fields& f, std::size_t i) {
+  return ParticleState<Dim>{load_vec<Dim>(f.pos, i), load_vec<Dim>(f.vel, i), f.density[i], f.pressure[i], f.kind[i]};
 }
 
 }  // namespace spate

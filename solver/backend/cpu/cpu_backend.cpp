@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "../../particles/particle_access.hpp"
+#include "../particle_updates.hpp"
 #include "../../physics/dispatch.hpp"
 #include "../../physics/eos.hpp"
 #include "../../physics/fluid_interactions.hpp"
@@ -72,16 +73,7 @@ void summation_density(ParticleStore& p, const CellGrid& grid, const PhysicsPara
   dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
     const CellGridView v = grid.view();
     for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
-      for (std::uint32_t i = b; i < e; ++i) {
-        if (!is_fluid(p.kind[i])) continue;
-        const Vec<Dim> xi = load_vec<Dim>(p.pos, i);
-        float rho = 0.0f;
-        v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
-          for (std::uint32_t j = jb; j < je; ++j)
-            rho += summation_density_term<Kernel, Dim>(P, xi, load_vec<Dim>(p.pos, j));
-        });
-        p.density[i] = std::max(rho, P.rho0);
-      }
+      for (std::uint32_t i = b; i < e; ++i) update_summation_density<Kernel, Dim>(P, v, p, i, g);
     });
   });
 }
@@ -90,19 +82,7 @@ void wall_state(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) 
   dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
     const CellGridView v = grid.view();
     for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
-      for (std::uint32_t w = b; w < e; ++w) {
-        if (is_fluid(p.kind[w])) continue;
-        const Vec<Dim> xw = load_vec<Dim>(p.pos, w);
-        WallSums<Dim> sums;
-        v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
-          for (std::uint32_t j = jb; j < je; ++j)
-            if (is_fluid(p.kind[j])) accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(p, j), sums);
-        });
-        const WallState<Dim> s = finish_wall(P, sums);
-        p.pressure[w] = s.p;
-        p.density[w] = s.rho;
-        SPATE_UNROLL for (int k = 0; k < Dim; ++k) p.vel[k][w] = s.v[k];
-      }
+      for (std::uint32_t i = b; i < e; ++i) update_wall_state<Kernel, Dim>(P, v, p, i, g);
     });
   });
 }
@@ -111,30 +91,7 @@ void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P)
   dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
     const CellGridView v = grid.view();
     for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
-      for (std::uint32_t i = b; i < e; ++i) {
-        if (!is_fluid(p.kind[i])) {
-          SPATE_UNROLL for (int k = 0; k < Dim; ++k) p.acc[k][i] = 0.0f;
-          p.density_rate[i] = 0.0f;
-          continue;
-        }
-        const ParticleState<Dim> si = load_state<Dim>(p, i);
-        FluidRates<Dim> rates;
-        // About 1 in 6 candidates of the 27 cells lies inside the support (3D); skip the others
-        // before paying for the pair terms (which would add exactly zero for them).
-        v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
-          for (std::uint32_t j = jb; j < je; ++j) {
-            float r2 = 0.0f;
-            SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
-              const float d = si.x[k] - p.pos[k][j];
-              r2 += d * d;
-            }
-            if (r2 < P.support2) accumulate_fluid_pair<Kernel, Dim>(P, si, load_state<Dim>(p, j), rates);
-          }
-        });
-        add_body_forces(P, rates);
-        SPATE_UNROLL for (int k = 0; k < Dim; ++k) p.acc[k][i] = rates.acc[k];
-        p.density_rate[i] = P.density_mode == DensityMode::Continuity ? rates.density_rate : 0.0f;
-      }
+      for (std::uint32_t i = b; i < e; ++i) update_fluid_rates<Kernel, Dim>(P, v, p, i, g);
     });
   });
 }

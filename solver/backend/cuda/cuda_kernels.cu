@@ -17,6 +17,7 @@
 #include "../../physics/fluid_interactions.hpp"
 #include "../../physics/integrator.hpp"
 #include "../../physics/wall_boundary.hpp"
+#include "../particle_updates.hpp"
 #include "device_plan.hpp"
 #include "device_runtime.hpp"
 
@@ -41,18 +42,6 @@ struct DeviceFields {
   const std::uint32_t* id;
   const std::uint8_t* kind;
 };
-
-template <int Dim>
-__device__ Vec<Dim> load_vec(float* const (&a)[3], std::uint32_t i) {
-  Vec<Dim> v;
-  for (int k = 0; k < Dim; ++k) v[k] = a[k][i];
-  return v;
-}
-
-template <int Dim>
-__device__ ParticleState<Dim> load_state(const DeviceFields& d, std::uint32_t i) {
-  return ParticleState<Dim>{load_vec<Dim>(d.pos, i), load_vec<Dim>(d.vel, i), d.density[i], d.pressure[i], d.kind[i]};
-}
 
 // Global cell coordinates of particle i: the cell its (unchanged since the sort) position is in,
 // which is the owned cell whose coordinates the CPU loop passes.
@@ -86,54 +75,28 @@ __global__ void eos_kernel(DeviceFields d, std::uint32_t n, PhysicsParams P) {
 template <class Kernel, int Dim>
 __global__ void summation_density_kernel(DeviceFields d, std::uint32_t owned, CellGridView v, Lattice L, PhysicsParams P) {
   const std::uint32_t i = thread_index();
-  if (i >= owned || !is_fluid(d.kind[i])) return;
+  if (i >= owned) return;
   int g[3];
   cell_coords<Dim>(L, d, i, g);
-  const Vec<Dim> xi = load_vec<Dim>(d.pos, i);
-  float rho = 0.0f;
-  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
-    for (std::uint32_t j = jb; j < je; ++j) rho += summation_density_term<Kernel, Dim>(P, xi, load_vec<Dim>(d.pos, j));
-  });
-  d.density[i] = rho < P.rho0 ? P.rho0 : rho;  // std::max(rho, rho0) of the CPU loop
+  update_summation_density<Kernel, Dim>(P, v, d, i, g);
 }
 
 template <class Kernel, int Dim>
 __global__ void wall_state_kernel(DeviceFields d, std::uint32_t owned, CellGridView v, Lattice L, PhysicsParams P) {
-  const std::uint32_t w = thread_index();
-  if (w >= owned || is_fluid(d.kind[w])) return;
+  const std::uint32_t i = thread_index();
+  if (i >= owned) return;
   int g[3];
-  cell_coords<Dim>(L, d, w, g);
-  const Vec<Dim> xw = load_vec<Dim>(d.pos, w);
-  WallSums<Dim> sums;
-  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
-    for (std::uint32_t j = jb; j < je; ++j)
-      if (is_fluid(d.kind[j])) accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(d, j), sums);
-  });
-  const WallState<Dim> s = finish_wall(P, sums);
-  d.pressure[w] = s.p;
-  d.density[w] = s.rho;
-  for (int k = 0; k < Dim; ++k) d.vel[k][w] = s.v[k];
+  cell_coords<Dim>(L, d, i, g);
+  update_wall_state<Kernel, Dim>(P, v, d, i, g);
 }
 
 template <class Kernel, int Dim>
 __global__ void fluid_rates_kernel(DeviceFields d, std::uint32_t owned, CellGridView v, Lattice L, PhysicsParams P) {
   const std::uint32_t i = thread_index();
   if (i >= owned) return;
-  if (!is_fluid(d.kind[i])) {
-    for (int k = 0; k < Dim; ++k) d.acc[k][i] = 0.0f;
-    d.density_rate[i] = 0.0f;
-    return;
-  }
   int g[3];
   cell_coords<Dim>(L, d, i, g);
-  const ParticleState<Dim> si = load_state<Dim>(d, i);
-  FluidRates<Dim> rates;
-  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
-    for (std::uint32_t j = jb; j < je; ++j) accumulate_fluid_pair<Kernel, Dim>(P, si, load_state<Dim>(d, j), rates);
-  });
-  add_body_forces(P, rates);
-  for (int k = 0; k < Dim; ++k) d.acc[k][i] = rates.acc[k];
-  d.density_rate[i] = P.density_mode == DensityMode::Continuity ? rates.density_rate : 0.0f;
+  update_fluid_rates<Kernel, Dim>(P, v, d, i, g);
 }
 
 // Per-particle stable step (infinity for walls); the minimum is a CUB reduction (order-free, exact).

@@ -1,0 +1,71 @@
+#pragma once
+// The per-particle bodies of the neighbour loops, shared by the OpenMP driver (a loop over cells)
+// and the CUDA driver (one thread per particle): particle i in cell g visits its neighbours in the
+// fixed (cell, id) order of CellGridView and calls the physics in solver/physics. `Fields` is any
+// structure of arrays with ParticleStore's field names (host vectors or device pointers).
+#include <cstdint>
+
+#include "../grid/cell_grid_view.hpp"
+#include "../particles/particle_access.hpp"
+#include "../physics/fluid_interactions.hpp"
+#include "../physics/wall_boundary.hpp"
+
+namespace spate {
+
+// Acceleration and density rate of fluid particle i (zero rates for walls).
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
+  if (!is_fluid(f.kind[i])) {
+    SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = 0.0f;
+    f.density_rate[i] = 0.0f;
+    return;
+  }
+  const ParticleState<Dim> si = load_state<Dim>(f, i);
+  FluidRates<Dim> rates;
+  // About 1 in 6 candidates of the 27 cells lies inside the support (3D); skip the others before
+  // paying for the pair terms (which would add exactly zero for them).
+  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+    for (std::uint32_t j = jb; j < je; ++j) {
+      float r2 = 0.0f;
+      SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
+        const float d = si.x[k] - f.pos[k][j];
+        r2 += d * d;
+      }
+      if (r2 < P.support2) accumulate_fluid_pair<Kernel, Dim>(P, si, load_state<Dim>(f, j), rates);
+    }
+  });
+  add_body_forces(P, rates);
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = rates.acc[k];
+  f.density_rate[i] = P.density_mode == DensityMode::Continuity ? rates.density_rate : 0.0f;
+}
+
+// Adami pressure, density and no-slip velocity of wall particle w (fluid particles are skipped).
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void update_wall_state(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t w, const int g[3]) {
+  if (is_fluid(f.kind[w])) return;
+  const Vec<Dim> xw = load_vec<Dim>(f.pos, w);
+  WallSums<Dim> sums;
+  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+    for (std::uint32_t j = jb; j < je; ++j)
+      if (is_fluid(f.kind[j])) accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(f, j), sums);
+  });
+  const WallState<Dim> s = finish_wall(P, sums);
+  f.pressure[w] = s.p;
+  f.density[w] = s.rho;
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.vel[k][w] = s.v[k];
+}
+
+// Mass-summation density (eq. 5) of fluid particle i, clipped below at rho0 (free surface).
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void update_summation_density(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i,
+                                       const int g[3]) {
+  if (!is_fluid(f.kind[i])) return;
+  const Vec<Dim> xi = load_vec<Dim>(f.pos, i);
+  float rho = 0.0f;
+  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+    for (std::uint32_t j = jb; j < je; ++j) rho += summation_density_term<Kernel, Dim>(P, xi, load_vec<Dim>(f.pos, j));
+  });
+  f.density[i] = rho < P.rho0 ? P.rho0 : rho;
+}
+
+}  // namespace spate
