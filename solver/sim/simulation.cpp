@@ -35,6 +35,7 @@ std::string step_name(std::int64_t step) { return fmt::format("step_{:08d}", ste
 
 // Everything the worker threads of this process share. Written by the writer slab only.
 struct Shared {
+  Shared(const Case& case_in, const RunOptions& options) : c(case_in), opts(options), initial(case_in.dim) {}
   const Case& c;
   const RunOptions& opts;
   Lattice lattice;
@@ -47,6 +48,7 @@ struct Shared {
   RunResult result;
   std::mutex result_mutex;
   std::vector<SlabWorker*> workers;  // local slabs, for in-situ views
+  int workers_first_slab = 0;        // global index of this process's first slab
   std::vector<SteeringChange> steering_history;  // accepted so far (from the checkpoint, then live)
 };
 
@@ -130,7 +132,10 @@ class Worker {
       std::lock_guard lock(s_.result_mutex);
       s_.workers[t_.slab()] = &w_;
     }
-    t_.barrier();  // every slab has its share; `initial` may be dropped by the main thread after join
+    t_.barrier();  // every slab has its share: the generated set is no longer needed (on the
+                   // paper's case it holds about a gigabyte)
+    if (t_.slab() == s_.workers_first_slab) s_.initial = ParticleStore(s_.c.dim);
+    t_.barrier();
     w_.prepare(!s_.restarted);
 
     ProbeSet probes(s_.c, s_.opts.out_dir, writer, s_.restarted);
@@ -329,7 +334,9 @@ class Worker {
 Simulation::Simulation(Case c, RunOptions options) : case_(std::move(c)), options_(std::move(options)) {}
 
 RunResult Simulation::run() {
-  Shared s{case_, options_, make_lattice(case_), physics_params(case_), ParticleStore(case_.dim), {}, false, {}, 1, {}, {}, {}, {}};
+  Shared s(case_, options_);
+  s.lattice = make_lattice(case_);
+  s.params = physics_params(case_);
   if (options_.devices < 1) throw InputError(fmt::format("--devices {}: must be at least 1", options_.devices));
   if (options_.backend != "cpu" && options_.backend != "cuda")
     throw InputError(fmt::format("--backend {}: expected 'cpu' or 'cuda'", options_.backend));
