@@ -17,6 +17,7 @@
 #include "case/case.hpp"
 #include "case/generator.hpp"
 #include "comm/in_process_transport.hpp"
+#include "comm/process_group.hpp"
 #include "io/checkpoint.hpp"
 #include "io/run_summary.hpp"
 #include "sim/simulation.hpp"
@@ -91,10 +92,14 @@ int run_command(const RunArgs& a) {
   } catch (const CaseError& e) {
     throw BadInput(e.what());
   }
+  // Every rank knows the outcome; rank 0 reports it.
+  const ProcessGroup& group = process_group();
+  if (group.rank != 0) return r.exit_code;
   SummaryExtras x;
-  x.threads = a.threads > 0 ? a.threads : hardware_threads();
+  x.threads = a.threads > 0 ? a.threads : std::max(1, hardware_threads() / group.ranks_on_node);
   x.devices = a.devices;
   x.backend = a.backend;
+  x.ranks = group.ranks;
   write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
   if (r.exit_code == 3) {
     std::fprintf(stderr, "spate: the run went unstable: %s\n", r.message.c_str());
@@ -243,6 +248,7 @@ int bench_command(const BenchArgs& a) {
   o.quiet = true;
   const RunResult r = Simulation(c, o).run();
   std::filesystem::remove_all(o.out_dir);
+  if (process_group().rank != 0) return 0;
   const double psps = r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds;
   const double ips = r.steps * static_cast<double>(interactions) / r.wall_seconds;
   const int threads = a.threads > 0 ? a.threads : hardware_threads();
@@ -253,6 +259,7 @@ int bench_command(const BenchArgs& a) {
     j["threads"] = threads;
     j["devices"] = a.devices;
     j["backend"] = a.backend;
+    j["ranks"] = process_group().ranks;
     j["steps"] = r.steps;
     j["wall_seconds"] = r.wall_seconds;
     j["seconds_per_step"] = r.wall_seconds / r.steps;

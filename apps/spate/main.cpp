@@ -8,9 +8,34 @@
 #include <thread>
 
 #include "commands.hpp"
+#include "comm/process_group.hpp"
+
+namespace {
+
+// Under mpirun every rank ends the same way. Bad input and internal errors may strike one rank
+// only, while its peers wait in a collective: MPI_Abort ends them all (no hang). Outcomes every
+// rank agrees on (done, differences, unstable) finalise MPI normally.
+int finish(int code) {
+  if (spate::process_group().ranks > 1 && (code == 2 || code == 4)) spate::abort_process_group(code);
+  spate::finalize_process_group();
+  return code;
+}
+
+std::string who() {
+  const auto& g = spate::process_group();
+  return g.ranks > 1 ? fmt::format("spate (rank {} of {})", g.rank, g.ranks) : std::string("spate");
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace spate::app;
+  try {
+    spate::init_process_group(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "spate: error: %s\n", e.what());
+    return 2;
+  }
   CLI::App app{"spate: weakly-compressible SPH for free-surface flows, on CPUs and GPUs, watched and steered in situ.\n"};
   app.footer(
       "Exit codes: 0 done; 1 compare found differences; 2 bad input (case file, options, restart file);\n"
@@ -67,19 +92,19 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
-    return code == 0 ? 0 : 2;
+    return finish(code == 0 ? 0 : 2);
   }
   try {
-    if (*run_cmd) return run_command(run);
-    if (*info_cmd) return info_command(info);
-    if (*cmp_cmd) return compare_command(cmp);
-    if (*bench_cmd) return bench_command(bench);
+    if (*run_cmd) return finish(run_command(run));
+    if (*info_cmd) return finish(info_command(info));
+    if (*cmp_cmd) return finish(compare_command(cmp));
+    if (*bench_cmd) return finish(bench_command(bench));
   } catch (const BadInput& e) {
-    std::fprintf(stderr, "spate: error: %s\n", e.what());
-    return 2;
+    std::fprintf(stderr, "%s: error: %s\n", who().c_str(), e.what());
+    return finish(2);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "spate: internal error: %s\n", e.what());
-    return 4;
+    std::fprintf(stderr, "%s: internal error: %s\n", who().c_str(), e.what());
+    return finish(4);
   }
-  return 0;
+  return finish(0);
 }

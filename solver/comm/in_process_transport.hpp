@@ -5,23 +5,21 @@
 #include <atomic>
 #include <barrier>
 #include <memory>
-#include <stdexcept>
 #include <vector>
 
 #include "transport.hpp"
 
 namespace spate {
 
-struct PeerFailure : std::runtime_error {
-  PeerFailure() : std::runtime_error("another slab failed") {}
-};
-
-class InProcessHub {
+class InProcessHub final : public LocalSlabs {
  public:
   explicit InProcessHub(int slabs);
   int slabs() const { return slabs_; }
-  std::unique_ptr<SlabTransport> endpoint(int slab, bool periodic_x);
-  void abandon();  // called by a failing worker, once
+  int local_slabs() const override { return slabs_; }
+  int first_slab() const override { return 0; }
+  int slab_count() const override { return slabs_; }
+  std::unique_ptr<SlabTransport> endpoint(int slab, bool periodic_x) override;
+  void abandon() override;  // called by a failing worker, once
   bool failed() const { return failed_.load(); }
 
  private:

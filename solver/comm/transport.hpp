@@ -6,6 +6,8 @@
 // Slabs are numbered globally left to right along x; slab s has neighbours s-1 and s+1 (wrapping
 // around when x is periodic, possibly to itself).
 #include <cstdint>
+#include <memory>
+#include <stdexcept>
 #include <vector>
 
 namespace spate {
@@ -39,6 +41,26 @@ class SlabTransport {
   bool periodic_x = false;
   int left_of(int s) const { return s > 0 ? s - 1 : (periodic_x ? slab_count() - 1 : -1); }
   int right_of(int s) const { return s + 1 < slab_count() ? s + 1 : (periodic_x ? 0 : -1); }
+};
+
+// Raised in a slab's collective when another slab of this process gave up.
+struct PeerFailure : std::runtime_error {
+  PeerFailure() : std::runtime_error("another slab failed") {}
+};
+
+// The slabs that run in this process, one worker thread each: local slab d is global slab
+// first_slab() + d. Implemented by the in-process hub (every slab here) and the MPI node (this
+// rank's share of R x D slabs).
+class LocalSlabs {
+ public:
+  virtual ~LocalSlabs() = default;
+  virtual int local_slabs() const = 0;
+  virtual int first_slab() const = 0;
+  virtual int slab_count() const = 0;
+  virtual std::unique_ptr<SlabTransport> endpoint(int local, bool periodic_x) = 0;
+  // Called once by a worker that leaves early (failure): the others see PeerFailure at their next
+  // collective instead of waiting forever.
+  virtual void abandon() = 0;
 };
 
 }  // namespace spate

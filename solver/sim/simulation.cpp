@@ -17,6 +17,10 @@
 #include "../backend/cuda/device_plan.hpp"
 #include "../backend/cuda/device_runtime.hpp"
 #include "../comm/in_process_transport.hpp"
+#include "../comm/process_group.hpp"
+#ifdef SPATE_WITH_MPI
+#include "../comm/mpi_transport.hpp"
+#endif
 #include "../io/checkpoint.hpp"
 #include "../io/vtk_snapshot.hpp"
 #include "../particles/particle_pack.hpp"
@@ -50,6 +54,7 @@ struct Shared {
   std::vector<SlabWorker*> workers;  // local slabs, for in-situ views
   int workers_first_slab = 0;        // global index of this process's first slab
   std::vector<SteeringChange> steering_history;  // accepted so far (from the checkpoint, then live)
+  int first_slab = 0;                // global index of this process's first slab (rank * devices)
 };
 
 // Slab 0's list of changes, on every slab (collective).
@@ -127,10 +132,12 @@ class Worker {
       const int gpu = gpu::device_for_worker(worker, s_.opts.devices, gpu::node_local_rank(), gpu::device_count());
       w_.use_kernels(gpu::make_cuda_kernels(gpu, s_.lattice.dim));
     }
+    // The first slab of each process reports the run's outcome to it (every rank needs the exit status).
+    const bool reporter = t_.slab() == s_.first_slab;
     w_.take_share(s_.initial, s_.layout);
     {
       std::lock_guard lock(s_.result_mutex);
-      s_.workers[t_.slab()] = &w_;
+      s_.workers[t_.slab() - s_.first_slab] = &w_;
     }
     t_.barrier();  // every slab has its share: the generated set is no longer needed (on the
                    // paper's case it holds about a gigabyte)
@@ -256,7 +263,7 @@ class Worker {
     const auto counts = w_.slab_particle_counts();
     const std::int64_t solver_bytes = t_.sum(static_cast<std::int64_t>(w_.allocated_bytes()));
     const std::int64_t ghosts = t_.sum(static_cast<std::int64_t>(w_.particles().ghosts()));
-    if (writer) {
+    if (reporter) {
       std::lock_guard lock(s_.result_mutex);
       RunResult& r = s_.result;
       r.steps = taken;
@@ -368,39 +375,51 @@ RunResult Simulation::run() {
     s.initial = generate_particles(case_);
   }
   s.result.particles = expected;
-  const int slabs = options_.devices;
+  // R ranks x D devices: global slab = rank * D + local device (docs/decomposition.md).
+  const ProcessGroup& group = process_group();
+  const int local_slabs = options_.devices;
+  const int slabs = group.ranks * local_slabs;
   s.layout = SlabLayout::uniform(s.lattice.cells[0], slabs);
-  if (s.layout.narrowest() < kMinColumnsPerSlab)
-    throw InputError(fmt::format("--devices {}: the domain is {} cells long in x; every slab needs at least {} cells, so at most {} devices",
-                                 slabs, s.lattice.cells[0], kMinColumnsPerSlab, s.lattice.cells[0] / kMinColumnsPerSlab));
+  if (s.layout.narrowest() < kMinColumnsPerSlab) {
+    const std::string split = group.ranks > 1 ? fmt::format("{} ranks x --devices {} = {} slabs", group.ranks, local_slabs, slabs)
+                                              : fmt::format("--devices {}", slabs);
+    throw InputError(fmt::format("{}: the domain is {} cells long in x; every slab needs at least {} cells, so at most {} slabs",
+                                 split, s.lattice.cells[0], kMinColumnsPerSlab, s.lattice.cells[0] / kMinColumnsPerSlab));
+  }
+  // --threads counts the threads of this process; by default the cores are shared among the
+  // ranks on this machine, then among the device workers (at least one thread each).
   const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const int threads = options_.threads > 0 ? options_.threads : hw;
-  s.omp_threads = std::max(1, threads / slabs);
-  s.workers.assign(slabs, nullptr);
+  const int threads = options_.threads > 0 ? options_.threads : std::max(1, hw / group.ranks_on_node);
+  s.omp_threads = std::max(1, threads / local_slabs);
+  s.workers.assign(local_slabs, nullptr);
   std::filesystem::create_directories(options_.out_dir);
 
-  InProcessHub hub(slabs);
-  std::vector<std::string> errors(slabs);
-  auto body = [&](int slab) {
+  std::unique_ptr<LocalSlabs> local;
+#ifdef SPATE_WITH_MPI
+  if (group.mpi) local = make_mpi_slabs(local_slabs);
+#endif
+  if (!local) local = std::make_unique<InProcessHub>(local_slabs);
+  s.first_slab = local->first_slab();
+  std::vector<std::string> errors(local_slabs);
+  auto body = [&](int d) {
     try {
-      auto t = hub.endpoint(slab, s.lattice.periodic[0]);
+      auto t = local->endpoint(d, s.lattice.periodic[0]);
       Worker(s, *t).run();
     } catch (const PeerFailure&) {
-      hub.abandon();
+      local->abandon();
     } catch (const std::exception& e) {
-      errors[slab] = e.what();
-      hub.abandon();
+      errors[d] = e.what();
+      local->abandon();
     }
   };
-  if (slabs == 1) {
-    body(0);
-  } else {
-    std::vector<std::thread> pool;
-    for (int k = 0; k < slabs; ++k) pool.emplace_back(body, k);
-    for (auto& th : pool) th.join();
-  }
-  for (auto& e : errors)
-    if (!e.empty()) throw std::runtime_error(e);
+  // Local slab 0 runs on this (the main) thread: with MPI it is the one worker that calls MPI.
+  std::vector<std::thread> pool;
+  for (int d = 1; d < local_slabs; ++d) pool.emplace_back(body, d);
+  body(0);
+  for (auto& th : pool) th.join();
+  for (int d = 0; d < local_slabs; ++d)
+    if (!errors[d].empty())
+      throw std::runtime_error(group.ranks > 1 ? fmt::format("slab {} (rank {}): {}", s.first_slab + d, group.rank, errors[d]) : errors[d]);
   return s.result;
 }
 
