@@ -38,6 +38,9 @@ void write_summary(const std::filesystem::path& path, const Case& c, const Physi
   j["imbalance"] = r.imbalance;
   j["imbalance_history"] = r.imbalance_history;
   j["ghost_particles"] = r.ghosts;
+  j["migrated_particles"] = r.migrated;
+  j["handed_over_particles"] = r.handed_over;
+  j["face_moves"] = r.face_moves;
   j["last_checkpoint"] = r.last_checkpoint.string();
   j["insitu_failures"] = r.insitu_failures;
   j["steering"] = {{"accepted", r.steering_accepted}, {"rejected", r.steering_rejected}, {"stopped", r.stopped_by_steering}};

@@ -276,6 +276,9 @@ class Worker {
       r.ghosts = ghosts;
       r.bytes_per_particle = static_cast<double>(solver_bytes) / static_cast<double>(std::max<std::int64_t>(1, total_particles));
       r.imbalance_history = imbalance_log;
+      r.migrated = w_.crossings();
+      r.handed_over = w_.handovers();
+      r.face_moves = w_.face_moves();
       if (!unstable.empty()) {
         r.exit_code = 3;
         r.exit_status = "unstable";

@@ -44,6 +44,9 @@ struct RunResult {
   std::int64_t ghosts = 0;
   double bytes_per_particle = 0.0;         // solver arrays (owned + ghosts + cell grid) / particles
   std::vector<double> imbalance_history;   // max/mean before each balancing pass
+  std::int64_t migrated = 0;               // particles that crossed a slab face by moving
+  std::int64_t handed_over = 0;            // particles handed to a new owner because faces moved
+  std::int64_t face_moves = 0;             // balancing passes that moved faces
   std::vector<std::string> insitu_failures;
   std::int64_t steering_accepted = 0, steering_rejected = 0;
   bool stopped_by_steering = false;

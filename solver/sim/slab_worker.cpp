@@ -27,7 +27,8 @@ void SlabWorker::take_share(const ParticleStore& global, const SlabLayout& layou
 }
 
 void SlabWorker::rebuild() {
-  migrate(particles_, layout_.faces, lattice_, transport_);
+  (faces_moved_ ? handovers_ : crossings_) += migrate(particles_, layout_.faces, lattice_, transport_);
+  faces_moved_ = false;
   grid_.sort_owned(particles_);
   halo_.build(particles_, grid_, transport_);
   kernels_->publish(particles_, grid_);
@@ -145,6 +146,8 @@ double SlabWorker::rebalance(int min_columns) {
   const SlabLayout next = balanced_layout(per_column, layout_.slabs(), min_columns);
   if (next != layout_) {
     layout_ = next;
+    faces_moved_ = true;
+    ++face_moves_;
     const int s = transport_.slab();
     grid_.configure(lattice_, layout_.faces[s], layout_.faces[s + 1]);
     // The next rebuild() migrates particles to their new owners.

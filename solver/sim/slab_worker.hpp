@@ -46,6 +46,12 @@ class SlabWorker {
   // Moves faces to even out particle counts (collective); returns the global imbalance before.
   double rebalance(int min_columns);
   std::vector<std::int64_t> slab_particle_counts();  // collective
+  // Traffic across faces so far, totals over all slabs (the same on every slab): particles that
+  // crossed a face by moving, particles handed over because faces moved (the migration right after
+  // a balancing pass that moved faces), and the balancing passes that moved faces.
+  std::int64_t crossings() const { return crossings_; }
+  std::int64_t handovers() const { return handovers_; }
+  std::int64_t face_moves() const { return face_moves_; }
 
   void set_params(const PhysicsParams& p) { params_ = p; }
   const PhysicsParams& params() const { return params_; }
@@ -70,6 +76,8 @@ class SlabWorker {
   CellGrid grid_;
   Halo halo_;
   std::unique_ptr<StepKernels> kernels_;
+  std::int64_t crossings_ = 0, handovers_ = 0, face_moves_ = 0;
+  bool faces_moved_ = false;
 };
 
 // The fault with the lowest particle id over all slabs (collective), or none.
