@@ -15,9 +15,11 @@ find_package(HDF5 REQUIRED COMPONENTS C)
 
 option(SPATE_ENABLE_MPI "Build the MPI transport" ON)
 set(SPATE_WITH_MPI OFF)
-if(SPATE_ENABLE_MPI)
+# Debian's HDF5 is the parallel (OpenMPI) flavour: its headers include mpi.h, so MPI's headers are
+# needed even when the MPI transport is switched off.
+if(SPATE_ENABLE_MPI OR HDF5_IS_PARALLEL)
   find_package(MPI COMPONENTS C CXX)
-  if(MPI_FOUND)
+  if(MPI_FOUND AND SPATE_ENABLE_MPI)
     set(SPATE_WITH_MPI ON)
   endif()
 endif()

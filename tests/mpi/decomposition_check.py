@@ -130,6 +130,32 @@ def check_summary(out, split, steps):
     return s
 
 
+PARAVIEW_CHECK = """
+import sys
+from paraview.simple import PVDReader, MergeBlocks
+reader = PVDReader(FileName=sys.argv[1])
+t = reader.TimestepValues[-1] if reader.TimestepValues else 0.0
+merged = MergeBlocks(Input=reader)
+merged.UpdatePipeline(t)
+print("POINTS", merged.GetDataInformation().GetNumberOfPoints(), "BLOCKS", reader.GetDataInformation().GetNumberOfDataSets())
+"""
+
+
+def check_paraview(pvbatch, out, total, slabs):
+    """ParaView opens the last snapshot of the run as one dataset holding every particle."""
+    script = out / "check_snapshot.py"
+    script.write_text(PARAVIEW_CHECK)
+    p = subprocess.run([pvbatch, str(script), str(out / "particles.pvd")], capture_output=True, text=True, timeout=300)
+    line = next((l for l in p.stdout.splitlines() if l.startswith("POINTS")), None)
+    if p.returncode != 0 or line is None:
+        print(p.stdout, p.stderr)
+        fail(f"pvbatch could not read {out / 'particles.pvd'}")
+    points, blocks = int(line.split()[1]), int(line.split()[3])
+    if points != total or blocks != slabs:
+        fail(f"ParaView reads {points} points in {blocks} partitions from {out.name}, expected {total} in {slabs}")
+    print(f"  ParaView opens {out.name}/particles.pvd as one dataset: {points} points in {blocks} partitions")
+
+
 def cmd_splits(args):
     """Runs every split and compares every pair of final checkpoints, including runs already in
     <work> from another test (the MPI splits compare with the in-process ones)."""
@@ -139,6 +165,10 @@ def cmd_splits(args):
         s = check_summary(out, split, args.steps)
         print(f"  {split_name(split)}: device_particles {s['device_particles']}, imbalance {s['imbalance']:.3f}, "
               f"ghosts {s['ghost_particles']}, migrated {s.get('migrated_particles')}, face moves {s.get('face_moves')}")
+    if args.pvbatch:
+        last = args.splits[-1]
+        out = spate.work / split_name(last)
+        check_paraview(args.pvbatch, out, summary(out)["particles"]["total"], last[0] * last[1])
     runs = sorted(p for p in spate.work.glob("r*d*") if (p / "summary.json").exists() and summary(p)["steps"] == args.steps)
     names = {p.name for p in runs}
     for split in args.splits:
@@ -267,6 +297,7 @@ def main():
     ap.add_argument("--splits", type=lambda t: [parse_split(v) for v in t.split(",")], default=[(1, 1)])
     ap.add_argument("--mpiexec", default="")
     ap.add_argument("--mpiexec-args", default="")
+    ap.add_argument("--pvbatch", default="", help="check that ParaView opens the last split's snapshots as one dataset")
     ap.add_argument("--too-many", type=int, default=64, help="a device count with fewer than 3 cells per slab")
     ap.add_argument("--mismatched-set", action="append", default=[],
                     help="case override that makes a checkpoint which does not fit the case (bad-input)")
