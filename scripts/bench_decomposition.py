@@ -6,8 +6,9 @@
 1. devices: `spate bench` on the column case (193,020 particles at its default dp = 0.01) with
    D = 1 and D = 2 on the same threads, and with one thread per device.
 2. ranks: the same with 2 MPI ranks (one thread each) against 1 rank.
-3. ghosts: ghost particles as a fraction of owned for D = 2, 3, 4 (from the bench runs).
-4. balance: the 2D dam break over its first `--until` seconds on 4 devices with balancing every
+3. cpu: CPU seconds per step of each split (robust on a shared machine).
+4. ghosts: ghost particles as a fraction of owned for D = 2, 3, 4 (from the bench runs).
+5. balance: the 2D dam break over its first `--until` seconds on 4 devices with balancing every
    100 steps and without; the imbalance (max/mean owned particles) at every snapshot, counted from
    the slab pieces.
 """
@@ -15,6 +16,7 @@ import argparse
 import json
 import os
 import re
+import resource
 import subprocess
 import tempfile
 from pathlib import Path
@@ -40,6 +42,24 @@ def bench(args, devices, threads, ranks=1):
     j = json.loads(out[out.index("{"):])
     j["command"] = " ".join(["mpirun -np 2 " if ranks > 1 else ""] + ["spate"] + cmd[cmd.index("bench"):]).strip()
     return j
+
+
+def cpu_seconds_per_step(args, devices, threads, ranks=1, short=2, long=12):
+    """CPU time (user + sys, all threads and ranks) per step: the difference of two runs that differ
+    only in their step count, so set-up and the final checkpoint cancel. Unlike wall time it
+    measures the work of a split even on a machine shared with other jobs."""
+    used = []
+    for steps in (short, long):
+        with tempfile.TemporaryDirectory() as tmp:
+            cmd = [args.spate, "run", str(ROOT / "cases/dam_break_column_3d.yaml"), "--steps", str(steps), "--devices", str(devices),
+                   "--threads", str(threads), "--quiet", "--out", tmp, "--set", "output.interval=0", "--set", "probes=[]"]
+            if ranks > 1:
+                cmd = [args.mpiexec, "-n", str(ranks), *cmd]
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            subprocess.run(cmd, check=True, env=env(), capture_output=True)
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            used.append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
+    return (used[1] - used[0]) / (long - short)
 
 
 def imbalance_series(out_dir):
@@ -75,7 +95,7 @@ def main():
     ap.add_argument("--steps", type=int, default=20)
     ap.add_argument("--until", type=float, default=1.0)
     ap.add_argument("--mpiexec", default="mpiexec")
-    ap.add_argument("--skip", default="", help="comma list of parts to skip: devices,ranks,ghosts,balance")
+    ap.add_argument("--skip", default="", help="comma list of parts to skip: devices,ranks,cpu,ghosts,balance")
     args = ap.parse_args()
     skip = set(args.skip.split(","))
     cores = os.cpu_count()
@@ -94,6 +114,17 @@ def main():
         for name, j in rows:
             print(f"| {name} | {j['seconds_per_step']:.3f} | {j['particle_steps_per_second']:.3g} | "
                   f"{base / j['seconds_per_step']:.2f} | {j['ghost_particles']} | `{j['command']}` |")
+        print()
+
+    if "cpu" not in skip:
+        print("| run | CPU s/step (all threads, all ranks) | ratio to D = 1, 1 thread |")
+        print("|---|---|---|")
+        base = None
+        for name, d, th, r in (("1 rank, D = 1, 1 thread", 1, 1, 1), ("1 rank, D = 1, 2 threads", 1, 2, 1),
+                               ("1 rank, D = 2, 1 thread each", 2, 2, 1), ("2 ranks x D = 1, 1 thread each", 1, 1, 2)):
+            c = cpu_seconds_per_step(args, d, th, r)
+            base = base or c
+            print(f"| {name} | {c:.3f} | {c / base:.2f} |")
         print()
 
     if "ghosts" not in skip:
