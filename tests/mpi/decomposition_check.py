@@ -286,9 +286,24 @@ def cmd_rank_failure(args):
     print(f"PASS: a failure on rank {ranks - 1} ended all {ranks} ranks with exit {p.returncode}")
 
 
+def cmd_unstable(args):
+    """A run that goes unstable is known to every rank (collective check): all end with exit code 3,
+    rank 0 writes the summary, and every slab writes its piece of the diagnostic snapshot."""
+    spate = Spate(args)
+    split = args.splits[0]
+    out, p = spate.run("unstable", split, ["--steps", str(args.steps)], expect=3)
+    s = summary(out)
+    if s["exit_status"] != "unstable" or "went unstable" not in p.stderr:
+        fail(f"exit_status {s['exit_status']}; stderr: {p.stderr}")
+    pieces = list((out / "diagnostic").glob("step_*/slab_*.vtp"))
+    if len(pieces) != split[0] * split[1]:
+        fail(f"{len(pieces)} diagnostic pieces for {split[0] * split[1]} slabs")
+    print(f"PASS: unstable run on {split[0]}x{split[1]} ended with exit 3 on every rank, {len(pieces)} diagnostic pieces")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("mode", choices=["splits", "restart", "balance", "bad-input", "rank-failure"])
+    ap.add_argument("mode", choices=["splits", "restart", "balance", "bad-input", "rank-failure", "unstable"])
     ap.add_argument("--spate", required=True)
     ap.add_argument("--case", required=True)
     ap.add_argument("--work", required=True, help="folder for the runs")
@@ -303,7 +318,7 @@ def main():
                     help="case override that makes a checkpoint which does not fit the case (bad-input)")
     args = ap.parse_args()
     {"splits": cmd_splits, "restart": cmd_restart, "balance": cmd_balance, "bad-input": cmd_bad_input,
-     "rank-failure": cmd_rank_failure}[args.mode](args)
+     "rank-failure": cmd_rank_failure, "unstable": cmd_unstable}[args.mode](args)
 
 
 if __name__ == "__main__":
