@@ -159,6 +159,9 @@ def check_paraview(pvbatch, out, total, slabs):
 def cmd_splits(args):
     """Runs every split and compares every pair of final checkpoints, including runs already in
     <work> from another test (the MPI splits compare with the in-process ones)."""
+    if args.fresh:
+        # Runs left by an older build must not take part in the comparison.
+        shutil.rmtree(args.work, ignore_errors=True)
     spate = Spate(args)
     for split in args.splits:
         out, _ = spate.run(split_name(split), split, ["--steps", str(args.steps)])
@@ -312,6 +315,7 @@ def main():
     ap.add_argument("--splits", type=lambda t: [parse_split(v) for v in t.split(",")], default=[(1, 1)])
     ap.add_argument("--mpiexec", default="")
     ap.add_argument("--mpiexec-args", default="")
+    ap.add_argument("--fresh", action="store_true", help="splits: empty the work folder first")
     ap.add_argument("--pvbatch", default="", help="check that ParaView opens the last split's snapshots as one dataset")
     ap.add_argument("--too-many", type=int, default=64, help="a device count with fewer than 3 cells per slab")
     ap.add_argument("--mismatched-set", action="append", default=[],
