@@ -40,7 +40,7 @@ def bench(args, devices, threads, ranks=1):
         cmd = [args.mpiexec, "-n", str(ranks), *cmd]
     out = subprocess.run(cmd, capture_output=True, text=True, check=True, env=env()).stdout
     j = json.loads(out[out.index("{"):])
-    j["command"] = " ".join(["mpirun -np 2 " if ranks > 1 else ""] + ["spate"] + cmd[cmd.index("bench"):]).strip()
+    j["command"] = ("mpirun -np 2 " if ranks > 1 else "") + " ".join(["spate"] + cmd[cmd.index("bench"):])
     return j
 
 
