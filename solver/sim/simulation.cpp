@@ -52,9 +52,8 @@ struct Shared {
   RunResult result;
   std::mutex result_mutex;
   std::vector<SlabWorker*> workers;  // local slabs, for in-situ views
-  int workers_first_slab = 0;        // global index of this process's first slab
+  int workers_first_slab = 0;        // global index of this process's first slab (rank * devices)
   std::vector<SteeringChange> steering_history;  // accepted so far (from the checkpoint, then live)
-  int first_slab = 0;                // global index of this process's first slab (rank * devices)
 };
 
 // Slab 0's list of changes, on every slab (collective).
@@ -133,11 +132,11 @@ class Worker {
       w_.use_kernels(gpu::make_cuda_kernels(gpu, s_.lattice.dim));
     }
     // The first slab of each process reports the run's outcome to it (every rank needs the exit status).
-    const bool reporter = t_.slab() == s_.first_slab;
+    const bool reporter = t_.slab() == s_.workers_first_slab;
     w_.take_share(s_.initial, s_.layout);
     {
       std::lock_guard lock(s_.result_mutex);
-      s_.workers[t_.slab() - s_.first_slab] = &w_;
+      s_.workers[t_.slab() - s_.workers_first_slab] = &w_;
     }
     t_.barrier();  // every slab has its share: the generated set is no longer needed (on the
                    // paper's case it holds about a gigabyte)
@@ -402,7 +401,7 @@ RunResult Simulation::run() {
   if (group.mpi) local = make_mpi_slabs(local_slabs);
 #endif
   if (!local) local = std::make_unique<InProcessHub>(local_slabs);
-  s.first_slab = local->first_slab();
+  s.workers_first_slab = local->first_slab();
   std::vector<std::string> errors(local_slabs);
   auto body = [&](int d) {
     try {
@@ -422,7 +421,7 @@ RunResult Simulation::run() {
   for (auto& th : pool) th.join();
   for (int d = 0; d < local_slabs; ++d)
     if (!errors[d].empty())
-      throw std::runtime_error(group.ranks > 1 ? fmt::format("slab {} (rank {}): {}", s.first_slab + d, group.rank, errors[d]) : errors[d]);
+      throw std::runtime_error(group.ranks > 1 ? fmt::format("slab {} (rank {}): {}", s.workers_first_slab + d, group.rank, errors[d]) : errors[d]);
   return s.result;
 }
 
