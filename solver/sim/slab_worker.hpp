@@ -43,7 +43,8 @@ class SlabWorker {
   std::optional<ParticleFault> health(float min_ratio, float max_ratio) const;
   float local_time_step(const TimeStepControl& c) const;
 
-  // Moves faces to even out particle counts (collective); returns the global imbalance before.
+  // Moves faces to even out the estimated cost (fluid 4, wall 1 per particle; collective); returns
+  // the cost imbalance (max/mean over slabs) before the move.
   double rebalance(int min_columns);
   std::vector<std::int64_t> slab_particle_counts();  // collective
   // Traffic across faces so far, totals over all slabs (the same on every slab): particles that
