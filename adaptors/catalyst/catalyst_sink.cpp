@@ -142,6 +142,7 @@ struct CatalystSink::Impl {
     log = vtkSmartPointer<CapturingOutputWindow>::New();
     vtkOutputWindow::SetInstance(log);
     dataset = std::make_unique<ParticleDataset>();
+    for (auto& [name, value] : options.constants) dataset->set_constant(name, value);
     for (auto& script : options.scripts) {
       auto p = vtkSmartPointer<GuardedPipeline>::New();
       p->setup(script, log);

@@ -14,6 +14,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sim/insitu.hpp"
@@ -32,6 +33,9 @@ struct CatalystOptions {
   std::vector<std::filesystem::path> scripts;
   int every = 1;                          // steps between in-situ steps (the first step is always one)
   std::filesystem::path working_dir;      // extracts go to working_dir/<script's ExtractsOutputDirectory>
+  // Case constants put in the dataset's field data (e.g. "dp", "smoothing_length"), so that
+  // scripts can size sprites and interpolation kernels without knowing the case.
+  std::vector<std::pair<std::string, double>> constants;
 };
 
 // Time spent per in-situ step, for the performance report.

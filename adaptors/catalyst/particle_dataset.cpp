@@ -2,6 +2,8 @@
 
 #include <vtkCellArray.h>
 #include <vtkCompositeDataSet.h>
+#include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
 #include <vtkFloatArray.h>
 #include <vtkInformation.h>
 #include <vtkIntArray.h>
@@ -146,5 +148,13 @@ vtkMultiBlockDataSet* ParticleDataset::update(const std::vector<SlabView>& slabs
 }
 
 vtkMultiBlockDataSet* ParticleDataset::data() const { return blocks_; }
+
+void ParticleDataset::set_constant(const std::string& name, double value) {
+  vtkNew<vtkDoubleArray> a;
+  a->SetName(name.c_str());
+  a->SetNumberOfTuples(1);
+  a->SetValue(0, value);
+  blocks_->GetFieldData()->AddArray(a);
+}
 
 }  // namespace spate::catalyst

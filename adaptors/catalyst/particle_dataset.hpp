@@ -20,6 +20,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -44,6 +45,8 @@ class ParticleDataset {
   // attach (all when empty). The memory must stay valid until the pipelines have run.
   vtkMultiBlockDataSet* update(const std::vector<SlabView>& slabs, const std::function<bool(std::string_view)>& wanted = {});
   vtkMultiBlockDataSet* data() const;
+  // A one-value double array in the dataset's field data.
+  void set_constant(const std::string& name, double value);
 
  private:
   struct Partition;

@@ -121,6 +121,8 @@ int run_command(const RunArgs& a) {
     co.scripts.assign(pipelines.begin(), pipelines.end());
     co.every = insitu_every;
     co.working_dir = o.out_dir;
+    const PhysicsParams P = physics_params(c);
+    co.constants = {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.rho0}, {"particle_mass", P.mass}};
     std::filesystem::create_directories(o.out_dir);
     try {
       insitu = std::make_unique<catalyst::CatalystSink>(co);
