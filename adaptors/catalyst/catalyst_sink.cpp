@@ -185,10 +185,13 @@ struct CatalystSink::Impl {
     std::lock_guard lock(mutex);
     timing.steps += 1;
     timing.adaptor_seconds += adaptor;
+    timing.adaptor_step_seconds.push_back(adaptor);
+    timing.pipelines_step_seconds.push_back(0.0);
     for (std::size_t k = 0; k < pipelines.size(); ++k) {
       GuardedPipeline* p = pipelines[k];
       const double spent = p->seconds() - before[k];
       timing.pipelines_seconds += spent;
+      timing.pipelines_step_seconds.back() += spent;
       for (std::size_t s = 0; s < options.scripts.size(); ++s)
         if (options.scripts[s] == p->script()) timing.script_seconds[s] += spent;
       if (!p->failed() || p->failed_at_step >= 0) continue;

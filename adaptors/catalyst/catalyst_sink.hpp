@@ -42,7 +42,9 @@ struct CatalystOptions {
 struct InSituTiming {
   std::int64_t steps = 0;                 // in-situ steps executed
   double adaptor_seconds = 0.0;           // building/refreshing the dataset (sum over steps)
+  std::vector<double> adaptor_step_seconds;  // the same, step by step (the first one allocates)
   double pipelines_seconds = 0.0;         // the pipelines' own work, all scripts (sum over steps)
+  std::vector<double> pipelines_step_seconds;  // the same, step by step (the first one imports the scripts)
   std::vector<double> script_seconds;     // per script, same order as the options
 };
 
