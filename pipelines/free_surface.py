@@ -86,7 +86,7 @@ def _build_scene():
     fluid_all.UpdatePipeline()
     wb = walls.GetDataInformation().GetBounds()  # tank with its wall layers (walls never move)
 
-    surface_source = SPHVolumeInterpolator(registrationName="sph", Input=fluid_all)
+    surface_source = SPHVolumeInterpolator(registrationName="sph", Input=fluid_all, Source="Bounded Volume")
     surface_source.Kernel = "SPHWendlandQuinticKernel"
     surface_source.Kernel.SpatialStep = dp
     surface_source.Kernel.Dimension = dim
