@@ -122,13 +122,11 @@ struct ParticleDataset::Partition {
 
 ParticleDataset::ParticleDataset() : blocks_(vtkSmartPointer<vtkMultiBlockDataSet>::New()) {}
 
-ParticleDataset::~ParticleDataset() {
-  for (Partition* p : partitions_) delete p;
-}
+ParticleDataset::~ParticleDataset() = default;
 
 ParticleDataset::Partition& ParticleDataset::partition(int slab) {
-  if (static_cast<std::size_t>(slab) >= partitions_.size()) partitions_.resize(slab + 1, nullptr);
-  if (!partitions_[slab]) partitions_[slab] = new Partition();
+  if (static_cast<std::size_t>(slab) >= partitions_.size()) partitions_.resize(slab + 1);
+  if (!partitions_[slab]) partitions_[slab] = std::make_unique<Partition>();
   return *partitions_[slab];
 }
 

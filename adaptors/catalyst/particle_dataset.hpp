@@ -20,6 +20,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -53,7 +54,7 @@ class ParticleDataset {
   Partition& partition(int slab);
 
   vtkSmartPointer<vtkMultiBlockDataSet> blocks_;
-  std::vector<Partition*> partitions_;  // by global slab index, created on first use
+  std::vector<std::unique_ptr<Partition>> partitions_;  // by global slab index, created on first use
 };
 
 }  // namespace spate::catalyst
