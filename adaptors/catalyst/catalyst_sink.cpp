@@ -24,6 +24,7 @@
 #include <mutex>
 
 #include "particle_dataset.hpp"
+#include "private_display.hpp"
 
 namespace spate::catalyst {
 
@@ -112,6 +113,7 @@ vtkStandardNewMacro(GuardedPipeline);
 
 struct CatalystSink::Impl {
   CatalystOptions options;
+  std::unique_ptr<PrivateDisplay> display;  // outlives every VTK object below (declared first)
   vtkSmartPointer<vtkCPProcessor> processor;
   vtkSmartPointer<CapturingOutputWindow> log;
   std::vector<vtkSmartPointer<GuardedPipeline>> pipelines;
@@ -122,6 +124,7 @@ struct CatalystSink::Impl {
   mutable std::mutex mutex;  // guards failures and timing, read from other threads
 
   void start() {
+    display = std::make_unique<PrivateDisplay>();
     processor = vtkSmartPointer<vtkCPProcessor>::New();
     const std::string dir = options.working_dir.string();
     const char* working = dir.empty() ? nullptr : dir.c_str();

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # One image-regression test: runs spate with pipelines/free_surface.py for a fixed number of
-# steps, renders 400x300 off screen (scripts/headless: under Xvfb when there is no DISPLAY) and compares the last
+# steps, renders 400x300 off screen (spate starts a private Xvfb when there is no DISPLAY) and compares the last
 # image with tests/baselines/NAME.png. With SPATE_UPDATE_BASELINES=1 it refreshes the baseline.
 # Usage: image_test.sh SPATE SOURCE_DIR OUT_DIR NAME CASE STEPS [spate run options...]
 set -euo pipefail
@@ -9,7 +9,7 @@ shift 6
 rm -rf "$out"
 mkdir -p "$out"
 render() {
-  SPATE_INSITU_IMAGE_SIZE=400x300 "$src/scripts/headless" "$spate" run "$src/cases/$case_file" --out "$out/run" --steps "$steps" \
+  SPATE_INSITU_IMAGE_SIZE=400x300 "$spate" run "$src/cases/$case_file" --out "$out/run" --steps "$steps" \
     --insitu-every "$steps" --pipeline "$src/pipelines/free_surface.py" --quiet "$@" >"$out/run.log" 2>&1
 }
 # On a shared machine a private Xvfb occasionally goes away under us ("bad X server connection");
