@@ -12,6 +12,8 @@ find_package(GLEW QUIET)
 find_package(LibXml2 QUIET)
 find_package(Boost QUIET)
 find_package(NetCDF QUIET)
+# VTK::hdf5 links hdf5::hdf5_hl, which the solver's HDF5 search (C only) does not define.
+find_package(HDF5 QUIET COMPONENTS C HL)
 find_package(ParaView 5.11 QUIET COMPONENTS Catalyst PythonCatalyst RemotingServerManager RemotingLive)
 if(ParaView_FOUND)
   set(SPATE_WITH_CATALYST ON)

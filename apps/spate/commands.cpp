@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -22,6 +23,9 @@
 #include "io/run_summary.hpp"
 #include "sim/simulation.hpp"
 #include "sim/slab_worker.hpp"
+#ifdef SPATE_WITH_CATALYST
+#include "catalyst_sink.hpp"
+#endif
 
 namespace spate::app {
 
@@ -48,6 +52,27 @@ void check_backend(const std::string& backend) {
   throw BadInput(fmt::format("--backend {}: expected 'cpu' or 'cuda'", backend));
 }
 
+#ifdef SPATE_WITH_CATALYST
+// Timing of the in-situ steps: a line on stdout and insitu.json beside summary.json.
+void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::path& out_dir, bool quiet) {
+  const catalyst::InSituTiming t = sink.timing();
+  const double n = static_cast<double>(std::max<std::int64_t>(1, t.steps));
+  nlohmann::ordered_json j;
+  j["insitu_steps"] = t.steps;
+  j["adaptor_seconds_per_step"] = t.adaptor_seconds / n;
+  j["adaptor_seconds_each_step"] = t.adaptor_step_seconds;
+  j["pipelines_seconds_per_step"] = t.pipelines_seconds / n;
+  j["pipelines_seconds_each_step"] = t.pipelines_step_seconds;
+  j["script_seconds_per_step"] = nlohmann::json::array();
+  for (double s : t.script_seconds) j["script_seconds_per_step"].push_back(s / n);
+  j["failures"] = sink.failures();
+  std::ofstream(out_dir / "insitu.json") << j.dump(2) << "\n";
+  if (!quiet)
+    std::printf("spate: in situ: %lld steps, adaptor %.3g ms/step, pipelines %.3g s/step\n", static_cast<long long>(t.steps),
+                1e3 * t.adaptor_seconds / n, t.pipelines_seconds / n);
+}
+#endif
+
 int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 }  // namespace
@@ -55,8 +80,15 @@ int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardw
 int run_command(const RunArgs& a) {
   Case c = load(a.case_file, a.overrides);
   check_backend(a.backend);
-  if (!a.pipelines.empty() || a.insitu_every || !a.live.empty())
-    throw BadInput("--pipeline/--insitu-every/--live: this spate was built without ParaView Catalyst");
+  // In situ: the command line replaces the case file's `insitu:` section.
+  const std::vector<std::string> pipelines = a.pipelines.empty() ? c.insitu_pipelines : a.pipelines;
+  [[maybe_unused]] const int insitu_every = a.insitu_every.value_or(c.insitu_every);
+#ifndef SPATE_WITH_CATALYST
+  if (!pipelines.empty() || a.insitu_every)
+    throw BadInput("--pipeline/--insitu-every (or the case's insitu: section): this spate was built without ParaView Catalyst");
+#endif
+  if (a.insitu_every && *a.insitu_every < 1) throw BadInput(fmt::format("--insitu-every {}: must be at least 1", *a.insitu_every));
+  if (!a.live.empty()) throw BadInput("--live: this spate was built without ParaView Catalyst Live support");
   if (a.steps && *a.steps < 0) throw BadInput(fmt::format("--steps {}: must be >= 0", *a.steps));
   if (a.until && !(*a.until > 0)) throw BadInput(fmt::format("--until {}: must be > 0", *a.until));
   if (a.threads < 0) throw BadInput(fmt::format("--threads {}: must be >= 0 (0: all cores)", a.threads));
@@ -84,6 +116,25 @@ int run_command(const RunArgs& a) {
     o.steering = replay.get();
   }
 
+#ifdef SPATE_WITH_CATALYST
+  std::unique_ptr<catalyst::CatalystSink> insitu;
+  if (!pipelines.empty()) {
+    catalyst::CatalystOptions co;
+    co.scripts.assign(pipelines.begin(), pipelines.end());
+    co.every = insitu_every;
+    co.working_dir = o.out_dir;
+    const PhysicsParams P = physics_params(c);
+    co.constants = {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.rho0}, {"particle_mass", P.mass}};
+    std::filesystem::create_directories(o.out_dir);
+    try {
+      insitu = std::make_unique<catalyst::CatalystSink>(co);
+    } catch (const catalyst::InSituLoadError& e) {
+      throw BadInput(e.what());
+    }
+    o.insitu = insitu.get();
+  }
+#endif
+
   RunResult r;
   try {
     r = Simulation(c, o).run();
@@ -95,6 +146,9 @@ int run_command(const RunArgs& a) {
   // Every rank knows the outcome; rank 0 reports it.
   const ProcessGroup& group = process_group();
   if (group.rank != 0) return r.exit_code;
+#ifdef SPATE_WITH_CATALYST
+  if (insitu) report_insitu(*insitu, o.out_dir, a.quiet);
+#endif
   SummaryExtras x;
   x.threads = a.threads > 0 ? a.threads : std::max(1, hardware_threads() / group.ranks_on_node);
   x.devices = a.devices;

@@ -437,6 +437,27 @@ Case read(Section& root, const std::string& file) {
     if (c.balance_every < 0) dcmp.fail(dcmp.raw("balance_every"), "balance_every", "must be >= 0 (0: never)");
     dcmp.finish();
   }
+  if (auto in = root.child("insitu")) {
+    if (in->has("pipelines")) {
+      const YAML::Node list = in->raw("pipelines");
+      const std::filesystem::path folder = std::filesystem::path(file).parent_path();
+      auto add = [&](const YAML::Node& entry) {
+        if (!entry.IsScalar() || entry.Scalar().empty()) in->fail(entry, "pipelines", "expected a list of Catalyst script paths");
+        const std::filesystem::path script(entry.Scalar());
+        c.insitu_pipelines.push_back((script.is_absolute() ? script : folder / script).lexically_normal().string());
+      };
+      if (list.IsScalar()) {
+        add(list);  // a single script without brackets
+      } else if (list.IsSequence()) {
+        for (std::size_t k = 0; k < list.size(); ++k) add(list[k]);
+      } else {
+        in->fail(list, "pipelines", "expected a list of Catalyst script paths");
+      }
+    }
+    c.insitu_every = in->integer("every", 1);
+    if (c.insitu_every < 1) in->fail(in->raw("every"), "every", "must be >= 1 (steps between in-situ runs)");
+    in->finish();
+  }
   root.finish();
   return c;
 }

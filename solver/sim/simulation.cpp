@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <fmt/format.h>
 #include <mutex>
 #include <numeric>
@@ -84,6 +85,24 @@ ParticleStore gather_by_id(SlabWorker& w) {
   std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return merged.id[a] < merged.id[b]; });
   merged.permute(0, order);
   return merged;
+}
+
+SlabView slab_view(SlabWorker& w, int slab, int slab_count) {
+  ParticleStore& p = w.particles();
+  SlabView v;
+  v.slab = slab;
+  v.slab_count = slab_count;
+  v.dim = p.dim();
+  v.owned = p.owned();
+  for (int k = 0; k < p.dim(); ++k) {
+    v.pos[k] = p.pos[k].data();
+    v.vel[k] = p.vel[k].data();
+  }
+  v.pressure = p.pressure.data();
+  v.density = p.density.data();
+  v.id = p.id.data();
+  v.kind = p.kind.data();
+  return v;
 }
 
 class Progress {
@@ -177,6 +196,7 @@ class Worker {
     };
 
     if (!s_.restarted) output(false);
+    in_situ(step, time);
     std::string unstable;
     PhysicsParams params = s_.params;
     int insitu_every = 1;
@@ -245,6 +265,7 @@ class Worker {
       }
       const bool last = s_.opts.steps ? taken >= *s_.opts.steps : time >= end_time - 1e-12;
       output(last);
+      in_situ(step, time);  // before steering: the design applies steering after each in-situ step
       steer_now();
       if ((checkpoint_every > 0 && step % checkpoint_every == 0) || steer.checkpoint_now) {
         last_checkpoint = write_checkpoint_now(time, step, dt);
@@ -278,6 +299,7 @@ class Worker {
       r.migrated = w_.crossings();
       r.handed_over = w_.handovers();
       r.face_moves = w_.face_moves();
+      if (s_.opts.insitu) r.insitu_failures = s_.opts.insitu->failures();
       if (!unstable.empty()) {
         r.exit_code = 3;
         r.exit_status = "unstable";
@@ -288,6 +310,23 @@ class Worker {
   }
 
  private:
+  // In situ: every local slab stops at a barrier, the process's first local slab hands the views
+  // of all local slabs to the sink, and nobody moves on until the pipelines are done with the
+  // (zero-copy) arrays.
+  void in_situ(std::int64_t step, double time) {
+    InSituSink* sink = s_.opts.insitu;
+    if (!sink || !sink->wants(step, time)) return;
+    t_.barrier();
+    const auto first = std::find_if(s_.workers.begin(), s_.workers.end(), [](SlabWorker* w) { return w != nullptr; });
+    if (first != s_.workers.end() && *first == &w_) {
+      std::vector<SlabView> views;
+      for (std::size_t k = 0; k < s_.workers.size(); ++k)
+        if (s_.workers[k]) views.push_back(slab_view(*s_.workers[k], s_.workers_first_slab + static_cast<int>(k), t_.slab_count()));
+      sink->execute(step, time, views);
+    }
+    t_.barrier();
+  }
+
   double next_time_step() {
     if (s_.c.fixed_dt) return *s_.c.fixed_dt;
     TimeStepControl ctl;
@@ -402,26 +441,34 @@ RunResult Simulation::run() {
 #endif
   if (!local) local = std::make_unique<InProcessHub>(local_slabs);
   s.workers_first_slab = local->first_slab();
-  std::vector<std::string> errors(local_slabs);
+  std::vector<std::exception_ptr> errors(local_slabs);  // kept whole: bad input (exit 2) must stay InputError
   auto body = [&](int d) {
     try {
       auto t = local->endpoint(d, s.lattice.periodic[0]);
       Worker(s, *t).run();
     } catch (const PeerFailure&) {
       local->abandon();
-    } catch (const std::exception& e) {
-      errors[d] = e.what();
+    } catch (const std::exception&) {
+      errors[d] = std::current_exception();
       local->abandon();
     }
   };
-  // Local slab 0 runs on this (the main) thread: with MPI it is the one worker that calls MPI.
+  // Local slab 0 runs on this (the main) thread: with MPI it is the one worker that calls MPI, and
+  // in-situ consumers (VTK, ParaView's Python), which slab 0 calls, only work on the main thread.
   std::vector<std::thread> pool;
   for (int d = 1; d < local_slabs; ++d) pool.emplace_back(body, d);
   body(0);
   for (auto& th : pool) th.join();
-  for (int d = 0; d < local_slabs; ++d)
-    if (!errors[d].empty())
-      throw std::runtime_error(group.ranks > 1 ? fmt::format("slab {} (rank {}): {}", s.workers_first_slab + d, group.rank, errors[d]) : errors[d]);
+  for (int d = 0; d < local_slabs; ++d) {
+    if (!errors[d]) continue;
+    try {
+      std::rethrow_exception(errors[d]);
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw std::runtime_error(group.ranks > 1 ? fmt::format("slab {} (rank {}): {}", s.workers_first_slab + d, group.rank, e.what()) : e.what());
+    }
+  }
   return s.result;
 }
 

@@ -12,6 +12,7 @@
 #include "../case/case.hpp"
 #include "../case/generator.hpp"
 #include "steering.hpp"
+#include "insitu.hpp"
 
 namespace spate {
 
@@ -27,6 +28,7 @@ struct RunOptions {
   bool quiet = false;
   int keep_checkpoints = 2;               // periodic checkpoints kept on disk (the newest)
   SteeringSource* steering = nullptr;     // live requests or a replayed log; polled every step
+  InSituSink* insitu = nullptr;           // in-situ consumer (Catalyst), asked at the start and after every step
 };
 
 struct RunResult {
