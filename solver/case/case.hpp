@@ -80,6 +80,7 @@ struct Case {
   double probe_interval = 0.0;    // 0: every step
   int checkpoint_every = 0;       // steps; 0: only at the end
   int balance_every = 100;        // steps between load-balancing passes
+  bool balanced_start = true;     // first faces from the balancer (else equal column counts, as the paper)
 
   // In situ (section `insitu:`): Catalyst scripts, relative paths resolved against the case
   // file's folder, run every `insitu_every` steps; --pipeline/--insitu-every replace them.

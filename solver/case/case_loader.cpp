@@ -435,6 +435,7 @@ Case read(Section& root, const std::string& file) {
     auto dcmp = root.optional_child("decomposition");
     c.balance_every = dcmp.integer("balance_every", 100);
     if (c.balance_every < 0) dcmp.fail(dcmp.raw("balance_every"), "balance_every", "must be >= 0 (0: never)");
+    c.balanced_start = dcmp.choice<bool>("initial_layout", true, {{"balanced", true}, {"uniform", false}});
     dcmp.finish();
   }
   if (auto in = root.child("insitu")) {

@@ -136,14 +136,19 @@ std::vector<std::int64_t> SlabWorker::slab_particle_counts() {
   return counts;
 }
 
-double SlabWorker::rebalance(int min_columns) {
+std::vector<std::int64_t> column_costs(const ParticleStore& p, const Lattice& lattice) {
   // Cost, not count: a fluid particle sums over all its neighbours with the full pair terms, a wall
   // particle only looks for fluid around it. Profiles of the column case (perf) put a wall at about
   // a quarter of a fluid particle. Integer weights keep the histogram sum exact.
   constexpr std::int64_t kFluidCost = 4, kWallCost = 1;
-  std::vector<std::int64_t> per_column(lattice_.cells[0], 0);
-  for (std::size_t i = 0; i < particles_.owned(); ++i)
-    per_column[lattice_.cell_of(particles_.pos[0][i], 0)] += is_fluid(particles_.kind[i]) ? kFluidCost : kWallCost;
+  std::vector<std::int64_t> per_column(lattice.cells[0], 0);
+  for (std::size_t i = 0; i < p.owned(); ++i)
+    per_column[lattice.cell_of(p.pos[0][i], 0)] += is_fluid(p.kind[i]) ? kFluidCost : kWallCost;
+  return per_column;
+}
+
+double SlabWorker::rebalance(int min_columns) {
+  std::vector<std::int64_t> per_column = column_costs(particles_, lattice_);
   transport_.sum(per_column);
   std::vector<std::int64_t> per_slab(layout_.slabs(), 0);
   for (int c = 0; c < lattice_.cells[0]; ++c) per_slab[layout_.owner_of(c)] += per_column[c];

@@ -81,6 +81,10 @@ class SlabWorker {
   bool faces_moved_ = false;
 };
 
+// Estimated work per x column of the owned particles (fluid 4, wall 1 per particle); summed over
+// slabs it is what the balancer evens out.
+std::vector<std::int64_t> column_costs(const ParticleStore& p, const Lattice& lattice);
+
 // The fault with the lowest particle id over all slabs (collective), or none.
 std::optional<ParticleFault> first_fault(SlabTransport& t, const std::optional<ParticleFault>& mine);
 
