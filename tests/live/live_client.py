@@ -6,7 +6,9 @@
 # Plan (one live step apart, in this order, once particles have arrived):
 #   1. gravity := (2, -9.81, 0)          (accepted: tilts gravity to the right)
 #   2. viscosity := 50 Pa s              (outside [0, 10]: rejected by the solver)
-#   3. disconnect after two more live steps (the simulation must go on to the end)
+#   3. pause (Catalyst's own pause), pump events for 2 s noting the steps seen, continue
+#   4. write_checkpoint := 1             (a checkpoint now)
+#   5. disconnect after two more live steps (the simulation must go on to the end)
 import json
 import os
 import sys
@@ -56,7 +58,7 @@ def on_update(obj, event):
 link.AddObserver("UpdateEvent", on_update)
 
 extract = None
-plan = ["gravity", "viscosity", "disconnect", "disconnect"]
+plan = ["gravity", "viscosity", "pause", "write_checkpoint", "disconnect", "disconnect"]
 last_acted_step = None
 deadline = time.time() + timeout
 while time.time() < deadline:
@@ -96,6 +98,24 @@ while time.time() < deadline:
         link.PushUpdatedStates()
         report["requests"].append({"name": "viscosity", "value": [50.0], "step": step})
         note("asked viscosity = 50 at step %d" % step)
+    elif action == "write_checkpoint":
+        set_property(steering, "write_checkpoint", [1])
+        steering.UpdateVTKObjects()
+        link.PushUpdatedStates()
+        report["requests"].append({"name": "write_checkpoint", "value": [1], "step": step})
+        note("asked write_checkpoint at step %d" % step)
+    elif action == "pause":
+        live.PauseCatalyst(link, True)
+        t0 = time.time()
+        seen = []
+        while time.time() - t0 < 2.0:
+            live.ProcessServerNotifications()
+            if time.time() - t0 > 0.5:  # the pause takes effect at the simulation's next live step
+                seen.append(state["step"])
+            time.sleep(0.01)
+        live.PauseCatalyst(link, False)
+        report["pause"] = {"asked_at": step, "steps_seen_while_paused": sorted(set(seen))}
+        note("paused at step %d; steps seen while paused: %s; continued" % (step, sorted(set(seen))))
     elif action == "disconnect" and not plan:
         note("disconnecting at step %d" % step)
         report["disconnected_step"] = step

@@ -6,9 +6,11 @@ out to it. The test checks, from the simulation's outputs:
   1. the client received the particles (as many as `spate info` counts) and asked for a new
      gravity; steering.log records it from a step at or after the request, and the run that
      obeyed it differs from an unsteered one;
-  2. an out-of-range viscosity was rejected with a reason, counted in summary.json, not logged
+  2. write_checkpoint from the client writes a checkpoint at the logged step;
+     an out-of-range viscosity was rejected with a reason, counted in summary.json, not logged
      and not applied;
-  3. the client disconnected mid-run and the simulation still finished with exit 0, its stderr
+  3. pausing from the client holds the simulation at one step, continuing releases it;
+     the client disconnected mid-run and the simulation still finished with exit 0, its stderr
      holding only ParaView's known disconnect messages;
   4. replaying steering.log (--steering-log) gives a bit-identical final checkpoint;
   5. with nobody listening, --live runs on normally (exit 0, same result as without --live).
@@ -142,8 +144,8 @@ try:
     if int(gravity[0][0]) < requests["gravity"]["step"]:
         fail(f"gravity logged at step {gravity[0][0]}, before the request at step {requests['gravity']['step']}")
     summary = json.load(open(os.path.join(live_out, "summary.json")))
-    if summary["steering"]["accepted"] != 1 or summary["steering"]["rejected"] != 1:
-        fail(f"summary.json steering: {summary['steering']} (expected 1 accepted, 1 rejected)")
+    if summary["steering"]["accepted"] != 2 or summary["steering"]["rejected"] != 1:
+        fail(f"summary.json steering: {summary['steering']} (expected 2 accepted: gravity and write_checkpoint; 1 rejected)")
     if summary["exit_code"] != 0 or summary.get("final_step", STEPS) != STEPS:
         fail(f"summary.json: exit {summary['exit_code']}, final step {summary.get('final_step')}")
 
@@ -153,6 +155,24 @@ try:
         fail("no rejection message for viscosity 50 in the simulation's stderr")
     if any(l[2] == "viscosity" for l in log):
         fail("the rejected viscosity was logged as applied")
+
+    # Pause and continue (Catalyst's own): the simulation is held at one step while paused, and
+    # goes on after continue.
+    pause = report.get("pause")
+    if not pause or len(pause["steps_seen_while_paused"]) != 1:
+        fail(f"pause: the simulation was not held at one step: {pause}")
+    held = pause["steps_seen_while_paused"][0]
+    if held < pause["asked_at"] or report.get("disconnected_step", -1) <= held:
+        fail(f"pause: held at step {held}, asked at {pause['asked_at']}, disconnected at {report.get('disconnected_step')}")
+
+    # write_checkpoint: a checkpoint at the step the log names (the final one is written anyway)
+    ckpt = [l for l in log if l[2] == "write_checkpoint"]
+    if len(ckpt) != 1 or int(ckpt[0][0]) < requests["write_checkpoint"]["step"]:
+        fail(f"steering.log should hold one write_checkpoint at or after step {requests['write_checkpoint']['step']}: {log}")
+    # Periodic checkpoints are off and only the newest two are kept: the steered one is the older.
+    steered = os.path.join(live_out, "checkpoints", "checkpoint_step_%08d.h5" % int(ckpt[0][0]))
+    if not os.path.exists(steered):
+        fail(f"no checkpoint written at step {ckpt[0][0]}: {os.listdir(os.path.join(live_out, 'checkpoints'))}")
 
     # 3. disconnect mid-run: exit 0 (checked), and only the known messages on stderr
     if report.get("disconnected_step") is None or report["disconnected_step"] >= STEPS:
