@@ -177,6 +177,21 @@ int run_command(const RunArgs& a) {
       init.viscosity = c.viscosity;
       init.artificial_viscosity = c.artificial_viscosity;
       init.insitu_every = insitu_every;
+      // A restart continues steered (the checkpoint holds the accepted changes): show those values.
+      if (o.restart) {
+        try {
+          ParticleStore ignored;
+          const CheckpointMeta meta = read_checkpoint(*o.restart, ignored);
+          for (const SteeringChange& ch : parse_log(meta.steering_log, o.restart->string())) {
+            if (ch.name == "gravity" && ch.value.size() == 3) init.gravity = {ch.value[0], ch.value[1], ch.value[2]};
+            if (ch.name == "viscosity" && !ch.value.empty()) init.viscosity = ch.value[0];
+            if (ch.name == "artificial_viscosity" && !ch.value.empty()) init.artificial_viscosity = ch.value[0];
+            if (ch.name == "insitu_every" && !ch.value.empty()) init.insitu_every = static_cast<int>(ch.value[0]);
+          }
+        } catch (const std::exception&) {
+          // an unreadable checkpoint is reported by the run itself (exit 2)
+        }
+      }
       try {
         live_steering = std::make_unique<catalyst::CatalystSteering>(pipelines_dir() / "spate_steering.xml", init);
       } catch (const catalyst::InSituLoadError& e) {

@@ -13,7 +13,8 @@ out to it. The test checks, from the simulation's outputs:
      the client disconnected mid-run and the simulation still finished with exit 0, its stderr
      holding only ParaView's known disconnect messages;
   4. replaying steering.log (--steering-log) gives a bit-identical final checkpoint;
-  5. with nobody listening, --live runs on normally (exit 0, same result as without --live).
+  5. with nobody listening, --live runs on normally (exit 0, same result as without --live);
+  6. a bad --live address, or --live with --steering-log, is bad input (exit 2).
 
 Usage: live_test.py SPATE PVPYTHON SOURCE_DIR WORK_DIR
 Every wait is bounded; child processes are killed on any exit.
@@ -107,6 +108,14 @@ try:
     os.makedirs(work, exist_ok=True)
     expected = json.loads(subprocess.run([spate, "info", case, "--json"], capture_output=True, text=True, timeout=60,
                                          check=True).stdout)["particles"]["total"]
+
+    # --- bad input: exit 2 with a message ------------------------------------------------------------
+    for args, words in ((["--live", "localhost:notaport"], "PORT"),
+                        (["--live", "localhost:22222", "--steering-log", os.path.join(work, "none.log")], "not both")):
+        p = subprocess.run([spate, "run", case, "--steps", "1", "--quiet", "--out", os.path.join(work, "bad")] + args,
+                           capture_output=True, text=True, timeout=60)
+        if p.returncode != 2 or words not in p.stderr:
+            fail(f"{args}: expected exit 2 naming '{words}', got {p.returncode}: {p.stderr}")
 
     # --- live run, steered by the client ---------------------------------------------------------
     port = free_port_pair()
