@@ -96,6 +96,12 @@ TEST(SteeringProxy, ReportsOnlyChangesOnce) {
   EXPECT_EQ(c[0].name, "write_checkpoint");
   steering.set_for_test("write_checkpoint", {0});
   EXPECT_TRUE(steering.poll(7, 0.6).empty()) << "switching off only re-arms";
+  steering.set_for_test("write_checkpoint", {1});
+  steering.set_for_test("stop", {1});
+  c = steering.poll(8, 0.7);
+  ASSERT_EQ(c.size(), 2u) << "switched on again: a second request";
+  EXPECT_EQ(c[0].name, "write_checkpoint");
+  EXPECT_EQ(c[1].name, "stop");
 }
 
 TEST(SteeringProxy, SteersARunAndTheInSituInterval) {

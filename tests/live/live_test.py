@@ -33,7 +33,8 @@ case = os.path.join(src, "cases", "dam_break_2d.yaml")
 xml = os.path.join(src, "pipelines", "spate_steering.xml")
 STEPS = 200
 common = ["--steps", str(STEPS), "--insitu-every", "5", "--set", "output.interval=0", "--set", "probes=[]",
-          "--checkpoint-every", "0", "--quiet", "--threads", "2"]
+          "--checkpoint-every", "0", "--quiet", "--threads", "2",
+          "--devices", "2"]  # two slabs: the client sees both, a steered change reaches both
 children = []
 
 
