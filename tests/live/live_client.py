@@ -6,7 +6,8 @@
 # Plan (one live step apart, in this order, once particles have arrived):
 #   1. gravity := (2, -9.81, 0)          (accepted: tilts gravity to the right)
 #   2. viscosity := 50 Pa s              (outside [0, 10]: rejected by the solver)
-#   3. pause (Catalyst's own pause), pump events for 2 s noting the steps seen, continue
+#   3. pause (Catalyst's own pause), pump events for 2 s noting the steps seen, set
+#      artificial_viscosity := 0.05 while paused, continue
 #   4. write_checkpoint := 1             (a checkpoint now)
 #   5. disconnect after two more live steps (the simulation must go on to the end)
 import json
@@ -112,6 +113,15 @@ while time.time() < deadline:
             live.ProcessServerNotifications()
             if time.time() - t0 > 0.5:  # the pause takes effect at the simulation's next live step
                 seen.append(state["step"])
+            time.sleep(0.01)
+        # An edit while paused: applied at the boundary right after the held step.
+        set_property(steering, "artificial_viscosity", [0.05])
+        steering.UpdateVTKObjects()
+        link.PushUpdatedStates()
+        report["requests"].append({"name": "artificial_viscosity", "value": [0.05], "step": state["step"]})
+        t1 = time.time()
+        while time.time() - t1 < 0.3:
+            live.ProcessServerNotifications()
             time.sleep(0.01)
         live.PauseCatalyst(link, False)
         report["pause"] = {"asked_at": step, "steps_seen_while_paused": sorted(set(seen))}

@@ -9,7 +9,8 @@ out to it. The test checks, from the simulation's outputs:
   2. write_checkpoint from the client writes a checkpoint at the logged step;
      an out-of-range viscosity was rejected with a reason, counted in summary.json, not logged
      and not applied;
-  3. pausing from the client holds the simulation at one step, continuing releases it;
+  3. pausing from the client holds the simulation at one step, continuing releases it, and an
+     edit made while paused applies right after the held step;
      the client disconnected mid-run and the simulation still finished with exit 0, its stderr
      holding only ParaView's known disconnect messages;
   4. replaying steering.log (--steering-log) gives a bit-identical final checkpoint;
@@ -154,8 +155,9 @@ try:
     if int(gravity[0][0]) < requests["gravity"]["step"]:
         fail(f"gravity logged at step {gravity[0][0]}, before the request at step {requests['gravity']['step']}")
     summary = json.load(open(os.path.join(live_out, "summary.json")))
-    if summary["steering"]["accepted"] != 2 or summary["steering"]["rejected"] != 1:
-        fail(f"summary.json steering: {summary['steering']} (expected 2 accepted: gravity and write_checkpoint; 1 rejected)")
+    if summary["steering"]["accepted"] != 3 or summary["steering"]["rejected"] != 1:
+        fail(f"summary.json steering: {summary['steering']} (expected 3 accepted: gravity, artificial_viscosity, "
+             "write_checkpoint; 1 rejected)")
     if summary["exit_code"] != 0 or summary.get("final_step", STEPS) != STEPS:
         fail(f"summary.json: exit {summary['exit_code']}, final step {summary.get('final_step')}")
 
@@ -183,6 +185,11 @@ try:
     steered = os.path.join(live_out, "checkpoints", "checkpoint_step_%08d.h5" % int(ckpt[0][0]))
     if not os.path.exists(steered):
         fail(f"no checkpoint written at step {ckpt[0][0]}: {os.listdir(os.path.join(live_out, 'checkpoints'))}")
+
+    # The edit made while paused is applied at the boundary right after the held step.
+    av = [l for l in log if l[2] == "artificial_viscosity"]
+    if len(av) != 1 or int(av[0][0]) != held or float(av[0][3]) != 0.05:
+        fail(f"artificial_viscosity set while paused at step {held}: steering.log has {av}")
 
     # 3. disconnect mid-run: exit 0 (checked), and only the known messages on stderr
     if report.get("disconnected_step") is None or report["disconnected_step"] >= STEPS:
