@@ -163,6 +163,11 @@ int run_command(const RunArgs& a) {
     const PhysicsParams P = physics_params(c);
     co.constants = {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.rho0}, {"particle_mass", P.mass}};
     std::filesystem::create_directories(o.out_dir);
+    // Started outside mpirun, ParaView initialises MPI itself, and OpenMPI's TCP transport would
+    // then listen on every interface (ports 1024 and up) for the whole run. One process needs only
+    // shared memory; with it the run opens no listening socket at all (docs/live.md, Security).
+    // An explicit OMPI_MCA_btl in the environment wins.
+    if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK")) ::setenv("OMPI_MCA_btl", "self,vader", 0);
     try {
       insitu = std::make_unique<catalyst::CatalystSink>(co);
     } catch (const catalyst::InSituLoadError& e) {

@@ -15,7 +15,8 @@ out to it. The test checks, from the simulation's outputs:
      holding only ParaView's known disconnect messages;
   4. replaying steering.log (--steering-log) gives a bit-identical final checkpoint;
   5. with nobody listening, --live runs on normally (exit 0, same result as without --live);
-  6. a bad --live address, or --live with --steering-log, is bad input (exit 2).
+  6. the simulation never listens on a TCP port (sampled from /proc while it runs);
+  7. a bad --live address, or --live with --steering-log, is bad input (exit 2).
 
 Usage: live_test.py SPATE PVPYTHON SOURCE_DIR WORK_DIR
 Every wait is bounded; child processes are killed on any exit.
@@ -88,10 +89,46 @@ def wait(p, seconds, what):
         fail(f"{what} still running after {seconds} s")
 
 
+def listening_ports(pid):
+    """TCP ports process `pid` listens on (from /proc: no tools needed)."""
+    inodes = set()
+    try:
+        for fd in os.listdir(f"/proc/{pid}/fd"):
+            try:
+                link = os.readlink(f"/proc/{pid}/fd/{fd}")
+            except OSError:
+                continue
+            if link.startswith("socket:["):
+                inodes.add(link[8:-1])
+    except OSError:
+        return set()
+    ports = set()
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
+        try:
+            rows = open(table).read().splitlines()[1:]
+        except OSError:
+            continue
+        for row in rows:
+            f = row.split()
+            if f[3] == "0A" and f[9] in inodes:  # 0A: LISTEN
+                ports.add(int(f[1].rsplit(":", 1)[1], 16))
+    return ports
+
+
+listened = {}
+
+
 def run(args, name, seconds=120):
     out = os.path.join(work, name)
     p = start([spate, "run", case, "--out", out] + common + args, out)
-    code = wait(p, seconds, f"spate run ({name})")
+    # Security: the simulation must never listen; sample its sockets while it runs.
+    deadline = time.time() + seconds
+    ports = set()
+    while p.poll() is None and time.time() < deadline:
+        ports |= listening_ports(p.pid)
+        time.sleep(0.05)
+    listened[name] = ports
+    code = wait(p, max(1, deadline - time.time()), f"spate run ({name})")
     return code, out
 
 
@@ -230,6 +267,9 @@ try:
         fail("--live with nobody listening changed the result:\n" + c.stdout)
     s = json.load(open(os.path.join(lonely_out, "summary.json")))
     print(f"nobody listening: {s.get('wall_seconds')} s wall for {STEPS} steps")
+    for name in ("live", "nobody_listening"):
+        if listened.get(name):
+            fail(f"spate run --live ({name}) listened on TCP ports {sorted(listened[name])}")
     print("live round trip: OK")
 finally:
     cleanup()
