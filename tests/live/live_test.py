@@ -24,6 +24,7 @@ Every wait is bounded; child processes are killed on any exit.
 import glob
 import json
 import os
+import shutil
 import signal
 import socket
 import subprocess
@@ -144,6 +145,9 @@ def compare(a, b):
 
 
 try:
+    # Fresh outputs: checkpoints left by an earlier run in the same folder would be pruned
+    # together with the new ones (newest names kept), hiding the steered checkpoint.
+    shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work, exist_ok=True)
     expected = json.loads(subprocess.run([spate, "info", case, "--json"], capture_output=True, text=True, timeout=60,
                                          check=True).stdout)["particles"]["total"]
