@@ -121,6 +121,7 @@ struct CatalystSink::Impl {
   std::vector<std::string> failures;
   InSituTiming timing;
   bool first = true;
+  std::atomic<int> every{1};  // options.every, then as steered (set by every slab thread)
   mutable std::mutex mutex;  // guards failures and timing, read from other threads
 
   void start() {
@@ -234,6 +235,7 @@ CatalystSink::CatalystSink(CatalystOptions options) : impl_(std::make_unique<Imp
     script = std::filesystem::absolute(script);
   }
   if (!options.working_dir.empty()) options.working_dir = std::filesystem::absolute(options.working_dir);
+  impl_->every = options.every;
   impl_->options = std::move(options);
   try {
     impl_->start();
@@ -253,7 +255,11 @@ CatalystSink::~CatalystSink() {
 
 bool CatalystSink::wants(std::int64_t step, double) {
   if (impl_->pipelines.empty()) return false;
-  return impl_->first || step % impl_->options.every == 0;
+  return impl_->first || step % impl_->every.load() == 0;
+}
+
+void CatalystSink::set_interval(int every) {
+  if (every >= 1) impl_->every.store(every);
 }
 
 void CatalystSink::execute(std::int64_t step, double time, const std::vector<SlabView>& slabs) {

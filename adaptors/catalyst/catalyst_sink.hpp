@@ -9,6 +9,7 @@
 // Errors: a script that is missing, or fails on its first run (import, catalyst_initialize or the
 // first catalyst_execute), raises InSituLoadError (the run stops before step 1, exit 2). A script
 // that fails later is switched off with its traceback kept in failures(); the run goes on.
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -60,6 +61,7 @@ class CatalystSink final : public InSituSink {
   bool wants(std::int64_t step, double time) override;
   void execute(std::int64_t step, double time, const std::vector<SlabView>& slabs) override;
   std::vector<std::string> failures() const override;
+  void set_interval(int every) override;  // steering: insitu_every (>= 1)
 
   InSituTiming timing() const;
   // For tests: the dataset as last handed to the pipelines (null before the first step).

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -25,6 +26,7 @@
 #include "sim/slab_worker.hpp"
 #ifdef SPATE_WITH_CATALYST
 #include "catalyst_sink.hpp"
+#include "catalyst_steering.hpp"
 #endif
 
 namespace spate::app {
@@ -73,6 +75,27 @@ void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::pa
 }
 #endif
 
+// --live [HOST:]PORT -> "host:port" (host defaults to localhost). Exit 2 on anything else.
+std::string live_address(const std::string& arg) {
+  const std::string text = arg.empty() ? "localhost:22222" : arg;
+  const auto colon = text.rfind(':');
+  const std::string host = colon == std::string::npos ? "localhost" : text.substr(0, colon);
+  const std::string port = colon == std::string::npos ? text : text.substr(colon + 1);
+  const bool digits = !port.empty() && port.size() <= 5 && port.find_first_not_of("0123456789") == std::string::npos;
+  const long number = digits ? std::stol(port) : 0;
+  if (host.empty() || host.find_first_of(" /?&") != std::string::npos || number < 1 || number > 65534)
+    throw BadInput(fmt::format("--live {}: expected [HOST:]PORT with PORT in 1..65534 (e.g. localhost:22222)", text));
+  return host + ":" + port;
+}
+
+#ifdef SPATE_WITH_CATALYST
+// pipelines/ (live.py, spate_steering.xml): $SPATE_PIPELINES_DIR, else the source tree's.
+std::filesystem::path pipelines_dir() {
+  const char* env = std::getenv("SPATE_PIPELINES_DIR");
+  return env && *env ? std::filesystem::path(env) : std::filesystem::path(SPATE_PIPELINES_DIR);
+}
+#endif
+
 int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 }  // namespace
@@ -88,7 +111,15 @@ int run_command(const RunArgs& a) {
     throw BadInput("--pipeline/--insitu-every (or the case's insitu: section): this spate was built without ParaView Catalyst");
 #endif
   if (a.insitu_every && *a.insitu_every < 1) throw BadInput(fmt::format("--insitu-every {}: must be at least 1", *a.insitu_every));
-  if (!a.live.empty()) throw BadInput("--live: this spate was built without ParaView Catalyst Live support");
+  // Live: the simulation connects out to a listening ParaView; it never listens itself.
+  const bool live = a.live_requested || !a.live.empty();
+  std::string live_url;
+#ifndef SPATE_WITH_CATALYST
+  if (live) throw BadInput("--live: this spate was built without ParaView Catalyst (Catalyst Live needs it)");
+#endif
+  if (live) live_url = live_address(a.live);
+  if (live && !a.steering_log.empty())
+    throw BadInput("--live and --steering-log: a run is steered live or replays a log, not both");
   if (a.steps && *a.steps < 0) throw BadInput(fmt::format("--steps {}: must be >= 0", *a.steps));
   if (a.until && !(*a.until > 0)) throw BadInput(fmt::format("--until {}: must be > 0", *a.until));
   if (a.threads < 0) throw BadInput(fmt::format("--threads {}: must be >= 0 (0: all cores)", a.threads));
@@ -118,20 +149,63 @@ int run_command(const RunArgs& a) {
 
 #ifdef SPATE_WITH_CATALYST
   std::unique_ptr<catalyst::CatalystSink> insitu;
-  if (!pipelines.empty()) {
+  std::unique_ptr<catalyst::CatalystSteering> live_steering;
+  if (!pipelines.empty() || live) {
     catalyst::CatalystOptions co;
     co.scripts.assign(pipelines.begin(), pipelines.end());
+    if (live) {
+      // pipelines/live.py reads the address from the environment (ParaView scripts take no arguments).
+      ::setenv("SPATE_LIVE_URL", live_url.c_str(), 1);
+      co.scripts.push_back(pipelines_dir() / "live.py");
+    }
     co.every = insitu_every;
     co.working_dir = o.out_dir;
     const PhysicsParams P = physics_params(c);
     co.constants = {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.rho0}, {"particle_mass", P.mass}};
     std::filesystem::create_directories(o.out_dir);
+    // Started outside mpirun, ParaView initialises MPI itself, and OpenMPI's TCP transport would
+    // then listen on every interface (ports 1024 and up) for the whole run. One process needs only
+    // shared memory; with it the run opens no listening socket at all (docs/live.md, Security).
+    // An explicit OMPI_MCA_btl in the environment wins.
+    if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK")) ::setenv("OMPI_MCA_btl", "self,vader", 0);
     try {
       insitu = std::make_unique<catalyst::CatalystSink>(co);
     } catch (const catalyst::InSituLoadError& e) {
       throw BadInput(e.what());
     }
     o.insitu = insitu.get();
+    if (live) {
+      catalyst::SteeringInitial init;
+      // The case's own (double) values: they survive ParaView's state round trips unchanged, so an
+      // untouched parameter never shows up as a change.
+      for (int k = 0; k < 3; ++k) init.gravity[k] = k < c.dim ? c.gravity[k] : 0.0;
+      init.viscosity = c.viscosity;
+      init.artificial_viscosity = c.artificial_viscosity;
+      init.insitu_every = insitu_every;
+      // A restart continues steered (the checkpoint holds the accepted changes): show those values.
+      if (o.restart) {
+        try {
+          ParticleStore ignored;
+          const CheckpointMeta meta = read_checkpoint(*o.restart, ignored);
+          for (const SteeringChange& ch : parse_log(meta.steering_log, o.restart->string())) {
+            if (ch.name == "gravity" && ch.value.size() == 3) init.gravity = {ch.value[0], ch.value[1], ch.value[2]};
+            if (ch.name == "viscosity" && !ch.value.empty()) init.viscosity = ch.value[0];
+            if (ch.name == "artificial_viscosity" && !ch.value.empty()) init.artificial_viscosity = ch.value[0];
+            if (ch.name == "insitu_every" && !ch.value.empty()) init.insitu_every = static_cast<int>(ch.value[0]);
+          }
+        } catch (const std::exception&) {
+          // an unreadable checkpoint is reported by the run itself (exit 2)
+        }
+      }
+      try {
+        live_steering = std::make_unique<catalyst::CatalystSteering>(pipelines_dir() / "spate_steering.xml", init);
+      } catch (const catalyst::InSituLoadError& e) {
+        throw BadInput(e.what());
+      }
+      o.steering = live_steering.get();
+      if (!a.quiet)
+        std::printf("spate: live: connecting out to ParaView at %s on every in-situ step (Catalyst > Connect there)\n", live_url.c_str());
+    }
   }
 #endif
 

@@ -19,6 +19,7 @@ struct RunArgs {
   int threads = 0, devices = 1;
   std::optional<int> checkpoint_every, insitu_every;
   bool quiet = false;
+  bool live_requested = false;  // --live given (with or without an address)
 };
 struct InfoArgs {
   std::string case_file, backend = "cpu";

@@ -61,7 +61,9 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--quiet", run.quiet, "No progress output");
   run_cmd->add_option("--pipeline", run.pipelines, "ParaView Catalyst script (repeatable)");
   run_cmd->add_option("--insitu-every", run.insitu_every, "Run pipelines every N steps");
-  run_cmd->add_option("--live", run.live, "Connect to ParaView Catalyst Live at [HOST:]PORT")->expected(0, 1)->default_str("localhost:22222");
+  auto* live_opt = run_cmd->add_option("--live", run.live, "Connect out to ParaView Catalyst Live at [HOST:]PORT (docs/live.md)")
+                       ->expected(0, 1)
+                       ->default_str("localhost:22222");
   run_cmd->add_option("--steering-log", run.steering_log, "Replay a recorded steering log");
 
   InfoArgs info;
@@ -95,6 +97,7 @@ int main(int argc, char** argv) {
     return finish(code == 0 ? 0 : 2);
   }
   try {
+    run.live_requested = live_opt->count() > 0;
     if (*run_cmd) return finish(run_command(run));
     if (*info_cmd) return finish(info_command(info));
     if (*cmp_cmd) return finish(compare_command(cmp));

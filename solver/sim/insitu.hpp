@@ -31,6 +31,9 @@ class InSituSink {
   virtual void execute(std::int64_t step, double time, const std::vector<SlabView>& slabs) = 0;
   // Pipeline failures to put in summary.json.
   virtual std::vector<std::string> failures() const { return {}; }
+  // Steering (insitu_every): steps between in-situ steps from now on. Called with the same value
+  // by every slab at a step boundary.
+  virtual void set_interval(int /*every*/) {}
 };
 
 }  // namespace spate

@@ -201,7 +201,10 @@ class Worker {
     PhysicsParams params = s_.params;
     int insitu_every = 1;
     SteeringTarget steer{&params, &insitu_every};
-    for (auto& change : s_.steering_history) apply(change, steer);  // a restart continues steered
+    for (auto& change : s_.steering_history) {  // a restart continues steered
+      apply(change, steer);
+      if (change.name == "insitu_every" && s_.opts.insitu) s_.opts.insitu->set_interval(insitu_every);
+    }
     steer.checkpoint_now = steer.stop = false;
     w_.set_params(params);
     std::ofstream steering_log;
@@ -226,6 +229,7 @@ class Worker {
           continue;
         }
         apply(change, steer);
+        if (change.name == "insitu_every" && s_.opts.insitu) s_.opts.insitu->set_interval(insitu_every);
         if (writer) {
           s_.steering_history.push_back(change);
           ++s_.result.steering_accepted;

@@ -1,0 +1,51 @@
+#pragma once
+// Steering from ParaView Catalyst Live: the steering parameters are the properties of one proxy
+// (pipelines/spate_steering.xml, registered as 'steering' in the 'sources' group of the in-situ
+// proxy manager). A Live client edits the proxy; the edit reaches the simulation during the next
+// live step (inside CoProcess, on every rank). poll() reports the properties that changed since the
+// last poll as SteeringChange entries; the solver validates and applies them (solver/sim/steering).
+//
+// Construct after the CatalystSink (which starts ParaView's proxy manager) and use on the main
+// thread. The simulation never listens: the Live connection is made by ParaView's script pipeline
+// (pipelines/live.py), which connects out to the configured host.
+#include <array>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "catalyst_sink.hpp"
+#include "sim/steering.hpp"
+
+namespace spate::catalyst {
+
+// The values the proxy starts with: the run's current parameters, so that a client sees them.
+struct SteeringInitial {
+  std::array<double, 3> gravity{0.0, -9.81, 0.0};
+  double viscosity = 0.0;
+  double artificial_viscosity = 0.0;
+  int insitu_every = 1;
+};
+
+class CatalystSteering final : public SteeringSource {
+ public:
+  static constexpr const char* kRegistrationName = "steering";
+  static constexpr const char* kProxyType = "SpateSteeringParameters";
+
+  // Loads the proxy definition (the XML) into ParaView and creates the proxy with `initial`.
+  // Throws InSituLoadError when the XML cannot be loaded or the proxy cannot be created.
+  CatalystSteering(const std::filesystem::path& xml, const SteeringInitial& initial);
+  ~CatalystSteering() override;
+
+  std::vector<SteeringChange> poll(std::int64_t step, double time) override;
+
+  // The proxy's current values, by parameter name (for tests and messages).
+  std::map<std::string, std::vector<double>> values() const;
+  // For tests: set a property as a Live client's edit would (then UpdateVTKObjects).
+  void set_for_test(const std::string& name, const std::vector<double>& value);
+
+ private:
+  std::map<std::string, std::vector<double>> last_;  // as seen at the previous poll
+};
+
+}  // namespace spate::catalyst
