@@ -361,21 +361,25 @@ class Worker {
     if (t_.slab() == 0) {
       CheckpointMeta meta{step, time, dt, s_.c.name, s_.c.source_yaml, history_text(s_.steering_history)};
       write_checkpoint(path, meta, all);
-      prune_checkpoints(dir);
+      prune_checkpoints(path);
     }
     t_.barrier();
     return path;
   }
 
-  void prune_checkpoints(const std::filesystem::path& dir) const {
-    std::vector<std::filesystem::path> files;
-    for (auto& e : std::filesystem::directory_iterator(dir))
-      if (e.path().extension() == ".h5" && e.path().filename().string().starts_with("checkpoint_step_")) files.push_back(e.path());
-    std::sort(files.begin(), files.end());
-    const int keep = std::max(1, s_.opts.keep_checkpoints);
-    for (std::size_t k = 0; k + keep < files.size(); ++k) std::filesystem::remove(files[k]);
+  // Keeps the newest keep_checkpoints files this run wrote. Files of earlier runs in a reused
+  // output folder are never touched (a restart may still need them, and their step numbers say
+  // nothing about which is newer).
+  void prune_checkpoints(const std::filesystem::path& just_written) {
+    if (written_.empty() || written_.back() != just_written) written_.push_back(just_written);
+    const std::size_t keep = static_cast<std::size_t>(std::max(1, s_.opts.keep_checkpoints));
+    while (written_.size() > keep) {
+      std::filesystem::remove(written_.front());
+      written_.erase(written_.begin());
+    }
   }
 
+  std::vector<std::filesystem::path> written_;
   Shared& s_;
   SlabTransport& t_;
   SlabWorker w_;
