@@ -43,7 +43,7 @@ class SlabWorker {
   std::optional<ParticleFault> health(float min_ratio, float max_ratio) const;
   float local_time_step(const TimeStepControl& c) const;
 
-  // Moves faces to even out the estimated cost (fluid 4, wall 1 per particle; collective); returns
+  // Moves faces to even out the estimated cost (fluid 7, wall 1 per particle; collective); returns
   // the cost imbalance (max/mean over slabs) before the move.
   double rebalance(int min_columns);
   std::vector<std::int64_t> slab_particle_counts();  // collective
@@ -81,7 +81,7 @@ class SlabWorker {
   bool faces_moved_ = false;
 };
 
-// Estimated work per x column of the owned particles (fluid 4, wall 1 per particle); summed over
+// Estimated work per x column of the owned particles (fluid 7, wall 1 per particle); summed over
 // slabs it is what the balancer evens out.
 std::vector<std::int64_t> column_costs(const ParticleStore& p, const Lattice& lattice);
 
