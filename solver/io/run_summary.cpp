@@ -35,6 +35,7 @@ void write_summary(const std::filesystem::path& path, const Case& c, const Physi
   j["smoothing_length"] = P.h;
   j["sound_speed"] = P.c0;
   j["device_particles"] = r.slab_particles;
+  j["device_busy_seconds"] = r.slab_busy_seconds;
   j["imbalance"] = r.imbalance;
   j["imbalance_history"] = r.imbalance_history;
   j["ghost_particles"] = r.ghosts;

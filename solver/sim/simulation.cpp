@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <fmt/format.h>
 #include <mutex>
@@ -285,6 +286,17 @@ class Worker {
       last_checkpoint = write_checkpoint_now(time, step, dt);
     }
     const auto counts = w_.slab_particle_counts();
+    std::vector<double> busy;
+    {
+      const double mine = w_.busy_seconds();
+      Bytes b(sizeof mine);
+      std::memcpy(b.data(), &mine, sizeof mine);
+      for (auto& part : t_.allgather(b)) {
+        double v = 0.0;
+        std::memcpy(&v, part.data(), std::min(sizeof v, part.size()));
+        busy.push_back(v);
+      }
+    }
     const std::int64_t solver_bytes = t_.sum(static_cast<std::int64_t>(w_.allocated_bytes()));
     const std::int64_t ghosts = t_.sum(static_cast<std::int64_t>(w_.particles().ghosts()));
     if (reporter) {
@@ -296,6 +308,7 @@ class Worker {
       r.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
       r.last_checkpoint = last_checkpoint;
       r.slab_particles = counts;
+      r.slab_busy_seconds = busy;
       r.imbalance = imbalance(counts);
       r.ghosts = ghosts;
       r.bytes_per_particle = static_cast<double>(solver_bytes) / static_cast<double>(std::max<std::int64_t>(1, total_particles));

@@ -42,6 +42,7 @@ struct RunResult {
   ParticleCounts particles;
   std::filesystem::path last_checkpoint;
   std::vector<std::int64_t> slab_particles;
+  std::vector<double> slab_busy_seconds;    // per slab: time in its own neighbour loops
   double imbalance = 1.0;
   std::int64_t ghosts = 0;
   double bytes_per_particle = 0.0;         // solver arrays (owned + ghosts + cell grid) / particles

@@ -1,5 +1,6 @@
 #include "slab_worker.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -47,10 +48,15 @@ void SlabWorker::compute_rates() {
     kernels_->summation_density(particles_, grid_, params_);
     refresh_halo();
   }
+  const auto t0 = std::chrono::steady_clock::now();
   kernels_->equation_of_state(particles_, params_);
   kernels_->wall_state(particles_, grid_, params_);
+  auto t1 = std::chrono::steady_clock::now();
+  busy_seconds_ += std::chrono::duration<double>(t1 - t0).count();
   refresh_halo();
+  t1 = std::chrono::steady_clock::now();
   kernels_->fluid_rates(particles_, grid_, params_);
+  busy_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
 }
 
 void SlabWorker::prepare(bool rates) {

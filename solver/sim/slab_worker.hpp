@@ -62,6 +62,8 @@ class SlabWorker {
   SlabTransport& transport() { return transport_; }
   const SlabLayout& layout() const { return layout_; }
   std::size_t allocated_bytes() const;
+  // Wall-clock seconds this slab spent in its own neighbour loops (not waiting for others).
+  double busy_seconds() const { return busy_seconds_; }
 
  private:
   void rebuild();        // migrate, sort, halos
@@ -76,6 +78,7 @@ class SlabWorker {
   ParticleStore particles_;
   CellGrid grid_;
   Halo halo_;
+  double busy_seconds_ = 0.0;
   std::unique_ptr<StepKernels> kernels_;
   std::int64_t crossings_ = 0, handovers_ = 0, face_moves_ = 0;
   bool faces_moved_ = false;
