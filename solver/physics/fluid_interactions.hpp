@@ -57,8 +57,8 @@ SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const Particle
   // mean density, c0^2 (rho/rho0)^6, not c0^2: at depth the Tait hydrostatic density gradient is a
   // few percent below the linear one, and diffusing towards the linear profile biases deep pressures
   // upward. Switches are factors, not branches, so the loop stays vectorisable.
-  const float diffusion = P.diffusion == DensityDiffusion::None ? 0.0f : P.delta * P.h * P.c0 * 2.0f;
-  const float hydrostatic = P.diffusion == DensityDiffusion::Fourtakas ? P.rho0 / (P.c0 * P.c0) : 0.0f;
+  const float diffusion = (P.diffusion == DensityDiffusion::None ? 0.0f : 1.0f) * (P.delta * P.h * P.c0 * 2.0f);
+  const float hydrostatic = (P.diffusion == DensityDiffusion::Fourtakas ? 1.0f : 0.0f) * (P.rho0 / (P.c0 * P.c0));
   float g_dot_rji = 0.0f;
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) g_dot_rji -= P.gravity[k] * r[k];
   const float s = 0.5f * (i.rho + j.rho) / P.rho0;
