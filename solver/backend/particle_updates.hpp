@@ -26,12 +26,7 @@ SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, 
   // paying for the pair terms (which would add exactly zero for them).
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
     for (std::uint32_t j = jb; j < je; ++j) {
-      float r2 = 0.0f;
-      SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
-        const float d = si.x[k] - f.pos[k][j];
-        r2 += d * d;
-      }
-      if (r2 < P.support2) accumulate_fluid_pair<Kernel, Dim>(P, si, load_state<Dim>(f, j), rates);
+      if (distance_squared<Dim>(si.x, f.pos, j) < P.support2) accumulate_fluid_pair<Kernel, Dim>(P, si, load_state<Dim>(f, j), rates);
     }
   });
   add_body_forces(P, rates);

@@ -20,4 +20,16 @@ SPATE_HD ParticleState<Dim> load_state(const Fields& f, std::size_t i) {
   return ParticleState<Dim>{load_vec<Dim>(f.pos, i), load_vec<Dim>(f.vel, i), f.density[i], f.pressure[i], f.kind[i]};
 }
 
+// |x_i - x_j|^2 with x_j read from structure-of-arrays positions: the support test of the pair
+// loops, rounded exactly like dot(r, r) in the pair terms.
+template <int Dim, class Array>
+SPATE_HD float distance_squared(const Vec<Dim>& xi, const Array (&pos)[3], std::size_t j) {
+  float r2 = 0.0f;
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
+    const float d = xi[k] - pos[k][j];
+    r2 += d * d;
+  }
+  return r2;
+}
+
 }  // namespace spate

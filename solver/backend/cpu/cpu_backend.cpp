@@ -141,12 +141,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
         batch.n = 0;
         v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
           for (std::uint32_t j = jb; j < je; ++j) {
-            float r2 = 0.0f;
-            SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
-              const float d = si.x[k] - ps.pos[k][j];
-              r2 += d * d;
-            }
-            if (r2 >= P.support2) continue;
+            if (distance_squared<Dim>(si.x, ps.pos, j) >= P.support2) continue;
             const int n = batch.n++;
             SPATE_UNROLL for (int k = 0; k < Dim; ++k) batch.x[k][n] = ps.pos[k][j], batch.v[k][n] = ps.vel[k][j];
             batch.rho[n] = ps.density[j];
