@@ -88,11 +88,12 @@ void Halo::refresh(ParticleStore& p, SlabTransport& transport) {
                      pack_particles(p, send_right_, FieldSet::Refresh), from_left, from_right);
   unpack_into(p, from_left, FieldSet::Refresh, slots_left_);
   unpack_into(p, from_right, FieldSet::Refresh, slots_right_);
-  for (std::size_t k = 0; k < image_source_.size(); ++k) {
-    const std::uint32_t src = image_source_[k], dst = image_target_[k];
-    for (auto& f : p.fields())
-      if (in_set(f, FieldSet::Refresh))
-        std::copy_n(f.bytes() + src * f.elem_size, f.elem_size, f.bytes() + dst * f.elem_size);
+  // Images in creation order (an image of an image copies after its source was refreshed).
+  for (auto& f : p.fields()) {
+    if (!in_set(f, FieldSet::Refresh)) continue;
+    char* data = f.bytes();
+    for (std::size_t k = 0; k < image_source_.size(); ++k)
+      std::copy_n(data + image_source_[k] * f.elem_size, f.elem_size, data + image_target_[k] * f.elem_size);
   }
 }
 

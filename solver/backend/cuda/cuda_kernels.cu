@@ -72,31 +72,34 @@ __global__ void eos_kernel(DeviceFields d, std::uint32_t n, PhysicsParams P) {
   if (i < n && is_fluid(d.kind[i])) d.pressure[i] = tait_pressure(d.density[i], P.rho0, P.tait_b);
 }
 
-template <class Kernel, int Dim>
-__global__ void summation_density_kernel(DeviceFields d, std::uint32_t owned, CellGridView v, Lattice L, PhysicsParams P) {
-  const std::uint32_t i = thread_index();
-  if (i >= owned) return;
-  int g[3];
-  cell_coords<Dim>(L, d, i, g);
-  update_summation_density<Kernel, Dim>(P, v, d, i, g);
-}
+// One thread per owned particle running one of the shared per-particle bodies
+// (backend/particle_updates.hpp), named by a tag so that the three neighbour loops share one kernel.
+struct SummationDensityPass {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
+    update_summation_density<Kernel, Dim>(P, v, d, i, g);
+  }
+};
+struct WallStatePass {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
+    update_wall_state<Kernel, Dim>(P, v, d, i, g);
+  }
+};
+struct FluidRatesPass {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
+    update_fluid_rates<Kernel, Dim>(P, v, d, i, g);
+  }
+};
 
-template <class Kernel, int Dim>
-__global__ void wall_state_kernel(DeviceFields d, std::uint32_t owned, CellGridView v, Lattice L, PhysicsParams P) {
+template <class Update, class Kernel, int Dim>
+__global__ void neighbour_kernel(DeviceFields d, std::uint32_t owned, CellGridView v, Lattice L, PhysicsParams P) {
   const std::uint32_t i = thread_index();
   if (i >= owned) return;
   int g[3];
   cell_coords<Dim>(L, d, i, g);
-  update_wall_state<Kernel, Dim>(P, v, d, i, g);
-}
-
-template <class Kernel, int Dim>
-__global__ void fluid_rates_kernel(DeviceFields d, std::uint32_t owned, CellGridView v, Lattice L, PhysicsParams P) {
-  const std::uint32_t i = thread_index();
-  if (i >= owned) return;
-  int g[3];
-  cell_coords<Dim>(L, d, i, g);
-  update_fluid_rates<Kernel, Dim>(P, v, d, i, g);
+  Update::template run<Kernel, Dim>(P, v, d, i, g);
 }
 
 // Per-particle stable step (infinity for walls); the minimum is a CUB reduction (order-free, exact).
@@ -162,19 +165,19 @@ class CudaKernels final : public StepKernels {
   void summation_density(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
     select();
     dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-      launch(owned_, summation_density_kernel<Kernel, Dim>, fields(), owned32(), view_, lattice_, P);
+      launch(owned_, neighbour_kernel<SummationDensityPass, Kernel, Dim>, fields(), owned32(), view_, lattice_, P);
     });
   }
   void wall_state(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
     select();
     dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-      launch(owned_, wall_state_kernel<Kernel, Dim>, fields(), owned32(), view_, lattice_, P);
+      launch(owned_, neighbour_kernel<WallStatePass, Kernel, Dim>, fields(), owned32(), view_, lattice_, P);
     });
   }
   void fluid_rates(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
     select();
     dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-      launch(owned_, fluid_rates_kernel<Kernel, Dim>, fields(), owned32(), view_, lattice_, P);
+      launch(owned_, neighbour_kernel<FluidRatesPass, Kernel, Dim>, fields(), owned32(), view_, lattice_, P);
     });
   }
   float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
