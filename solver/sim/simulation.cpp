@@ -36,6 +36,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr int kMinColumnsPerSlab = 3;
+// The first balancing pass comes after this many steps whatever balance_every says (if balancing is
+// on): the first faces follow an estimated cost, this pass replaces it with the slabs' measured
+// loop times.
+constexpr std::int64_t kCalibrationSteps = 2;
 
 std::string step_name(std::int64_t step) { return fmt::format("step_{:08d}", step); }
 
@@ -248,7 +252,7 @@ class Worker {
         break;
       }
       if (s_.opts.steps ? taken >= *s_.opts.steps : time >= end_time - 1e-12) break;
-      if (s_.c.balance_every > 0 && t_.slab_count() > 1 && taken > 0 && step % s_.c.balance_every == 0)
+      if (s_.c.balance_every > 0 && t_.slab_count() > 1 && taken > 0 && (step % s_.c.balance_every == 0 || taken == kCalibrationSteps))
         imbalance_log.push_back(w_.rebalance(kMinColumnsPerSlab));
       if (auto fault = w_.step(static_cast<float>(dt))) {
         unstable = describe(*fault, step + 1, time + dt);
