@@ -23,8 +23,19 @@ void SlabWorker::take_share(const ParticleStore& global, const SlabLayout& layou
   std::vector<std::uint32_t> mine;
   for (std::size_t i = 0; i < global.owned(); ++i)
     if (layout.owner_of(lattice_.cell_of(global.pos[0][i], 0)) == s) mine.push_back(static_cast<std::uint32_t>(i));
+  // Copied field by field, without a packed buffer in between: every slab does this at once while
+  // the whole generated set is still alive, so an extra copy would be a full set more at the peak.
   particles_ = ParticleStore(lattice_.dim);
-  unpack_append(particles_, pack_particles(const_cast<ParticleStore&>(global), mine, FieldSet::All), FieldSet::All);
+  particles_.resize(mine.size());
+  auto from = const_cast<ParticleStore&>(global).fields();
+  auto to = particles_.fields();
+  for (std::size_t k = 0; k < to.size(); ++k) {
+    const std::size_t size = to[k].elem_size;
+    const char* src = from[k].bytes();
+    char* dst = to[k].bytes();
+    if (!src || !dst) continue;  // components beyond dim
+    for (std::size_t i = 0; i < mine.size(); ++i) std::memcpy(dst + i * size, src + mine[i] * size, size);
+  }
   particles_.set_owned(particles_.size());
   grid_.configure(lattice_, layout.faces[s], layout.faces[s + 1]);
 }

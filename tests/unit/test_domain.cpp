@@ -132,6 +132,27 @@ TEST(Migrate, EveryParticleEndsOnItsOwnerAndNoneIsLost) {
   }
 }
 
+// The checkpoint writer's collective: every slab's buffer on slab 0 only, in slab order, twice in a
+// row (the hub's slots are reusable after a gather moved them out).
+TEST(Transport, GatherBringsEverySlabsBufferToSlabZeroOnly) {
+  std::mutex m;
+  std::vector<std::vector<std::string>> seen(3);
+  on_three_slabs(false, [&](int s, SlabTransport& t) {
+    for (int round = 0; round < 2; ++round) {
+      const std::string mine = std::to_string(round) + ":" + std::string(static_cast<std::size_t>(s + 1) * 1000, static_cast<char>('a' + s));
+      const auto all = t.gather(Bytes(mine.begin(), mine.end()));
+      std::lock_guard lock(m);
+      for (auto& b : all) seen[s].emplace_back(b.begin(), b.end());
+    }
+  });
+  EXPECT_TRUE(seen[1].empty());
+  EXPECT_TRUE(seen[2].empty());
+  ASSERT_EQ(seen[0].size(), 6u);
+  for (int round = 0; round < 2; ++round)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(seen[0][round * 3 + k], std::to_string(round) + ":" + std::string(static_cast<std::size_t>(k + 1) * 1000, static_cast<char>('a' + k)));
+}
+
 // The measured balancer spreads a slab's timed seconds over its columns: the wall phase over the
 // walls, the fluid phase over the fluid, so the histogram sums back to the measured time.
 TEST(MeasuredCosts, SpreadTheTimedSecondsOverTheColumns) {
