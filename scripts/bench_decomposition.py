@@ -116,7 +116,7 @@ def scaling(args, raw):
             times[label].append(this_round[label])
             ratios[label].append(this_round[BASE] / this_round[label])
             ratios_t2[label].append(this_round["1 rank, D = 1, 2 threads"] / this_round[label])
-        print(f"round {r + 1}/{args.rounds}: " + ", ".join(f"{v:.3f}" for v in this_round.values()) +
+        print(f"round {r + 1}/{args.rounds} (s/step in table order): " + ", ".join(f"{this_round[label]:.3f}" for label, *_ in CONFIGS) +
               f"; pair {pair_mean:.3f} (ceiling {ceiling[-1]:.2f})", flush=True)
     print()
     print(f"Medians over {args.rounds} rounds, {args.steps} timed steps per run (s/step includes the final checkpoint):\n")
@@ -194,6 +194,10 @@ def balance(args):
         print(f"\nbalance_every = {k}: {s['final_step']} steps, wall {s['wall_seconds']:.1f} s, imbalance mean "
               f"{sum(values) / len(values):.3f}, largest after t = 0 {worst[0]:.3f} (t = {worst[1]:.2f} s), final device_particles "
               f"{s['device_particles']}, face moves {s.get('face_moves')}, ghosts {s['ghost_particles']}; `{cmd}`")
+        history = s.get("imbalance_history") or []
+        if history:
+            print(f"  measured phase imbalance before each of its {len(history)} passes: mean {statistics.mean(history):.3f}, "
+                  f"median {statistics.median(history):.3f}, max {max(history):.3f} (first {history[0]:.3f})")
 
 
 def main():

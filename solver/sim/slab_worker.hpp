@@ -88,9 +88,9 @@ class SlabWorker {
   bool faces_moved_ = false;
 };
 
-// Estimated work per x column of the owned particles (fluid 7, wall 1 per particle); summed over
-// slabs it is what the balancer evens out.
-std::vector<std::int64_t> column_costs(const ParticleStore& p, const Lattice& lattice);
+// Estimated work per x column of the owned particles (fluid 7 in the fluid phase, wall 1 in the wall
+// phase, per particle): the first faces, before anything was timed.
+PhaseCosts column_costs(const ParticleStore& p, const Lattice& lattice);
 
 // This slab's measured seconds spread over its x columns, in nanoseconds: the wall phase in
 // proportion to the owned particles' wall-phase share, the fluid phase to the fluid particles (a
