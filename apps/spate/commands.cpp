@@ -396,6 +396,11 @@ int bench_command(const BenchArgs& a) {
     j["interactions_per_second"] = ips;
     j["bytes_per_particle"] = r.bytes_per_particle;
     j["ghost_particles"] = r.ghosts;
+    // Decomposition diagnostics (as in summary.json): per-slab loop seconds and the balancer's work.
+    j["device_particles"] = r.slab_particles;
+    j["device_busy_seconds"] = r.slab_busy_seconds;
+    j["imbalance_history"] = r.imbalance_history;
+    j["face_moves"] = r.face_moves;
     std::printf("%s\n", j.dump(2).c_str());
   } else {
     std::printf("%s: %lld particles, %d threads, %d devices: %.4f s/step, %.3g particle-steps/s, %.3g interactions/s, %.1f B/particle\n",

@@ -48,6 +48,17 @@ class InProcessTransport final : public SlabTransport {
     hub_.wait();
     return all;
   }
+  std::vector<Bytes> gather(Bytes mine) override {
+    hub_.gslot_[slab_] = std::move(mine);
+    hub_.wait();
+    std::vector<Bytes> all;
+    if (slab_ == 0) {
+      all = std::move(hub_.gslot_);  // the other slabs only touch the slots after the next barrier
+      hub_.gslot_.assign(hub_.slabs_, Bytes{});
+    }
+    hub_.wait();
+    return all;
+  }
   void barrier() override { hub_.wait(); }
   bool any(bool flag) override { return max(flag ? 1.0 : 0.0) > 0.0; }
 

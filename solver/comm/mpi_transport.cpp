@@ -31,6 +31,7 @@ namespace {
 // neighbour are the same rank) the two messages cannot be confused.
 constexpr int kTagLeftward = 11;
 constexpr int kTagRightward = 12;
+constexpr int kTagGather = 13;
 constexpr std::int64_t kChunk = std::int64_t{1} << 30;  // broadcast pieces stay below INT_MAX bytes
 
 int byte_count(const Bytes& b) {
@@ -129,6 +130,38 @@ class MpiNode final : public LocalSlabs {
     }
   }
 
+  // Leader only: every slab's buffer to rank 0 (into gathered_ there, in global slab order); the
+  // other ranks send theirs and free their slots. Rank 0 receives rank by rank, so the senders
+  // only ever block on it.
+  void gather_to_rank0() {
+    std::vector<std::int64_t> sizes(static_cast<std::size_t>(ranks_) * local_);
+    std::vector<std::int64_t> mine(local_);
+    for (int d = 0; d < local_; ++d) mine[d] = static_cast<std::int64_t>(gslot_[d].size());
+    MPI_Gather(mine.data(), local_, MPI_INT64_T, sizes.data(), local_, MPI_INT64_T, 0, comm_);
+    gathered_.clear();
+    if (rank_ != 0) {
+      for (auto& b : gslot_) {
+        const auto total = static_cast<std::int64_t>(b.size());
+        for (std::int64_t at = 0; at < total; at += kChunk)
+          MPI_Send(b.data() + at, static_cast<int>(std::min(kChunk, total - at)), MPI_BYTE, 0, kTagGather, comm_);
+        Bytes().swap(b);
+      }
+      return;
+    }
+    gathered_.resize(sizes.size());
+    for (int d = 0; d < local_; ++d) gathered_[d] = std::move(gslot_[d]);
+    for (int r = 1; r < ranks_; ++r) {
+      for (int d = 0; d < local_; ++d) {
+        Bytes& b = gathered_[r * local_ + d];
+        const std::int64_t total = sizes[r * local_ + d];
+        b.resize(static_cast<std::size_t>(total));
+        for (std::int64_t at = 0; at < total; at += kChunk)
+          MPI_Recv(b.data() + at, static_cast<int>(std::min(kChunk, total - at)), MPI_BYTE, r, kTagGather, comm_, MPI_STATUS_IGNORE);
+      }
+    }
+    gslot_.assign(local_, Bytes{});
+  }
+
   int local_;
   int rank_ = 0, ranks_ = 1;
   MPI_Comm comm_ = MPI_COMM_NULL;
@@ -205,6 +238,18 @@ class MpiTransport final : public SlabTransport {
     if (leader()) node_.allgather_across_ranks();
     node_.wait();
     return node_.gathered_;
+  }
+  std::vector<Bytes> gather(Bytes mine) override {
+    node_.gslot_[local_] = std::move(mine);
+    node_.wait();
+    std::vector<Bytes> all;
+    // Global slab 0 is rank 0's leader: it gathers and keeps the result.
+    if (leader()) {
+      node_.gather_to_rank0();
+      if (slab_ == 0) all = std::move(node_.gathered_);
+    }
+    node_.wait();
+    return all;
   }
   void barrier() override {
     node_.wait();

@@ -34,6 +34,9 @@ class SlabTransport {
   virtual void sum(std::vector<std::int64_t>& v) = 0;
   // Every slab's buffer, in slab order, on every slab.
   virtual std::vector<Bytes> allgather(const Bytes& mine) = 0;
+  // Every slab's buffer, in slab order, on slab 0 only (the others get an empty list). For the big
+  // gathers (checkpoints): only the writer holds everything, and `mine` is moved, not copied.
+  virtual std::vector<Bytes> gather(Bytes mine) = 0;
   virtual void barrier() = 0;
   // Any slab may raise a failure; every slab learns of it at the next call to this (no hang).
   virtual bool any(bool flag) = 0;

@@ -53,4 +53,49 @@ double imbalance(const std::vector<std::int64_t>& per_slab) {
   return static_cast<double>(*std::max_element(per_slab.begin(), per_slab.end())) / mean;
 }
 
+std::vector<std::int64_t> slab_totals(const SlabLayout& layout, const std::vector<std::int64_t>& per_column) {
+  std::vector<std::int64_t> out(layout.slabs(), 0);
+  for (int s = 0; s < layout.slabs(); ++s)
+    for (int c = layout.faces[s]; c < layout.faces[s + 1]; ++c) out[s] += per_column[c];
+  return out;
+}
+
+std::int64_t critical_path(const SlabLayout& layout, const PhaseCosts& costs) {
+  const auto wall = slab_totals(layout, costs.wall), fluid = slab_totals(layout, costs.fluid);
+  return *std::max_element(wall.begin(), wall.end()) + *std::max_element(fluid.begin(), fluid.end());
+}
+
+double phase_imbalance(const SlabLayout& layout, const PhaseCosts& costs) {
+  const std::int64_t total = std::accumulate(costs.wall.begin(), costs.wall.end(), std::int64_t{0}) +
+                             std::accumulate(costs.fluid.begin(), costs.fluid.end(), std::int64_t{0});
+  if (total <= 0) return 1.0;
+  return static_cast<double>(critical_path(layout, costs)) * layout.slabs() / static_cast<double>(total);
+}
+
+SlabLayout balanced_layout(const PhaseCosts& costs, int slabs, int min_columns) {
+  std::vector<std::int64_t> sum(costs.wall.size());
+  for (std::size_t c = 0; c < sum.size(); ++c) sum[c] = costs.wall[c] + costs.fluid[c];
+  SlabLayout best = balanced_layout(sum, slabs, min_columns);
+  std::int64_t best_path = critical_path(best, costs);
+  // Hill climbing over single-column face moves. Each accepted move shortens the path by at least
+  // one unit, so it ends; the columns are few (tens to hundreds), so a full sweep is cheap.
+  for (bool improved = true; improved;) {
+    improved = false;
+    for (int f = 1; f < slabs; ++f) {
+      for (const int delta : {-1, 1}) {
+        SlabLayout trial = best;
+        trial.faces[f] += delta;
+        if (trial.faces[f] - trial.faces[f - 1] < min_columns || trial.faces[f + 1] - trial.faces[f] < min_columns) continue;
+        const std::int64_t path = critical_path(trial, costs);
+        if (path < best_path) {
+          best = trial;
+          best_path = path;
+          improved = true;
+        }
+      }
+    }
+  }
+  return best;
+}
+
 }  // namespace spate

@@ -2,6 +2,7 @@
 
 #include <hdf5.h>
 
+#include <algorithm>
 #include <stdexcept>
 #include <vector>
 
@@ -64,6 +65,15 @@ std::string read_string_attr(hid_t loc, const char* name) {
 }  // namespace
 
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, ParticleStore& particles) {
+  auto fields = particles.fields();
+  const std::size_t n = particles.owned();
+  write_checkpoint(path, meta, particles.dim(), n, [&](std::size_t k, char* out) {
+    std::copy_n(fields[k].bytes(), n * fields[k].elem_size, out);
+  });
+}
+
+void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, int dim, std::size_t count,
+                      const CheckpointFieldFill& fill) {
   const std::filesystem::path tmp = path.string() + ".tmp";
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
   hid_t file = H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
@@ -72,18 +82,23 @@ void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& m
   write_attr(file, "step", H5T_NATIVE_INT64, &meta.step);
   write_attr(file, "time", H5T_NATIVE_DOUBLE, &meta.time);
   write_attr(file, "dt", H5T_NATIVE_DOUBLE, &meta.dt);
-  const int dim = particles.dim();
   write_attr(file, "dimensions", H5T_NATIVE_INT, &dim);
   write_string_attr(file, "case_name", meta.case_name);
   write_string_attr(file, "case_yaml", meta.case_yaml);
   write_string_attr(file, "steering_log", meta.steering_log);
   hid_t group = H5Gcreate2(file, "particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  const hsize_t n = particles.owned();
-  for (auto& f : particles.fields()) {
+  const hsize_t n = count;
+  ParticleStore layout(dim);  // empty: only the field list (names, sizes, flags)
+  const auto fields = layout.fields();
+  std::vector<char> buffer;  // one field at a time
+  for (std::size_t k = 0; k < fields.size(); ++k) {
+    const FieldRef& f = fields[k];
     if (!f.checkpoint) continue;
+    buffer.resize(count * f.elem_size);
+    if (count > 0) fill(k, buffer.data());
     hid_t space = H5Screate_simple(1, &n, nullptr);
     hid_t dset = H5Dcreate2(group, std::string(f.name).c_str(), h5_type(f), space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-    if (n > 0) check(H5Dwrite(dset, h5_type(f), H5S_ALL, H5S_ALL, H5P_DEFAULT, f.bytes()), tmp, "writing " + std::string(f.name));
+    if (n > 0) check(H5Dwrite(dset, h5_type(f), H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data()), tmp, "writing " + std::string(f.name));
     H5Dclose(dset);
     H5Sclose(space);
   }

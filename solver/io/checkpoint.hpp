@@ -5,6 +5,7 @@
 // a run killed mid-write leaves the previous checkpoint intact.
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "../particles/particle_store.hpp"
@@ -22,6 +23,12 @@ struct CheckpointMeta {
 
 // `particles` must hold every particle, ordered by id.
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, ParticleStore& particles);
+// The same file written one field at a time, so the particles never have to sit in one store:
+// fill(k, out) writes field k of ParticleStore(dim).fields() (asked only for checkpoint fields) of
+// all `count` particles, ordered by id, into out (count * elem_size bytes).
+using CheckpointFieldFill = std::function<void(std::size_t field, char* out)>;
+void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, int dim, std::size_t count,
+                      const CheckpointFieldFill& fill);
 // Throws std::runtime_error naming the file and what is wrong.
 CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore& particles);
 

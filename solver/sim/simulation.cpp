@@ -36,6 +36,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr int kMinColumnsPerSlab = 3;
+// The first balancing pass comes after this many steps whatever balance_every says (if balancing is
+// on): the first faces follow an estimated cost, this pass replaces it with the slabs' measured
+// loop times.
+constexpr std::int64_t kCalibrationSteps = 2;
 
 std::string step_name(std::int64_t step) { return fmt::format("step_{:08d}", step); }
 
@@ -72,20 +76,50 @@ std::string history_text(const std::vector<SteeringChange>& history) {
   return s;
 }
 
-// Gathers every particle, ordered by id, on every slab (collective). Checkpoints and comparisons
-// are independent of the split because of this order.
-ParticleStore gather_by_id(SlabWorker& w) {
+// Every particle where slab 0 (the writer) can read it, and the id order across slabs (collective;
+// the other slabs get nothing back). Checkpoints are independent of the split because of this
+// order. Slabs in the writer's process are read in place (they wait at the barrier after the write),
+// so on one rank a checkpoint costs no particle copy at all; slabs of other ranks send their packed
+// share to the writer, which unpacks it part by part, freeing each buffer once unpacked.
+struct GatheredParticles {
+  std::vector<ParticleStore*> slabs;   // owned particles [0, owned) of every global slab
+  std::vector<ParticleStore> received; // the other ranks' slabs
+  struct Entry {
+    std::uint32_t id, slab, index;
+  };
+  std::vector<Entry> by_id;
+};
+
+GatheredParticles gather_to_writer(SlabWorker& w, const std::vector<SlabWorker*>& local, bool writer_process) {
   ParticleStore& p = w.particles();
-  std::vector<std::uint32_t> all(p.owned());
-  std::iota(all.begin(), all.end(), 0u);
-  ParticleStore merged(p.dim());
-  for (auto& part : w.transport().allgather(pack_particles(p, all, FieldSet::All))) unpack_append(merged, part, FieldSet::All);
-  merged.set_owned(merged.size());
-  std::vector<std::uint32_t> order(merged.size());
-  std::iota(order.begin(), order.end(), 0u);
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return merged.id[a] < merged.id[b]; });
-  merged.permute(0, order);
-  return merged;
+  Bytes share;
+  if (!writer_process) {
+    std::vector<std::uint32_t> mine(p.owned());
+    std::iota(mine.begin(), mine.end(), 0u);
+    share = pack_particles(p, mine, FieldSet::All);
+  }
+  std::vector<Bytes> packed = w.transport().gather(std::move(share));
+  GatheredParticles g;
+  if (packed.empty()) return g;
+  g.received.reserve(packed.size());
+  for (std::size_t s = 0; s < packed.size(); ++s) {
+    if (s < local.size()) {
+      g.slabs.push_back(&local[s]->particles());
+      continue;
+    }
+    g.received.emplace_back(p.dim());
+    unpack_append(g.received.back(), packed[s], FieldSet::All);
+    g.received.back().set_owned(g.received.back().size());
+    g.slabs.push_back(&g.received.back());
+    Bytes().swap(packed[s]);
+  }
+  std::size_t total = 0;
+  for (auto* slab : g.slabs) total += slab->owned();
+  g.by_id.reserve(total);
+  for (std::uint32_t s = 0; s < g.slabs.size(); ++s)
+    for (std::uint32_t i = 0; i < g.slabs[s]->owned(); ++i) g.by_id.push_back({g.slabs[s]->id[i], s, i});
+  std::sort(g.by_id.begin(), g.by_id.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+  return g;
 }
 
 SlabView slab_view(SlabWorker& w, int slab, int slab_count) {
@@ -248,7 +282,7 @@ class Worker {
         break;
       }
       if (s_.opts.steps ? taken >= *s_.opts.steps : time >= end_time - 1e-12) break;
-      if (s_.c.balance_every > 0 && t_.slab_count() > 1 && taken > 0 && step % s_.c.balance_every == 0)
+      if (s_.c.balance_every > 0 && t_.slab_count() > 1 && taken > 0 && (step % s_.c.balance_every == 0 || taken == kCalibrationSteps))
         imbalance_log.push_back(w_.rebalance(kMinColumnsPerSlab));
       if (auto fault = w_.step(static_cast<float>(dt))) {
         unstable = describe(*fault, step + 1, time + dt);
@@ -368,12 +402,18 @@ class Worker {
   }
 
   std::filesystem::path write_checkpoint_now(double time, std::int64_t step, double dt) {
-    ParticleStore all = gather_by_id(w_);
+    // The writer's process is the one that holds slab 0.
+    GatheredParticles all = gather_to_writer(w_, s_.workers, s_.workers_first_slab == 0);
     const auto dir = s_.opts.out_dir / "checkpoints";
     const auto path = dir / ("checkpoint_" + step_name(step) + ".h5");
     if (t_.slab() == 0) {
       CheckpointMeta meta{step, time, dt, s_.c.name, s_.c.source_yaml, history_text(s_.steering_history)};
-      write_checkpoint(path, meta, all);
+      std::vector<std::vector<FieldRef>> fields;
+      for (auto* slab : all.slabs) fields.push_back(slab->fields());
+      write_checkpoint(path, meta, s_.c.dim, all.by_id.size(), [&](std::size_t k, char* out) {
+        const std::size_t size = fields[0][k].elem_size;
+        for (const auto& e : all.by_id) std::memcpy(out, fields[e.slab][k].bytes() + e.index * size, size), out += size;
+      });
       prune_checkpoints(path);
     }
     t_.barrier();

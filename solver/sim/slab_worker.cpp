@@ -3,6 +3,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <numeric>
+#include <utility>
 #include <sstream>
 
 #include "../backend/cpu/cpu_backend.hpp"
@@ -21,8 +23,19 @@ void SlabWorker::take_share(const ParticleStore& global, const SlabLayout& layou
   std::vector<std::uint32_t> mine;
   for (std::size_t i = 0; i < global.owned(); ++i)
     if (layout.owner_of(lattice_.cell_of(global.pos[0][i], 0)) == s) mine.push_back(static_cast<std::uint32_t>(i));
+  // Copied field by field, without a packed buffer in between: every slab does this at once while
+  // the whole generated set is still alive, so an extra copy would be a full set more at the peak.
   particles_ = ParticleStore(lattice_.dim);
-  unpack_append(particles_, pack_particles(const_cast<ParticleStore&>(global), mine, FieldSet::All), FieldSet::All);
+  particles_.resize(mine.size());
+  auto from = const_cast<ParticleStore&>(global).fields();
+  auto to = particles_.fields();
+  for (std::size_t k = 0; k < to.size(); ++k) {
+    const std::size_t size = to[k].elem_size;
+    const char* src = from[k].bytes();
+    char* dst = to[k].bytes();
+    if (!src || !dst) continue;  // components beyond dim
+    for (std::size_t i = 0; i < mine.size(); ++i) std::memcpy(dst + i * size, src + mine[i] * size, size);
+  }
   particles_.set_owned(particles_.size());
   grid_.configure(lattice_, layout.faces[s], layout.faces[s + 1]);
 }
@@ -44,19 +57,25 @@ void SlabWorker::refresh_halo() {
 }
 
 void SlabWorker::compute_rates() {
+  using Clock = std::chrono::steady_clock;
+  auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   if (params_.density_mode == DensityMode::Summation) {
+    const auto t = Clock::now();
     kernels_->summation_density(particles_, grid_, params_);
+    window_fluid_seconds_ += since(t);
     refresh_halo();
   }
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   kernels_->equation_of_state(particles_, params_);
   kernels_->wall_state(particles_, grid_, params_);
-  auto t1 = std::chrono::steady_clock::now();
-  busy_seconds_ += std::chrono::duration<double>(t1 - t0).count();
+  const double wall = since(t0);
   refresh_halo();
-  t1 = std::chrono::steady_clock::now();
+  const auto t1 = Clock::now();
   kernels_->fluid_rates(particles_, grid_, params_);
-  busy_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+  const double fluid = since(t1);
+  busy_seconds_ += wall + fluid;
+  window_wall_seconds_ += wall;
+  window_fluid_seconds_ += fluid;
 }
 
 void SlabWorker::prepare(bool rates) {
@@ -142,26 +161,67 @@ std::vector<std::int64_t> SlabWorker::slab_particle_counts() {
   return counts;
 }
 
-std::vector<std::int64_t> column_costs(const ParticleStore& p, const Lattice& lattice) {
+PhaseCosts column_costs(const ParticleStore& p, const Lattice& lattice) {
   // Cost, not count: a fluid particle sums over all its neighbours with the full pair terms, a wall
   // particle only looks for fluid around it. A profile of the column case (perf: fluid loop 58%,
   // wall loop 18% of the time with 25k fluid and 51k wall particles) puts a fluid particle at about
-  // 7 walls. Integer weights keep the histogram sum exact.
+  // 7 walls. The two weights land in the two phases the slabs synchronise between. Integer weights
+  // keep the histogram sums exact.
   constexpr std::int64_t kFluidCost = 7, kWallCost = 1;
-  std::vector<std::int64_t> per_column(lattice.cells[0], 0);
-  for (std::size_t i = 0; i < p.owned(); ++i)
-    per_column[lattice.cell_of(p.pos[0][i], 0)] += is_fluid(p.kind[i]) ? kFluidCost : kWallCost;
-  return per_column;
+  PhaseCosts c{std::vector<std::int64_t>(lattice.cells[0], 0), std::vector<std::int64_t>(lattice.cells[0], 0)};
+  for (std::size_t i = 0; i < p.owned(); ++i) {
+    const int column = lattice.cell_of(p.pos[0][i], 0);
+    if (is_fluid(p.kind[i])) c.fluid[column] += kFluidCost;
+    else c.wall[column] += kWallCost;
+  }
+  return c;
+}
+
+PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice, double wall_seconds, double fluid_seconds) {
+  const int columns = lattice.cells[0];
+  std::vector<std::int64_t> fluid_count(columns, 0), wall_count(columns, 0);
+  std::int64_t fluids = 0, walls = 0;
+  for (std::size_t i = 0; i < p.owned(); ++i) {
+    const bool fluid = is_fluid(p.kind[i]);
+    ++(fluid ? fluid_count : wall_count)[lattice.cell_of(p.pos[0][i], 0)];
+    ++(fluid ? fluids : walls);
+  }
+  if (fluids == 0) wall_seconds += std::exchange(fluid_seconds, 0.0);
+  if (walls == 0) fluid_seconds += std::exchange(wall_seconds, 0.0);
+  const double per_wall = walls ? 1e9 * wall_seconds / static_cast<double>(walls) : 0.0;
+  const double per_fluid = fluids ? 1e9 * fluid_seconds / static_cast<double>(fluids) : 0.0;
+  // The wall phase also runs the equation of state over the fluid, but wall_state dominates it.
+  PhaseCosts c{std::vector<std::int64_t>(columns, 0), std::vector<std::int64_t>(columns, 0)};
+  for (int k = 0; k < columns; ++k) {
+    c.wall[k] = std::llround(per_wall * static_cast<double>(wall_count[k]));
+    c.fluid[k] = std::llround(per_fluid * static_cast<double>(fluid_count[k]));
+  }
+  return c;
 }
 
 double SlabWorker::rebalance(int min_columns) {
-  std::vector<std::int64_t> per_column = column_costs(particles_, lattice_);
-  transport_.sum(per_column);
-  std::vector<std::int64_t> per_slab(layout_.slabs(), 0);
-  for (int c = 0; c < lattice_.cells[0]; ++c) per_slab[layout_.owner_of(c)] += per_column[c];
-  const double before = imbalance(per_slab);
-  const SlabLayout next = balanced_layout(per_column, layout_.slabs(), min_columns);
-  if (next != layout_) {
+  // One exact integer sum of both phase histograms: every slab ends up with the same numbers and
+  // therefore the same faces, although the timings themselves differ from run to run. Faces do not
+  // change the physics (neighbour order is (cell, id)), so results stay bit-identical.
+  const int columns = lattice_.cells[0];
+  PhaseCosts mine = measured_column_costs(particles_, lattice_, window_wall_seconds_, window_fluid_seconds_);
+  window_wall_seconds_ = window_fluid_seconds_ = 0.0;
+  std::vector<std::int64_t> both(mine.wall);
+  both.insert(both.end(), mine.fluid.begin(), mine.fluid.end());
+  transport_.sum(both);
+  PhaseCosts costs{std::vector<std::int64_t>(both.begin(), both.begin() + columns), std::vector<std::int64_t>(both.begin() + columns, both.end())};
+  if (std::accumulate(both.begin(), both.end(), std::int64_t{0}) <= 0) {
+    // Nothing timed (no step since the last pass): the estimated cost.
+    costs = column_costs(particles_, lattice_);
+    transport_.sum(costs.wall);
+    transport_.sum(costs.fluid);
+  }
+  const double before = phase_imbalance(layout_, costs);
+  const SlabLayout next = balanced_layout(costs, layout_.slabs(), min_columns);
+  // Timings are noisy: faces move only for a gain of at least 2 % of the critical path, so they do
+  // not jitter (each move hands particles over).
+  const std::int64_t now_path = critical_path(layout_, costs), next_path = critical_path(next, costs);
+  if (next != layout_ && static_cast<double>(next_path) < 0.98 * static_cast<double>(now_path)) {
     layout_ = next;
     faces_moved_ = true;
     ++face_moves_;

@@ -43,8 +43,10 @@ class SlabWorker {
   std::optional<ParticleFault> health(float min_ratio, float max_ratio) const;
   float local_time_step(const TimeStepControl& c) const;
 
-  // Moves faces to even out the estimated cost (fluid 7, wall 1 per particle; collective); returns
-  // the cost imbalance (max/mean over slabs) before the move.
+  // Moves faces to shorten the step's critical path, from the time each slab measured in its wall
+  // and fluid loops since the previous pass (collective; every slab takes the same decision). Falls
+  // back to the estimated cost (fluid 7, wall 1 per particle) when nothing was timed. Returns the
+  // phase imbalance (phase_imbalance in slab_layout.hpp) before the move.
   double rebalance(int min_columns);
   std::vector<std::int64_t> slab_particle_counts();  // collective
   // Traffic across faces so far, totals over all slabs (the same on every slab): particles that
@@ -79,14 +81,22 @@ class SlabWorker {
   CellGrid grid_;
   Halo halo_;
   double busy_seconds_ = 0.0;
+  // Loop seconds since the last balancing pass, per synchronised phase (see PhaseCosts).
+  double window_wall_seconds_ = 0.0, window_fluid_seconds_ = 0.0;
   std::unique_ptr<StepKernels> kernels_;
   std::int64_t crossings_ = 0, handovers_ = 0, face_moves_ = 0;
   bool faces_moved_ = false;
 };
 
-// Estimated work per x column of the owned particles (fluid 7, wall 1 per particle); summed over
-// slabs it is what the balancer evens out.
-std::vector<std::int64_t> column_costs(const ParticleStore& p, const Lattice& lattice);
+// Estimated work per x column of the owned particles (fluid 7 in the fluid phase, wall 1 in the wall
+// phase, per particle): the first faces, before anything was timed.
+PhaseCosts column_costs(const ParticleStore& p, const Lattice& lattice);
+
+// This slab's measured seconds spread over its x columns, in nanoseconds: the wall phase in
+// proportion to the owned particles' wall-phase share, the fluid phase to the fluid particles (a
+// slab without fluid charges both phases to its walls and vice versa). Summed over slabs it is
+// the measured histogram the balancer evens out.
+PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice, double wall_seconds, double fluid_seconds);
 
 // The fault with the lowest particle id over all slabs (collective), or none.
 std::optional<ParticleFault> first_fault(SlabTransport& t, const std::optional<ParticleFault>& mine);

@@ -106,6 +106,14 @@ TEST_P(MpiTransportTest, CollectivesAreExactOverAllSlabs) {
     const auto all = t.allgather(bytes(message('G', s, 0)));
     ASSERT_EQ(static_cast<int>(all.size()), S);
     for (int k = 0; k < S; ++k) EXPECT_EQ(text(all[k]), message('G', k, 0));
+    // gather: everything on slab 0 only, in slab order (the checkpoint writer's collective).
+    const auto at_writer = t.gather(bytes(message('W', s, 0)));
+    if (s == 0) {
+      ASSERT_EQ(static_cast<int>(at_writer.size()), S);
+      for (int k = 0; k < S; ++k) EXPECT_EQ(text(at_writer[k]), message('W', k, 0));
+    } else {
+      EXPECT_TRUE(at_writer.empty());
+    }
     EXPECT_TRUE(t.any(s == S - 1));
     EXPECT_FALSE(t.any(false));
     t.barrier();

@@ -12,6 +12,7 @@
 #include "domain/slab_layout.hpp"
 #include "grid/cell_grid.hpp"
 #include "physics/params.hpp"
+#include "sim/slab_worker.hpp"
 
 namespace spate {
 namespace {
@@ -129,6 +130,54 @@ TEST(Migrate, EveryParticleEndsOnItsOwnerAndNoneIsLost) {
     EXPECT_EQ(ids_after, expected);
     EXPECT_GT(moved_seen, 300);  // about two thirds of the 900 particles had to move
   }
+}
+
+// The checkpoint writer's collective: every slab's buffer on slab 0 only, in slab order, twice in a
+// row (the hub's slots are reusable after a gather moved them out).
+TEST(Transport, GatherBringsEverySlabsBufferToSlabZeroOnly) {
+  std::mutex m;
+  std::vector<std::vector<std::string>> seen(3);
+  on_three_slabs(false, [&](int s, SlabTransport& t) {
+    for (int round = 0; round < 2; ++round) {
+      const std::string mine = std::to_string(round) + ":" + std::string(static_cast<std::size_t>(s + 1) * 1000, static_cast<char>('a' + s));
+      const auto all = t.gather(Bytes(mine.begin(), mine.end()));
+      std::lock_guard lock(m);
+      for (auto& b : all) seen[s].emplace_back(b.begin(), b.end());
+    }
+  });
+  EXPECT_TRUE(seen[1].empty());
+  EXPECT_TRUE(seen[2].empty());
+  ASSERT_EQ(seen[0].size(), 6u);
+  for (int round = 0; round < 2; ++round)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(seen[0][round * 3 + k], std::to_string(round) + ":" + std::string(static_cast<std::size_t>(k + 1) * 1000, static_cast<char>('a' + k)));
+}
+
+// The measured balancer spreads a slab's timed seconds over its columns: the wall phase over the
+// walls, the fluid phase over the fluid, so the histogram sums back to the measured time.
+TEST(MeasuredCosts, SpreadTheTimedSecondsOverTheColumns) {
+  const Lattice L = periodic_lattice(2);
+  ParticleStore p = random_store(L, 90, 7);
+  for (std::size_t i = 0; i < p.owned(); ++i) p.kind[i] = i % 3 == 0 ? kTankWall : kFluid;
+  const PhaseCosts c = measured_column_costs(p, L, 0.3, 1.2);
+  std::int64_t wall = 0, fluid = 0;
+  for (int k = 0; k < L.cells[0]; ++k) wall += c.wall[k], fluid += c.fluid[k];
+  EXPECT_NEAR(static_cast<double>(wall), 0.3e9, L.cells[0]);  // nanoseconds, rounded per column
+  EXPECT_NEAR(static_cast<double>(fluid), 1.2e9, L.cells[0]);
+  // Per column: its walls times the slab's seconds per wall, its fluid times seconds per fluid.
+  std::vector<int> walls(L.cells[0], 0), fluids(L.cells[0], 0);
+  for (std::size_t i = 0; i < p.owned(); ++i) ++(is_fluid(p.kind[i]) ? fluids : walls)[L.cell_of(p.pos[0][i], 0)];
+  for (int k = 0; k < L.cells[0]; ++k) {
+    EXPECT_NEAR(static_cast<double>(c.wall[k]), 0.3e9 * walls[k] / 30.0, 1.0) << "column " << k;
+    EXPECT_NEAR(static_cast<double>(c.fluid[k]), 1.2e9 * fluids[k] / 60.0, 1.0) << "column " << k;
+  }
+  // A slab without fluid charges all its time to its walls (its fluid loop still ran over cells).
+  for (std::size_t i = 0; i < p.owned(); ++i) p.kind[i] = kTankWall;
+  const PhaseCosts dry = measured_column_costs(p, L, 0.3, 0.1);
+  std::int64_t dry_wall = 0, dry_fluid = 0;
+  for (int k = 0; k < L.cells[0]; ++k) dry_wall += dry.wall[k], dry_fluid += dry.fluid[k];
+  EXPECT_NEAR(static_cast<double>(dry_wall), 0.4e9, L.cells[0]);
+  EXPECT_EQ(dry_fluid, 0);
 }
 
 }  // namespace

@@ -73,6 +73,34 @@ TEST(SlabLayout, BalancedLayoutRejectsTooFewColumns) {
   EXPECT_THROW(balanced_layout(std::vector<std::int64_t>(5, 1), 2, 3), std::invalid_argument);
 }
 
+TEST(SlabLayout, PhaseBalancingShortensTheCriticalPath) {
+  // The column case in miniature: fluid (expensive, one phase) upstream, dry walls (the other
+  // phase) downstream. The slabs wait for each other after each phase, so evening out the sums
+  // leaves one slab with all the wall work and the other with most of the fluid work.
+  PhaseCosts c{std::vector<std::int64_t>(30, 0), std::vector<std::int64_t>(30, 0)};
+  for (int k = 0; k < 30; ++k) c.wall[k] = 10;
+  for (int k = 20; k < 30; ++k) c.wall[k] = 60;  // the obstacle and the far wall
+  for (int k = 0; k < 12; ++k) c.fluid[k] = 100;
+  std::vector<std::int64_t> sum(30);
+  for (int k = 0; k < 30; ++k) sum[k] = c.wall[k] + c.fluid[k];
+  const SlabLayout by_sum = balanced_layout(sum, 2, 3);
+  const SlabLayout by_phase = balanced_layout(c, 2, 3);
+  EXPECT_LT(critical_path(by_phase, c), critical_path(by_sum, c));
+  // No single-column move of the face shortens it further.
+  for (const int delta : {-1, 1}) {
+    SlabLayout trial = by_phase;
+    trial.faces[1] += delta;
+    EXPECT_GE(critical_path(trial, c), critical_path(by_phase, c));
+  }
+  EXPECT_EQ(balanced_layout(c, 2, 3), by_phase);  // deterministic
+  EXPECT_GE(balanced_layout(c, 4, 3).narrowest(), 3);
+  // Phase imbalance: the critical path over the mean total; 1 when both phases are even.
+  PhaseCosts even{std::vector<std::int64_t>(12, 5), std::vector<std::int64_t>(12, 7)};
+  EXPECT_DOUBLE_EQ(phase_imbalance(SlabLayout::uniform(12, 3), even), 1.0);
+  EXPECT_EQ(slab_totals(SlabLayout::uniform(12, 3), even.fluid), (std::vector<std::int64_t>{28, 28, 28}));
+  EXPECT_GT(phase_imbalance(by_sum, c), phase_imbalance(by_phase, c));
+}
+
 TEST(SlabLayout, ImbalanceIsMaxOverMean) {
   EXPECT_DOUBLE_EQ(imbalance({10, 10, 10}), 1.0);
   EXPECT_DOUBLE_EQ(imbalance({30, 0, 0}), 3.0);
