@@ -39,14 +39,22 @@ TEST(CudaCapacity, GrowsWithHeadroomInQuantaAndNeverShrinks) {
 TEST(CudaFootprint, DeviceFieldsMatchTheHostStoreAndStayUnderBudget) {
   for (int dim : {2, 3}) {
     const DeviceFootprint f = device_footprint(dim);
-    // The device holds exactly the host store's per-particle fields plus one scratch float.
+    // The device holds exactly the host store's per-particle fields, the sort's words and one
+    // scratch word.
     ParticleStore host(dim);
     std::size_t host_fields = 0;
     for (auto& field : host.fields()) host_fields += field.elem_size;
     EXPECT_EQ(f.field_bytes, host_fields) << dim << "D";
+    EXPECT_EQ(f.field_bytes, staged_bytes(dim, FieldSet::All));
+    EXPECT_EQ(f.sort_bytes, 4u + 16u + 8u);
     EXPECT_EQ(f.scratch_bytes, sizeof(float));
   }
-  EXPECT_EQ(device_footprint(3).per_particle(), 73u);  // 69 bytes of fields + 4 of scratch
+  EXPECT_EQ(device_footprint(3).per_particle(), 101u);  // 69 bytes of fields + 28 of sort + 4 of scratch
+  EXPECT_EQ(device_footprint(2).per_particle(), 85u);
+  // Ghost payload in 3D: position, velocity (24), density, pressure, id (12), kind (1).
+  EXPECT_EQ(staged_bytes(3, FieldSet::Ghost), 37u);
+  EXPECT_EQ(staged_bytes(3, FieldSet::Refresh), 20u);  // velocity, density, pressure
+  EXPECT_EQ(halo_bytes_per_ghost(3), 78u);
   // The budget: <= 150 bytes per particle on the device, headroom and ghosts included.
   Lattice L;
   L.dim = 3;
@@ -65,8 +73,23 @@ TEST(CudaFootprint, DeviceFieldsMatchTheHostStoreAndStayUnderBudget) {
     }
     EXPECT_GE(owned, n);
     EXPECT_LT(owned, n + devices);
-    EXPECT_GT(bytes, static_cast<std::size_t>(n / devices) * 73);
+    EXPECT_GT(bytes, static_cast<std::size_t>(n / devices) * 101);
   }
+}
+
+TEST(CudaSort, EndBitCoversTheKeysAboveTheIds) {
+  EXPECT_EQ(sort_end_bit(1), 32);
+  EXPECT_EQ(sort_end_bit(2), 33);
+  EXPECT_EQ(sort_end_bit(3), 34);
+  EXPECT_EQ(sort_end_bit(4), 34);
+  EXPECT_EQ(sort_end_bit(5), 35);
+  // Every key below key_count fits: (key_count - 1) << 32 | id < 2^end_bit.
+  for (std::uint32_t n : {2u, 3u, 1000u, 65536u, 65537u, 4000000u}) {
+    const int end = sort_end_bit(n);
+    EXPECT_LT((static_cast<std::uint64_t>(n - 1) << 32 | 0xffffffffu) >> (end - 1), 2u) << n;
+    EXPECT_GE((static_cast<std::uint64_t>(n - 1) << 32) >> (end - 2), 1u) << n;  // and no bit is wasted
+  }
+  EXPECT_EQ(sort_end_bit(0xffffffffu), 64);
 }
 
 TEST(CudaFootprint, GhostColumnsOnlyWhereThereIsANeighbour) {
