@@ -139,7 +139,7 @@ std::optional<ParticleFault> SlabWorker::step(float dt) {
     kernels_->predict(particles_, params_, dt);
     host_stale_ = true;
     const std::uint32_t bad = r->wrap_and_find_position_fault(lattice_);
-    if (auto fault = first_fault(transport_, host_fault_message(bad, true))) return fault;
+    if (auto fault = first_fault(transport_, position_fault_message(bad))) return fault;
     rebuild();
     compute_rates();
     kernels_->correct(particles_, params_, dt);
@@ -155,14 +155,14 @@ std::optional<ParticleFault> SlabWorker::step(float dt) {
   return std::nullopt;
 }
 
-// The host's message for the fault a device reduction found (the same predicates: the host check
-// on the mirror finds the same lowest id).
-std::optional<ParticleFault> SlabWorker::host_fault_message(std::uint32_t id, bool position) {
+// The host's message for the position fault a device reduction found (the same predicates: the
+// host check on the mirror, already wrapped, finds the same lowest id).
+std::optional<ParticleFault> SlabWorker::position_fault_message(std::uint32_t id) {
   if (id == SlabArrays::kNoFault) return std::nullopt;
   sync_host();
-  auto fault = position ? wrap_and_check_domain(false) : std::optional<ParticleFault>{};
+  auto fault = wrap_and_check_domain(false);
   if (fault && fault->id == id) return fault;
-  return ParticleFault{id, position ? "left the domain" : "is unhealthy"};
+  return ParticleFault{id, "left the domain"};
 }
 
 std::optional<ParticleFault> SlabWorker::health(float min_ratio, float max_ratio) {

@@ -84,7 +84,7 @@ class SlabWorker {
   SlabArrays* resident() const { return kernels_->resident(); }
   void sync_host();
   void fluid_rates_overlapping_refresh();
-  std::optional<ParticleFault> host_fault_message(std::uint32_t id, bool position);
+  std::optional<ParticleFault> position_fault_message(std::uint32_t id);
 
   Lattice lattice_;
   PhysicsParams params_;
