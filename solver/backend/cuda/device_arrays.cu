@@ -169,7 +169,13 @@ std::uint32_t u32(std::size_t n) { return static_cast<std::uint32_t>(n); }
 
 }  // namespace
 
-DeviceSlabArrays::DeviceSlabArrays(int device, int dim) : device_(device), dim_(dim) {
+#if defined(SPATE_CUDA_AWARE_MPI)
+constexpr bool kCudaAwareMpi = true;
+#else
+constexpr bool kCudaAwareMpi = false;
+#endif
+
+DeviceSlabArrays::DeviceSlabArrays(int device, int dim) : device_(device), dim_(dim), halo_(kCudaAwareMpi) {
   select();
   check(cudaStreamCreateWithFlags(&compute_, cudaStreamNonBlocking), "cudaStreamCreate(compute)");
   check(cudaStreamCreateWithFlags(&copy_, cudaStreamNonBlocking), "cudaStreamCreate(copy)");
@@ -206,7 +212,8 @@ DeviceSlabArrays::~DeviceSlabArrays() {
     b->release();
   for (auto& b : image_source_) b.release();
   for (auto& b : image_target_) b.release();
-  for (PinnedBuffer* b : {&pinned_out_[0], &pinned_out_[1], &pinned_in_[0], &pinned_in_[1], &mirror_, &result_host_}) b->release();
+  for (auto& b : pinned_) b.release();
+  for (PinnedBuffer* b : {&mirror_, &result_host_}) b->release();
   cudaFree(result_);
   cudaEventDestroy(staged_);
   cudaEventDestroy(consumed_);
@@ -488,115 +495,44 @@ void DeviceSlabArrays::stage(Side side, FieldSet set, ParticleRange range, Shift
   check(cudaEventRecord(staged_, compute_), "cudaEventRecord(staged)");
 }
 
-namespace {
-struct Header {
-  std::uint64_t count = 0, bytes = 0, pointer = 0;
-  std::int32_t device = -1;
-};
-}  // namespace
-
-// Once: the two ends of each neighbour pair agree on how the payload travels. Peer copies when
-// both slabs run in this process and each device can reach the other's memory (or they share a
-// device); otherwise through pinned host memory and the transport, or, with CUDA-aware MPI, device
-// buffers handed to MPI.
-void DeviceSlabArrays::discover_links(SlabTransport& t) {
-  Bytes mine(sizeof(std::int32_t)), got[2];
-  std::memcpy(mine.data(), &device_, sizeof device_);
-  t.exchange(mine, mine, got[kLeft], got[kRight]);
-  const int s = t.slab();
-  for (Side side : {kLeft, kRight}) {
-    const int neighbour = side == kLeft ? t.left_of(s) : t.right_of(s);
-    if (neighbour < 0) {
-      link_[side] = Link::None;
-      continue;
-    }
-    if (!t.shares_memory_with(neighbour)) {
-#if defined(SPATE_CUDA_AWARE_MPI)
-      link_[side] = Link::DeviceMpi;
-#else
-      link_[side] = Link::Staged;
-#endif
-      continue;
-    }
-    std::int32_t theirs = -1;
-    std::memcpy(&theirs, got[side].data(), sizeof theirs);
-    const bool peer = theirs == device_ || (can_access_peer(device_, theirs) && can_access_peer(theirs, device_));
-    if (peer && theirs != device_) {
-      const cudaError_t e = cudaDeviceEnablePeerAccess(theirs, 0);
-      if (e == cudaErrorPeerAccessAlreadyEnabled) (void)cudaGetLastError();
-      else check(e, "cudaDeviceEnablePeerAccess");
-    }
-    link_[side] = peer ? Link::Peer : Link::Staged;
-  }
-  links_known_ = true;
-}
-
-// The payload moves on the copy stream while the compute stream runs whatever was queued after
-// the staging (the interior of the fluid loop). Pull model: each slab copies its neighbours'
-// outgoing buffers into its own incoming ones; the closing handshake tells every slab that nobody
-// reads its outgoing buffers any more.
+// The protocol is HaloExchange's (halo_exchange.cpp, tested on the CPU); these are its copies,
+// all on the copy stream, so that the compute stream keeps running what was queued after the
+// staging (the interior of the fluid loop) while the payload travels.
 std::array<std::size_t, 2> DeviceSlabArrays::exchange(SlabTransport& t, FieldSet) {
   select();
-  if (!links_known_) discover_links(t);
-  check(cudaEventSynchronize(staged_), "halo: outgoing buffers");
-  for (Side side : {kLeft, kRight})
-    if (link_[side] == Link::Staged && out_bytes_[side] > 0) {
-      pinned_out_[side].reserve(out_bytes_[side]);
-      check(cudaMemcpyAsync(pinned_out_[side].data, outbox_[side].data, out_bytes_[side], cudaMemcpyDeviceToHost, copy_), "halo D2H");
-    }
-  check(cudaStreamSynchronize(copy_), "halo D2H");
-  Bytes message[2], got[2];
-  for (Side side : {kLeft, kRight}) {
-    const Header h{out_count_[side], out_bytes_[side], reinterpret_cast<std::uint64_t>(outbox_[side].data), device_};
-    const bool payload = link_[side] == Link::Staged;
-    message[side].resize(sizeof h + (payload ? h.bytes : 0));
-    std::memcpy(message[side].data(), &h, sizeof h);
-    if (payload && h.bytes > 0) std::memcpy(message[side].data() + sizeof h, pinned_out_[side].data, h.bytes);
-  }
-  t.exchange(message[kLeft], message[kRight], got[kLeft], got[kRight]);
-  // The incoming buffers are rewritten only after the compute stream has read them.
-  check(cudaStreamWaitEvent(copy_, consumed_, 0), "cudaStreamWaitEvent(consumed)");
-#if defined(SPATE_CUDA_AWARE_MPI)
-  SlabTransport::DeviceSpan device_span[2];
-#endif
-  for (Side side : {kLeft, kRight}) {
-    in_count_[side] = 0;
-    if (got[side].size() < sizeof(Header)) continue;
-    Header h;
-    std::memcpy(&h, got[side].data(), sizeof h);
-    in_count_[side] = h.count;
-    inbox_[side].reserve(h.bytes, compute_);
-    if (h.bytes == 0) continue;
-    if (link_[side] == Link::Peer) {
-      check(cudaMemcpyPeerAsync(inbox_[side].data, device_, reinterpret_cast<const void*>(h.pointer), h.device, h.bytes, copy_),
-            "cudaMemcpyPeerAsync");
-    } else if (link_[side] == Link::Staged) {
-      pinned_in_[side].reserve(h.bytes);
-      std::memcpy(pinned_in_[side].data, got[side].data() + sizeof h, h.bytes);
-      check(cudaMemcpyAsync(inbox_[side].data, pinned_in_[side].data, h.bytes, cudaMemcpyHostToDevice, copy_), "halo H2D");
-    } else {
-#if defined(SPATE_CUDA_AWARE_MPI)
-      device_span[side].recv = inbox_[side].data;
-      device_span[side].recv_bytes = h.bytes;
-#endif
-    }
-  }
-#if defined(SPATE_CUDA_AWARE_MPI)
-  // Collective on every slab of the process, whether or not this one has a remote side.
-  for (Side side : {kLeft, kRight})
-    if (link_[side] == Link::DeviceMpi) {
-      device_span[side].send = outbox_[side].data;
-      device_span[side].send_bytes = out_bytes_[side];
-    }
-  check(cudaEventSynchronize(consumed_), "CUDA-aware MPI: incoming buffers");
-  const bool remote = link_[kLeft] == Link::DeviceMpi || link_[kRight] == Link::DeviceMpi;
-  if (!t.exchange_device(device_span[kLeft], device_span[kRight]) && remote)
-    throw std::runtime_error("SPATE_CUDA_AWARE_MPI: the transport cannot exchange device buffers");
-#endif
-  check(cudaStreamSynchronize(copy_), "halo copies");
-  Bytes none[2];
-  t.exchange(Bytes{}, Bytes{}, none[kLeft], none[kRight]);
+  const std::array<Outgoing, 2> out{Outgoing{outbox_[kLeft].data, out_count_[kLeft], out_bytes_[kLeft]},
+                                    Outgoing{outbox_[kRight].data, out_count_[kRight], out_bytes_[kRight]}};
+  in_count_ = halo_.exchange(t, *this, out);
   return in_count_;
+}
+
+bool DeviceSlabArrays::peer_both_ways(int other) {
+  if (!can_access_peer(device_, other) || !can_access_peer(other, device_)) return false;
+  const cudaError_t e = cudaDeviceEnablePeerAccess(other, 0);
+  if (e == cudaErrorPeerAccessAlreadyEnabled) (void)cudaGetLastError();
+  else check(e, "cudaDeviceEnablePeerAccess");
+  return true;
+}
+void DeviceSlabArrays::wait_staged() { check(cudaEventSynchronize(staged_), "halo: outgoing buffers"); }
+void DeviceSlabArrays::copy_to_host(void* host, const void* device, std::size_t bytes) {
+  check(cudaMemcpyAsync(host, device, bytes, cudaMemcpyDeviceToHost, copy_), "halo D2H");
+}
+void DeviceSlabArrays::copy_from_host(void* device, const void* host, std::size_t bytes) {
+  check(cudaMemcpyAsync(device, host, bytes, cudaMemcpyHostToDevice, copy_), "halo H2D");
+}
+void DeviceSlabArrays::copy_peer(void* device, const void* their_device, int their_device_index, std::size_t bytes) {
+  check(cudaMemcpyPeerAsync(device, device_, their_device, their_device_index, bytes, copy_), "cudaMemcpyPeerAsync");
+}
+void DeviceSlabArrays::after_incoming_read() { check(cudaStreamWaitEvent(copy_, consumed_, 0), "cudaStreamWaitEvent(consumed)"); }
+void DeviceSlabArrays::wait_incoming_read() { check(cudaEventSynchronize(consumed_), "halo: incoming buffers read"); }
+void DeviceSlabArrays::wait_copies() { check(cudaStreamSynchronize(copy_), "halo copies"); }
+void* DeviceSlabArrays::incoming(Side side, std::size_t bytes) {
+  inbox_[side].reserve(bytes, compute_);
+  return inbox_[side].data;
+}
+void* DeviceSlabArrays::pinned(int which, std::size_t bytes) {
+  pinned_[which].reserve(bytes);
+  return pinned_[which].data;
 }
 
 void DeviceSlabArrays::append_received(Side side, FieldSet set) {

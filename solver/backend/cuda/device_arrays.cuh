@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "../../domain/slab_arrays.hpp"
+#include "halo_exchange.hpp"
 
 namespace spate::gpu {
 
@@ -51,7 +52,8 @@ struct PinnedBuffer {
   void release();
 };
 
-class DeviceSlabArrays final : public SlabArrays {
+// The primitives (SlabArrays) and, for the halo protocol (HaloExchange), the copies it queues.
+class DeviceSlabArrays final : public SlabArrays, private DeviceCopies {
  public:
   DeviceSlabArrays(int device, int dim);
   ~DeviceSlabArrays() override;
@@ -99,13 +101,21 @@ class DeviceSlabArrays final : public SlabArrays {
     FieldRef meta;  // name, element size, sets (data unused)
     char* data = nullptr;
   };
-  // How the halo payload of one side travels (decided once, symmetric for both ends of a pair).
-  enum class Link { None, Peer, Staged, DeviceMpi };
-
   int field(std::string_view name) const;
   void reserve(std::size_t n);  // particle slots, keeping [0, size_)
   void* cub_scratch(std::size_t bytes);
-  void discover_links(SlabTransport& t);
+  // DeviceCopies, for HaloExchange: cudaMemcpy*Async on the copy stream.
+  int device() const override { return device_; }
+  bool peer_both_ways(int other) override;
+  void wait_staged() override;
+  void copy_to_host(void* host, const void* device, std::size_t bytes) override;
+  void copy_from_host(void* device, const void* host, std::size_t bytes) override;
+  void copy_peer(void* device, const void* their_device, int their_device_index, std::size_t bytes) override;
+  void after_incoming_read() override;
+  void wait_incoming_read() override;
+  void wait_copies() override;
+  void* incoming(Side side, std::size_t bytes) override;
+  void* pinned(int which, std::size_t bytes) override;
   void gather_fields(FieldSet set, const std::uint32_t* from, std::size_t count, std::size_t to, Shift shift);
 
   int device_, dim_;
@@ -126,10 +136,9 @@ class DeviceSlabArrays final : public SlabArrays {
   CellGridView view_{};
   Lattice lattice_{};
 
-  std::array<Link, 2> link_{Link::None, Link::None};
-  bool links_known_ = false;
+  HaloExchange halo_;
   std::array<DeviceBuffer, 2> outbox_, inbox_;
-  std::array<PinnedBuffer, 2> pinned_out_, pinned_in_;
+  std::array<PinnedBuffer, 4> pinned_;  // outgoing left/right, incoming left/right
   std::array<std::size_t, 2> out_count_{0, 0}, out_bytes_{0, 0}, in_count_{0, 0};
   std::array<DeviceBuffer, 2> slots_;
   std::array<std::size_t, 2> slot_count_{0, 0};
