@@ -99,25 +99,28 @@ void HostSlabArrays::append_received(Side side, FieldSet set) {
 void HostSlabArrays::scatter_received(Side side) { unpack_into(store_, inbox_[side], FieldSet::Refresh, slots_[side]); }
 
 void HostSlabArrays::forget_images() {
-  for (auto& im : images_) im.source.clear(), im.target.clear();
+  for (auto& axis : images_)
+    for (auto& im : axis) im.source.clear(), im.target.clear();
 }
 
-void HostSlabArrays::make_images(const Lattice& L, int axis) {
+void HostSlabArrays::make_images(const CellGrid& geometry, int axis) {
+  const Lattice& L = geometry.lattice();
   const std::size_t n = store_.size();
-  std::vector<std::uint32_t> low, high;
-  for (std::size_t i = 0; i < n; ++i) {
-    const int c = L.cell_of(store_.pos[axis][i], axis);
-    if (c == 0) low.push_back(static_cast<std::uint32_t>(i));
-    if (c == L.cells[axis] - 1) high.push_back(static_cast<std::uint32_t>(i));
-  }
-  Images& im = images_[axis];
-  for (auto* list : {&low, &high}) {
-    const float offset = list == &low ? L.period[axis] : -L.period[axis];
-    const std::size_t first = store_.size();
-    unpack_append(store_, pack_particles(store_, *list, FieldSet::Ghost, Shift{axis, offset}), FieldSet::Ghost);
-    for (std::size_t k = 0; k < list->size(); ++k) {
-      im.source.push_back((*list)[k]);
-      im.target.push_back(static_cast<std::uint32_t>(first + k));
+  for (const ImagePart part : {ImagePart::Local, ImagePart::Halo}) {
+    Images& im = images_[axis][static_cast<int>(part)];
+    for (const int layer : {0, L.cells[axis] - 1}) {
+      std::vector<std::uint32_t> list;
+      for (std::size_t i = 0; i < n; ++i)
+        if (L.cell_of(store_.pos[axis][i], axis) == layer &&
+            geometry.owns_column(L.cell_of(store_.pos[0][i], 0)) == (part == ImagePart::Local))
+          list.push_back(static_cast<std::uint32_t>(i));
+      const float offset = layer == 0 ? L.period[axis] : -L.period[axis];
+      const std::size_t first = store_.size();
+      unpack_append(store_, pack_particles(store_, list, FieldSet::Ghost, Shift{axis, offset}), FieldSet::Ghost);
+      for (std::size_t k = 0; k < list.size(); ++k) {
+        im.source.push_back(list[k]);
+        im.target.push_back(static_cast<std::uint32_t>(first + k));
+      }
     }
   }
   keys_.resize(store_.size());
@@ -134,19 +137,22 @@ void HostSlabArrays::record_halo_slots(std::size_t left, std::size_t right) {
   slots_[kRight].resize(right);
   for (std::size_t k = 0; k < left; ++k) slots_[kLeft][k] = slot_of[k];
   for (std::size_t k = 0; k < right; ++k) slots_[kRight][k] = slot_of[left + k];
-  for (auto& im : images_) {
-    for (auto& s : im.source) s = slot(s);
-    for (auto& s : im.target) s = slot(s);
-  }
+  for (auto& axis : images_)
+    for (auto& im : axis) {
+      for (auto& s : im.source) s = slot(s);
+      for (auto& s : im.target) s = slot(s);
+    }
 }
 
-void HostSlabArrays::refresh_images() {
+void HostSlabArrays::refresh_images(ImagePart part) {
   for (auto& f : store_.fields()) {
     if (!in_set(f, FieldSet::Refresh)) continue;
     char* data = f.bytes();
-    for (auto& im : images_)
+    for (auto& axis : images_) {
+      const Images& im = axis[static_cast<int>(part)];
       for (std::size_t k = 0; k < im.source.size(); ++k)
         std::memcpy(data + im.target[k] * f.elem_size, data + im.source[k] * f.elem_size, f.elem_size);
+    }
   }
 }
 

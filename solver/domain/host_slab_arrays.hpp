@@ -30,9 +30,9 @@ class HostSlabArrays : public SlabArrays {
   void append_received(Side side, FieldSet set) override;
   void scatter_received(Side side) override;
   void forget_images() override;
-  void make_images(const Lattice& L, int axis) override;
+  void make_images(const CellGrid& geometry, int axis) override;
   void record_halo_slots(std::size_t left, std::size_t right) override;
-  void refresh_images() override;
+  void refresh_images(ImagePart part) override;
   std::uint32_t wrap_and_find_position_fault(const Lattice& L) override;
   std::uint32_t find_unhealthy(const HealthLimits& limits) override;
 
@@ -40,6 +40,9 @@ class HostSlabArrays : public SlabArrays {
   ParticleStore& store() { return store_; }
   const CellGrid& grid() const { return grid_; }
   const std::vector<std::uint32_t>& halo_slots(Side side) const { return slots_[side]; }
+  const std::vector<std::uint32_t>& image_targets(int axis, ImagePart part) const {
+    return images_[axis][static_cast<int>(part)].target;
+  }
 
  private:
   ParticleStore store_;
@@ -51,11 +54,11 @@ class HostSlabArrays : public SlabArrays {
   std::vector<std::int8_t> hops_;
   std::array<Bytes, 2> outbox_, inbox_;
   std::array<std::vector<std::uint32_t>, 2> slots_;
-  // Periodic images per axis: source and target slots, in creation order.
+  // Periodic images per axis and part: source and target slots, in creation order.
   struct Images {
     std::vector<std::uint32_t> source, target;
   };
-  std::array<Images, 3> images_;
+  std::array<std::array<Images, 2>, 3> images_;
 };
 
 }  // namespace spate

@@ -20,6 +20,8 @@
 
 namespace spate {
 
+enum class ImagePart : int { Local = 0, Halo = 1 };
+
 class SlabArrays {
  public:
   static constexpr std::uint32_t kNoFault = 0xffffffffu;
@@ -64,16 +66,20 @@ class SlabArrays {
 
   // Drops the record of the previous halo's images (a new halo is being built).
   virtual void forget_images() = 0;
-  // Periodic images along `axis`: every particle in the first cell layer gets a copy one period
-  // up, then every particle in the last layer one period down (in index order, appended). The
-  // source of each image is remembered for refresh_images.
-  virtual void make_images(const Lattice& L, int axis) = 0;
+  // Periodic images along `axis` of the particles there are now: every particle in the first cell
+  // layer gets a copy one period up, every particle in the last layer one period down, appended;
+  // first the images of particles in owned x columns (ImagePart::Local), then those of particles
+  // in the halo columns (ImagePart::Halo). The source of each image is remembered for
+  // refresh_images. (The order of creation does not matter: the ghost sort follows.)
+  virtual void make_images(const CellGrid& geometry, int axis) = 0;
   // After the ghost sort: where the halo ghosts received from the left ([owned, owned + left))
   // and the right (the next `right`) and every image now sit, using the permutation of the last
   // sort_by_key.
   virtual void record_halo_slots(std::size_t left, std::size_t right) = 0;
-  // Copies the Refresh fields of every image from its source, axis by axis in creation order.
-  virtual void refresh_images() = 0;
+  // Copies the Refresh fields of the images of `part` from their sources, axis by axis. Local
+  // images depend only on owned particles (an image keeps its source's x column), so they can be
+  // refreshed before the halo arrives; halo images after it.
+  virtual void refresh_images(ImagePart part) = 0;
 
   // Device reductions with the host's predicates (particle_checks.hpp). Wraps the owned positions
   // on periodic axes and returns the lowest id whose position is faulty (kNoFault if none).

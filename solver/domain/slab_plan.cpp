@@ -54,12 +54,9 @@ HaloSends plan_halo_sends(const CellGrid& grid, std::span<const std::uint32_t> s
 
 OwnedSplit plan_owned_split(const CellGrid& grid, std::span<const std::uint32_t> starts) {
   check_starts(grid, starts);
-  const Lattice& L = grid.lattice();
   const std::size_t n = starts.size() - 1;
-  bool images = false;
-  for (int a = 1; a < L.dim; ++a) images = images || L.periodic[a];
   OwnedSplit s;
-  if (n < 3 || images) {
+  if (n < 3) {
     s.before = between(0, starts[n]);
     s.interior = s.after = {starts[n], 0};
     return s;

@@ -70,9 +70,9 @@ struct HaloSends {
 };
 HaloSends plan_halo_sends(const CellGrid& grid, std::span<const std::uint32_t> column_starts, bool has_left, bool has_right);
 
-// Owned particles split for the overlap of the halo with the fluid loop: interior ones see owned
-// neighbours only (columns owned_lo + 1 ... owned_hi - 2, and no periodic image axis, whose
-// images are refreshed with the halo); the boundary ranges before and after need the ghosts.
+// Owned particles split for the overlap of the halo with the fluid loop: interior ones (columns
+// owned_lo + 1 ... owned_hi - 2) see owned particles and images of owned particles only, which
+// are ready before the halo arrives; the boundary ranges before and after need the halo.
 struct OwnedSplit {
   ParticleRange before, interior, after;
 };

@@ -60,7 +60,7 @@ void SlabTopology::build_halo(SlabArrays& a, const CellGrid& grid, SlabTransport
   a.forget_images();
   const Lattice& L = grid.lattice();
   for (int axis = 1; axis < L.dim; ++axis)
-    if (L.periodic[axis]) a.make_images(L, axis);
+    if (L.periodic[axis]) a.make_images(grid, axis);
   const std::size_t owned = a.owned();
   a.compute_keys(grid, owned, a.size(), false);
   a.sort_by_key(owned, a.size());
@@ -75,14 +75,16 @@ void SlabTopology::build_halo(SlabArrays& a, const CellGrid& grid, SlabTransport
 void SlabTopology::begin_refresh(SlabArrays& a) {
   a.stage(kLeft, FieldSet::Refresh, sends_.range[kLeft], {});
   a.stage(kRight, FieldSet::Refresh, sends_.range[kRight], {});
+  // Images of owned columns need no halo: ready for the interior pass.
+  a.refresh_images(ImagePart::Local);
 }
 
 void SlabTopology::finish_refresh(SlabArrays& a, SlabTransport& t) {
   a.exchange(t, FieldSet::Refresh);
   a.scatter_received(kLeft);
   a.scatter_received(kRight);
-  // Images after the halo: an image of a halo ghost copies the ghost's fresh values.
-  a.refresh_images();
+  // Images of halo columns after the halo: they copy the ghosts' fresh values.
+  a.refresh_images(ImagePart::Halo);
 }
 
 }  // namespace spate

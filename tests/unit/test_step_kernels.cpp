@@ -99,18 +99,22 @@ class ResidentKernels : public StepKernels {
   int ranges = 0;
 
  private:
-  // Poisons the halo ghosts' Refresh fields as soon as a refresh is staged: whatever the interior
-  // pass reads of them is NaN, which then shows in the results.
+  // Poisons the Refresh fields of the halo ghosts and of their images as soon as a refresh is
+  // staged: whatever the interior pass reads of them is NaN, which then shows in the results.
   class PoisoningArrays final : public HostSlabArrays {
    public:
     PoisoningArrays(int dim, bool poison) : HostSlabArrays(dim), poison_(poison) {}
     void stage(Side side, FieldSet set, ParticleRange range, Shift shift) override {
       HostSlabArrays::stage(side, set, range, shift);
       if (!poison_ || set != FieldSet::Refresh) return;
-      for (auto& f : store().fields())
-        if (in_set(f, FieldSet::Refresh))
-          for (Side s : {kLeft, kRight})
-            for (std::uint32_t slot : halo_slots(s)) reinterpret_cast<float*>(f.bytes())[slot] = NAN;
+      for (auto& f : store().fields()) {
+        if (!in_set(f, FieldSet::Refresh)) continue;
+        float* v = reinterpret_cast<float*>(f.bytes());
+        for (Side s : {kLeft, kRight})
+          for (std::uint32_t slot : halo_slots(s)) v[slot] = NAN;
+        for (int axis = 1; axis < 3; ++axis)
+          for (std::uint32_t slot : image_targets(axis, ImagePart::Halo)) v[slot] = NAN;
+      }
     }
 
    private:
@@ -231,7 +235,8 @@ TEST(ResidentTopology, SummationDensityAndPeriodicXMatchTheCpuBackend) {
 }
 
 TEST(ResidentTopology, PeriodicImagesIn3dMatchTheCpuBackend) {
-  // Periodic y makes images (and images of halo ghosts); there is then no interior pass.
+  // Periodic y makes images of owned particles (refreshed before the interior pass) and of halo
+  // ghosts (poisoned until the halo arrives).
   const Case c = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/hydrostatic_3d.yaml",
                            {"tank.size=[0.3, 0.2, 0.3]", "fluid_blocks=[{min: [0, 0, 0], max: [0.3, 0.2, 0.1]}]", "tank.periodic=[y]"});
   for (int slabs : {1, 3}) {

@@ -55,6 +55,8 @@ namespace {
 
 __device__ std::uint32_t thread_index() { return blockIdx.x * blockDim.x + threadIdx.x; }
 
+constexpr std::uint32_t kNone = SlabArrays::kNoFault;  // "no faulty particle" in the reductions
+
 template <class... Params, class... Args>
 void launch(cudaStream_t s, std::size_t items, void (*kernel)(Params...), Args... args) {
   if (items == 0) return;
@@ -119,9 +121,14 @@ __global__ void copy_within_kernel(float* f, const std::uint32_t* source, const 
   if (k < n) f[target[k]] = f[source[k]];
 }
 
-__global__ void layer_flag_kernel(const float* x, Lattice L, int axis, int layer, std::uint32_t* flags, std::uint32_t n) {
+// 1 for the particles in cell layer `layer` along `axis` whose x column is owned (local) or not.
+__global__ void layer_flag_kernel(const float* x0, const float* x, Lattice L, int axis, int layer, int owned_lo, int owned_hi,
+                                  bool local, std::uint32_t* flags, std::uint32_t n) {
   const std::uint32_t i = thread_index();
-  if (i < n) flags[i] = L.cell_of(x[i], axis) == layer ? 1u : 0u;
+  if (i >= n) return;
+  const int column = L.cell_of(x0[i], 0);
+  const bool owned = column >= owned_lo && column < owned_hi;
+  flags[i] = L.cell_of(x[i], axis) == layer && owned == local ? 1u : 0u;
 }
 
 __global__ void compact_kernel(const std::uint32_t* flags, const std::uint32_t* prefix, std::uint32_t* out, std::uint32_t n) {
@@ -153,7 +160,7 @@ __global__ void position_fault_kernel(DeviceFields d, Lattice L, std::uint32_t n
     wrap_periodic(L, d.pos[a][i], a);
     bad = bad || position_fault(L, d.pos[a][i], a) != PositionFault::None;
   }
-  out[i] = bad ? d.id[i] : SlabArrays::kNoFault;
+  out[i] = bad ? d.id[i] : kNone;
 }
 
 __global__ void health_kernel(DeviceFields d, int dim, HealthLimits h, std::uint32_t n, std::uint32_t* out) {
@@ -162,7 +169,7 @@ __global__ void health_kernel(DeviceFields d, int dim, HealthLimits h, std::uint
   float x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
   for (int a = 0; a < dim; ++a) x[a] = d.pos[a][i], v[a] = d.vel[a][i];
   const bool ok = !is_fluid(d.kind[i]) || healthy(h, state_finite(dim, x, v, d.density[i]), d.density[i]);
-  out[i] = ok ? SlabArrays::kNoFault : d.id[i];
+  out[i] = ok ? kNone : d.id[i];
 }
 
 std::uint32_t u32(std::size_t n) { return static_cast<std::uint32_t>(n); }
@@ -567,37 +574,50 @@ void DeviceSlabArrays::scatter_received(Side side) {
 
 // ---- periodic images ----------------------------------------------------------------------------
 
-void DeviceSlabArrays::forget_images() { images_ = {0, 0, 0}; }
+void DeviceSlabArrays::forget_images() {
+  images_ = {0, 0, 0};
+  local_images_ = {0, 0, 0};
+}
 
-void DeviceSlabArrays::make_images(const Lattice& L, int axis) {
+void DeviceSlabArrays::make_images(const CellGrid& geometry, int axis) {
   select();
-  const std::size_t n = size_;  // images of particles that existed before this axis
+  const std::size_t n = size_;  // images of the particles that exist before this axis
   if (n == 0) return;
   image_source_[axis].reserve(2 * n * sizeof(std::uint32_t), compute_);
   image_target_[axis].reserve(2 * n * sizeof(std::uint32_t), compute_);
-  for (const int layer : {0, L.cells[axis] - 1}) {
-    std::uint32_t* flags = sort_values_[0].as<std::uint32_t>();
-    std::uint32_t* prefix = sort_values_[1].as<std::uint32_t>();
-    launch(compute_, n, layer_flag_kernel, static_cast<const float*>(fields().pos[axis]), L, axis, layer, flags, u32(n));
-    std::size_t bytes = 0;
-    check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, flags, prefix, static_cast<int>(n), compute_), "cub::DeviceScan");
-    check(cub::DeviceScan::ExclusiveSum(cub_scratch(bytes), bytes, flags, prefix, static_cast<int>(n), compute_), "cub::DeviceScan");
-    std::uint32_t* list = image_source_[axis].as<std::uint32_t>() + images_[axis];
-    launch(compute_, n, compact_kernel, static_cast<const std::uint32_t*>(flags), static_cast<const std::uint32_t*>(prefix), list, u32(n));
-    check(cudaMemcpyAsync(result_host_.data, prefix + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_), "image count");
-    check(cudaMemcpyAsync(result_host_.data + 4, flags + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_), "image count");
-    check(cudaStreamSynchronize(compute_), "image count");
-    std::uint32_t last_prefix, last_flag;
-    std::memcpy(&last_prefix, result_host_.data, 4);
-    std::memcpy(&last_flag, result_host_.data + 4, 4);
-    const std::size_t count = last_prefix + last_flag;
-    reserve(size_ + count);
-    const float offset = layer == 0 ? L.period[axis] : -L.period[axis];
-    gather_fields(FieldSet::Ghost, list, count, size_, Shift{axis, offset});
-    launch(compute_, count, iota_kernel, image_target_[axis].as<std::uint32_t>() + images_[axis], u32(size_), u32(count));
-    size_ += count;
-    images_[axis] += count;
+  for (const bool local : {true, false}) {
+    for (const int layer : {0, geometry.lattice().cells[axis] - 1}) append_images(geometry, axis, layer, local, n);
+    if (local) local_images_[axis] = images_[axis];
   }
+}
+
+// Images of particles [0, n) in one cell layer, of owned columns (local) or halo columns: a flag
+// per particle, an exclusive scan, a compaction (index order), then the Ghost fields gathered and
+// shifted by one period to the end.
+void DeviceSlabArrays::append_images(const CellGrid& geometry, int axis, int layer, bool local, std::size_t n) {
+  const Lattice& L = geometry.lattice();
+  std::uint32_t* flags = sort_values_[0].as<std::uint32_t>();
+  std::uint32_t* prefix = sort_values_[1].as<std::uint32_t>();
+  launch(compute_, n, layer_flag_kernel, static_cast<const float*>(fields().pos[0]), static_cast<const float*>(fields().pos[axis]), L,
+         axis, layer, geometry.owned_lo(), geometry.owned_hi(), local, flags, u32(n));
+  std::size_t bytes = 0;
+  check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, flags, prefix, static_cast<int>(n), compute_), "cub::DeviceScan");
+  check(cub::DeviceScan::ExclusiveSum(cub_scratch(bytes), bytes, flags, prefix, static_cast<int>(n), compute_), "cub::DeviceScan");
+  std::uint32_t* list = image_source_[axis].as<std::uint32_t>() + images_[axis];
+  launch(compute_, n, compact_kernel, static_cast<const std::uint32_t*>(flags), static_cast<const std::uint32_t*>(prefix), list, u32(n));
+  check(cudaMemcpyAsync(result_host_.data, prefix + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_), "image count");
+  check(cudaMemcpyAsync(result_host_.data + 4, flags + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_), "image count");
+  check(cudaStreamSynchronize(compute_), "image count");
+  std::uint32_t last_prefix, last_flag;
+  std::memcpy(&last_prefix, result_host_.data, 4);
+  std::memcpy(&last_flag, result_host_.data + 4, 4);
+  const std::size_t count = last_prefix + last_flag;
+  reserve(size_ + count);
+  const float offset = layer == 0 ? L.period[axis] : -L.period[axis];
+  gather_fields(FieldSet::Ghost, list, count, size_, Shift{axis, offset});
+  launch(compute_, count, iota_kernel, image_target_[axis].as<std::uint32_t>() + images_[axis], u32(size_), u32(count));
+  size_ += count;
+  images_[axis] += count;
 }
 
 void DeviceSlabArrays::record_halo_slots(std::size_t left, std::size_t right) {
@@ -624,13 +644,16 @@ void DeviceSlabArrays::record_halo_slots(std::size_t left, std::size_t right) {
 }
 
 // Axis by axis in stream order: an image of an image copies after its source was refreshed.
-void DeviceSlabArrays::refresh_images() {
+void DeviceSlabArrays::refresh_images(ImagePart part) {
   select();
-  for (int axis = 0; axis < 3; ++axis)
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::size_t first = part == ImagePart::Local ? 0 : local_images_[axis];
+    const std::size_t count = part == ImagePart::Local ? local_images_[axis] : images_[axis] - local_images_[axis];
     for (auto& a : arrays_)
       if (in_set(a.meta, FieldSet::Refresh))
-        launch(compute_, images_[axis], copy_within_kernel, reinterpret_cast<float*>(a.data),
-               image_source_[axis].as<const std::uint32_t>(), image_target_[axis].as<const std::uint32_t>(), u32(images_[axis]));
+        launch(compute_, count, copy_within_kernel, reinterpret_cast<float*>(a.data),
+               image_source_[axis].as<const std::uint32_t>() + first, image_target_[axis].as<const std::uint32_t>() + first, u32(count));
+  }
 }
 
 // ---- checks -------------------------------------------------------------------------------------

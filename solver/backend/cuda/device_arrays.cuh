@@ -76,9 +76,9 @@ class DeviceSlabArrays final : public SlabArrays, private DeviceCopies {
   void append_received(Side side, FieldSet set) override;
   void scatter_received(Side side) override;
   void forget_images() override;
-  void make_images(const Lattice& L, int axis) override;
+  void make_images(const CellGrid& geometry, int axis) override;
   void record_halo_slots(std::size_t left, std::size_t right) override;
-  void refresh_images() override;
+  void refresh_images(ImagePart part) override;
   std::uint32_t wrap_and_find_position_fault(const Lattice& L) override;
   std::uint32_t find_unhealthy(const HealthLimits& limits) override;
 
@@ -116,6 +116,7 @@ class DeviceSlabArrays final : public SlabArrays, private DeviceCopies {
   void wait_copies() override;
   void* incoming(Side side, std::size_t bytes) override;
   void* pinned(int which, std::size_t bytes) override;
+  void append_images(const CellGrid& geometry, int axis, int layer, bool local, std::size_t n);
   void gather_fields(FieldSet set, const std::uint32_t* from, std::size_t count, std::size_t to, Shift shift);
 
   int device_, dim_;
@@ -142,9 +143,10 @@ class DeviceSlabArrays final : public SlabArrays, private DeviceCopies {
   std::array<std::size_t, 2> out_count_{0, 0}, out_bytes_{0, 0}, in_count_{0, 0};
   std::array<DeviceBuffer, 2> slots_;
   std::array<std::size_t, 2> slot_count_{0, 0};
-  // Periodic images per axis: source and target slots, in creation order.
+  // Periodic images per axis: source and target slots, the local part [0, local) first, then
+  // the halo part [local, total).
   std::array<DeviceBuffer, 3> image_source_, image_target_;
-  std::array<std::size_t, 3> images_{0, 0, 0};
+  std::array<std::size_t, 3> images_{0, 0, 0}, local_images_{0, 0, 0};
   PinnedBuffer mirror_;               // the host mirror's staging (output steps)
   std::uint32_t* result_ = nullptr;   // device word for reductions and counts
   PinnedBuffer result_host_;
