@@ -36,6 +36,9 @@ class SlabArrays {
   virtual void upload(const ParticleStore& host) = 0;
   virtual void download(ParticleStore& host, CellGrid& grid) = 0;
 
+  // Every id of the run is below `bound` (the largest id + 1 over all slabs; ids never change), so
+  // a device sort may use a narrower (key, id) word. No-op where that does not matter.
+  virtual void set_id_bound(std::uint32_t bound) { (void)bound; }
   // Keeps particles [0, n); the owned count becomes min(owned, n).
   virtual void truncate(std::size_t n) = 0;
   // Particles [0, n) are owned (after immigrants were appended).

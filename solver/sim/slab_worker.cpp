@@ -1,5 +1,6 @@
 #include "slab_worker.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -26,7 +27,12 @@ void SlabWorker::take_share(const ParticleStore& global, const SlabLayout& layou
   unpack_append(particles_, pack_particles(const_cast<ParticleStore&>(global), mine, FieldSet::All), FieldSet::All);
   particles_.set_owned(particles_.size());
   grid_.configure(lattice_, layout.faces[s], layout.faces[s + 1]);
-  if (auto* r = resident()) r->upload(particles_);
+  if (auto* r = resident()) {
+    std::uint64_t id_bound = 0;
+    for (const std::uint32_t id : global.id) id_bound = std::max<std::uint64_t>(id_bound, std::uint64_t{id} + 1);
+    r->set_id_bound(static_cast<std::uint32_t>(std::min<std::uint64_t>(id_bound, 0xffffffffu)));
+    r->upload(particles_);
+  }
   host_stale_ = false;
 }
 

@@ -1,6 +1,7 @@
 // The host-side arithmetic of the CUDA backend (backend/cuda/device_plan.hpp), on the CPU.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 #include <string>
 
@@ -77,19 +78,28 @@ TEST(CudaFootprint, DeviceFieldsMatchTheHostStoreAndStayUnderBudget) {
   }
 }
 
-TEST(CudaSort, EndBitCoversTheKeysAboveTheIds) {
-  EXPECT_EQ(sort_end_bit(1), 32);
-  EXPECT_EQ(sort_end_bit(2), 33);
-  EXPECT_EQ(sort_end_bit(3), 34);
-  EXPECT_EQ(sort_end_bit(4), 34);
-  EXPECT_EQ(sort_end_bit(5), 35);
-  // Every key below key_count fits: (key_count - 1) << 32 | id < 2^end_bit.
-  for (std::uint32_t n : {2u, 3u, 1000u, 65536u, 65537u, 4000000u}) {
-    const int end = sort_end_bit(n);
-    EXPECT_LT((static_cast<std::uint64_t>(n - 1) << 32 | 0xffffffffu) >> (end - 1), 2u) << n;
-    EXPECT_GE((static_cast<std::uint64_t>(n - 1) << 32) >> (end - 2), 1u) << n;  // and no bit is wasted
-  }
-  EXPECT_EQ(sort_end_bit(0xffffffffu), 64);
+TEST(CudaSort, TheSortWordHoldsEveryKeyAboveEveryIdAndNoMore) {
+  EXPECT_EQ(bits_for(0), 0);
+  EXPECT_EQ(bits_for(1), 0);
+  EXPECT_EQ(bits_for(2), 1);
+  EXPECT_EQ(bits_for(3), 2);
+  EXPECT_EQ(bits_for(4), 2);
+  EXPECT_EQ(bits_for(5), 3);
+  EXPECT_EQ(bits_for(std::uint64_t{1} << 32), 32);
+  // The paper's case: 12.8 million ids (24 bits) and about 1.9 million keys per GPU (21 bits).
+  EXPECT_EQ(sort_word(1'900'000, 12'763'776).id_bits, 24);
+  EXPECT_EQ(sort_word(1'900'000, 12'763'776).end_bit, 45);
+  EXPECT_EQ(sort_word(0xffffffffu, 0xffffffffu).end_bit, 64);
+  for (std::uint32_t keys : {1u, 2u, 3u, 1000u, 65537u, 4000000u})
+    for (std::uint32_t ids : {1u, 2u, 1000u, 1u << 20, 12'763'776u}) {
+      const SortWord w = sort_word(keys, ids);
+      const std::uint64_t largest = static_cast<std::uint64_t>(keys - 1) << w.id_bits | (ids - 1);
+      EXPECT_EQ(largest >> w.end_bit, 0u) << keys << " keys, " << ids << " ids";  // fits
+      EXPECT_LT(static_cast<std::uint64_t>(ids - 1), std::uint64_t{1} << w.id_bits);  // ids never reach the key bits
+      if (w.end_bit > 0) {
+        EXPECT_NE(largest >> (w.end_bit - 1), 0u) << "a bit too many";
+      }
+    }
 }
 
 TEST(CudaFootprint, GhostColumnsOnlyWhereThereIsANeighbour) {

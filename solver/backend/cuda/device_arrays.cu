@@ -73,18 +73,19 @@ __global__ void key_kernel(std::uint32_t* keys, const float* x, const float* y, 
   keys[i] = particle_key(g, L, hops, x[i], y ? y[i] : 0.0f, z ? z[i] : 0.0f);
 }
 
-// (key, id) as one 64-bit word; the values are the positions in the range (the permutation).
-__global__ void compose_kernel(const std::uint32_t* keys, const std::uint32_t* id, std::uint64_t* words, std::uint32_t* values,
-                               std::uint32_t first, std::uint32_t n) {
+// (key, id) as one 64-bit word (SortWord); the values are the positions in the range (the
+// permutation).
+__global__ void compose_kernel(const std::uint32_t* keys, const std::uint32_t* id, int id_bits, std::uint64_t* words,
+                               std::uint32_t* values, std::uint32_t first, std::uint32_t n) {
   const std::uint32_t k = thread_index();
   if (k >= n) return;
-  words[k] = static_cast<std::uint64_t>(keys[first + k]) << 32 | id[first + k];
+  words[k] = static_cast<std::uint64_t>(keys[first + k]) << id_bits | id[first + k];
   values[k] = k;
 }
 
-__global__ void key_of_word_kernel(const std::uint64_t* words, std::uint32_t* keys, std::uint32_t n) {
+__global__ void key_of_word_kernel(const std::uint64_t* words, int id_bits, std::uint32_t* keys, std::uint32_t n) {
   const std::uint32_t k = thread_index();
-  if (k < n) keys[k] = static_cast<std::uint32_t>(words[k] >> 32);
+  if (k < n) keys[k] = static_cast<std::uint32_t>(words[k] >> id_bits);
 }
 
 template <class T>
@@ -408,11 +409,12 @@ void DeviceSlabArrays::sort_by_key(std::size_t first, std::size_t last) {
   sort_first_ = first;
   sort_count_ = n;
   if (n == 0) return;
+  const SortWord word = sort_word(key_count_, id_bound_);
   launch(compute_, n, compose_kernel, keys_.as<const std::uint32_t>(), reinterpret_cast<const std::uint32_t*>(arrays_[id_].data),
-         sort_keys_[0].as<std::uint64_t>(), sort_values_[0].as<std::uint32_t>(), u32(first), u32(n));
+         word.id_bits, sort_keys_[0].as<std::uint64_t>(), sort_values_[0].as<std::uint32_t>(), u32(first), u32(n));
   cub::DoubleBuffer<std::uint64_t> words(sort_keys_[0].as<std::uint64_t>(), sort_keys_[1].as<std::uint64_t>());
   cub::DoubleBuffer<std::uint32_t> perm(sort_values_[0].as<std::uint32_t>(), sort_values_[1].as<std::uint32_t>());
-  const int end_bit = sort_end_bit(key_count_);
+  const int end_bit = word.end_bit;
   std::size_t bytes = 0;
   check(cub::DeviceRadixSort::SortPairs(nullptr, bytes, words, perm, static_cast<int>(n), 0, end_bit, compute_), "cub::DeviceRadixSort");
   check(cub::DeviceRadixSort::SortPairs(cub_scratch(bytes), bytes, words, perm, static_cast<int>(n), 0, end_bit, compute_),
@@ -431,7 +433,8 @@ void DeviceSlabArrays::sort_by_key(std::size_t first, std::size_t last) {
       throw std::logic_error("DeviceSlabArrays: fields are 4 or 1 bytes wide");
     check(cudaMemcpyAsync(at, scratch_.data, n * a.meta.elem_size, cudaMemcpyDeviceToDevice, compute_), "permute");
   }
-  launch(compute_, n, key_of_word_kernel, static_cast<const std::uint64_t*>(words.Current()), keys_.as<std::uint32_t>() + first, u32(n));
+  launch(compute_, n, key_of_word_kernel, static_cast<const std::uint64_t*>(words.Current()), word.id_bits,
+         keys_.as<std::uint32_t>() + first, u32(n));
 }
 
 void DeviceSlabArrays::build_table(const CellGrid& geometry) {

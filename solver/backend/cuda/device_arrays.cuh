@@ -66,6 +66,7 @@ class DeviceSlabArrays final : public SlabArrays, private DeviceCopies {
   void download(ParticleStore& host, CellGrid& grid) override;
   void truncate(std::size_t n) override;
   void set_owned(std::size_t n) override { owned_ = n; }
+  void set_id_bound(std::uint32_t bound) override { id_bound_ = bound; }
   void set_migration_hops(const std::vector<std::int8_t>& hops) override;
   void compute_keys(const CellGrid& geometry, std::size_t first, std::size_t last, bool migrating) override;
   void sort_by_key(std::size_t first, std::size_t last) override;
@@ -131,7 +132,7 @@ class DeviceSlabArrays final : public SlabArrays, private DeviceCopies {
   DeviceBuffer keys_, sort_keys_[2], sort_values_[2], scratch_, cub_;
   int sorted_values_ = 0;             // which sort_values_ holds the last sort's permutation
   std::size_t sort_first_ = 0, sort_count_ = 0;
-  std::uint32_t key_count_ = 0;
+  std::uint32_t key_count_ = 0, id_bound_ = 0xffffffffu;
   DeviceBuffer table_, hops_;
   std::size_t table_entries_ = 0;
   CellGridView view_{};

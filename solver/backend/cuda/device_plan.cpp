@@ -47,10 +47,17 @@ std::size_t halo_bytes_per_ghost(int dim) { return 2 * staged_bytes(dim, FieldSe
 
 std::size_t cub_scratch_estimate(std::size_t slots) { return (std::size_t{1} << 20) + slots; }
 
-int sort_end_bit(std::uint32_t key_count) {
+int bits_for(std::uint64_t values) {
   int bits = 0;
-  while (bits < 32 && (std::uint64_t{1} << bits) < key_count) ++bits;
-  return 32 + bits;
+  while (bits < 64 && (std::uint64_t{1} << bits) < values) ++bits;
+  return bits;
+}
+
+SortWord sort_word(std::uint32_t key_count, std::uint32_t id_bound) {
+  SortWord w;
+  w.id_bits = bits_for(id_bound);
+  w.end_bit = w.id_bits + bits_for(key_count);
+  return w;
 }
 
 std::vector<SlabMemory> device_memory_per_slab(const Lattice& lattice, std::int64_t particles, int devices) {

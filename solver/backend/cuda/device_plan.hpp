@@ -47,9 +47,15 @@ std::size_t halo_bytes_per_ghost(int dim);
 // estimate (the real size is asked from CUB at run time and grows the buffer when needed).
 std::size_t cub_scratch_estimate(std::size_t slots);
 
-// Radix sort of the 64-bit (key, id) words: the bits [0, end) that can be set when keys are below
-// `key_count` (ids use the low 32).
-int sort_end_bit(std::uint32_t key_count);
+// The 64-bit word the radix sort orders by (key, id): key << id_bits | id, with just enough bits
+// for ids below `id_bound` (the largest id + 1 of the run) and keys below `key_count`; the sort
+// looks at bits [0, end_bit) only, so narrower words take fewer radix passes.
+struct SortWord {
+  int id_bits = 32;
+  int end_bit = 64;
+};
+int bits_for(std::uint64_t values);  // bits that hold 0 ... values - 1
+SortWord sort_word(std::uint32_t key_count, std::uint32_t id_bound);
 
 // The device memory one GPU needs for its slab: its share of the particles (uniform split of the
 // x columns, particles spread evenly over columns: an estimate, balancing moves faces), the two
