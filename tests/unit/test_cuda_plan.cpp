@@ -88,9 +88,9 @@ TEST(CudaSort, TheSortWordHoldsEveryKeyAboveEveryIdAndNoMore) {
   EXPECT_EQ(bits_for(std::uint64_t{1} << 32), 32);
   // The paper's case (dp = 0.002, 312 x 122 x 148 cells) on 4 GPUs: 12.8 million ids (24 bits),
   // 78 owned columns and an 80-column ghost box per GPU, 2.85 million keys (22 bits).
-  const std::uint32_t keys = 78 * 122 * 148 + 80 * 122 * 148 + 3;
-  EXPECT_EQ(sort_word(keys, 12'763'776).id_bits, 24);
-  EXPECT_EQ(sort_word(keys, 12'763'776).end_bit, 46);
+  const std::uint32_t paper_keys = 78 * 122 * 148 + 80 * 122 * 148 + 3;
+  EXPECT_EQ(sort_word(paper_keys, 12'763'776).id_bits, 24);
+  EXPECT_EQ(sort_word(paper_keys, 12'763'776).end_bit, 46);
   EXPECT_EQ(sort_word(0xffffffffu, 0xffffffffu).end_bit, 64);
   for (std::uint32_t keys : {1u, 2u, 3u, 1000u, 65537u, 4000000u})
     for (std::uint32_t ids : {1u, 2u, 1000u, 1u << 20, 12'763'776u}) {
