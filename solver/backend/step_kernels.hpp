@@ -1,12 +1,13 @@
 #pragma once
-// The arithmetic of one time step on one device, as the slab worker sequences it. The worker owns
-// the host ParticleStore and does everything topological on it (migration, the (cell, id) sort,
-// halos: solver/domain, solver/grid); a backend only runs the physics loops. A backend whose
-// particles live elsewhere (a GPU) is told when the host copy changed and asked for the fields the
-// host needs next; for the CPU backend both are no-ops.
+// The arithmetic of one time step on one device, as the slab worker sequences it. With the CPU
+// backend the worker owns the host ParticleStore and does everything topological on it
+// (migration, the (cell, id) sort, halos: solver/domain, solver/grid); the backend only runs the
+// physics loops. A device-resident backend (CUDA) also offers the data-movement primitives of
+// SlabArrays, and the worker runs the same topology on its arrays instead (SlabTopology).
 #include <cstddef>
 
 #include "../grid/cell_grid.hpp"
+#include "../domain/slab_arrays.hpp"
 #include "../particles/particle_pack.hpp"
 #include "../particles/particle_store.hpp"
 #include "../physics/params.hpp"
@@ -37,6 +38,16 @@ class StepKernels {
   virtual void fetch(ParticleStore&, FieldSet, std::size_t /*first*/, std::size_t /*last*/) {}
   // Bytes the backend holds for this slab outside the host store (device memory).
   virtual std::size_t device_bytes() const { return 0; }
+
+  // Device-resident backends keep the particles in their own arrays for the whole run: the worker
+  // then runs the topology on those (SlabTopology) and the host store is only a mirror, filled on
+  // output steps. nullptr (the CPU backend): the host store is the only copy.
+  virtual SlabArrays* resident() { return nullptr; }
+  // Resident backends only: fluid rates of owned particles [range.first, range.end()), the
+  // interior/boundary split that overlaps the fluid loop with the halo refresh.
+  virtual void fluid_rates_range(const CellGrid& g, const PhysicsParams& P, ParticleRange range) {
+    (void)g, (void)P, (void)range;
+  }
 };
 
 }  // namespace spate

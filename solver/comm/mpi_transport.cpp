@@ -32,6 +32,8 @@ namespace {
 constexpr int kTagLeftward = 11;
 constexpr int kTagRightward = 12;
 constexpr int kTagGather = 13;
+constexpr int kTagDeviceLeftward = 21;  // exchange_device (CUDA-aware MPI)
+constexpr int kTagDeviceRightward = 22;
 constexpr std::int64_t kChunk = std::int64_t{1} << 30;  // broadcast pieces stay below INT_MAX bytes
 
 int byte_count(const Bytes& b) {
@@ -43,7 +45,7 @@ int byte_count(const Bytes& b) {
 class MpiNode final : public LocalSlabs {
  public:
   explicit MpiNode(int local)
-      : local_(local), barrier_(local), to_left_(local), to_right_(local), dslot_(local), islot_(local), vslot_(local), gslot_(local) {
+      : local_(local), barrier_(local), to_left_(local), to_right_(local), dev_left_(local), dev_right_(local), dslot_(local), islot_(local), vslot_(local), gslot_(local) {
     MPI_Comm_dup(MPI_COMM_WORLD, &comm_);
     MPI_Comm_rank(comm_, &rank_);
     MPI_Comm_size(comm_, &ranks_);
@@ -91,6 +93,27 @@ class MpiNode final : public LocalSlabs {
     if (left) receive(rank_of(left_slab), kTagRightward, from_left_rank_);
     if (right) receive(rank_of(right_slab), kTagLeftward, from_right_rank_);
     MPI_Waitall(n, sends, MPI_STATUSES_IGNORE);
+  }
+
+  // Leader only, CUDA-aware MPI: the edge slabs' device buffers to and from the neighbouring ranks.
+  void exchange_device_across_ranks(int left_slab, int right_slab) {
+    MPI_Request requests[4];
+    int n = 0;
+    const SlabTransport::DeviceSpan& l = dev_left_[0];
+    const SlabTransport::DeviceSpan& r = dev_right_[local_ - 1];
+    auto count = [](std::size_t bytes) {
+      if (bytes > static_cast<std::size_t>(INT_MAX)) throw std::runtime_error("MPI transport: a device halo message exceeds 2 GiB");
+      return static_cast<int>(bytes);
+    };
+    if (left_slab >= 0 && !is_local(left_slab)) {
+      MPI_Irecv(l.recv, count(l.recv_bytes), MPI_BYTE, rank_of(left_slab), kTagDeviceRightward, comm_, &requests[n++]);
+      MPI_Isend(l.send, count(l.send_bytes), MPI_BYTE, rank_of(left_slab), kTagDeviceLeftward, comm_, &requests[n++]);
+    }
+    if (right_slab >= 0 && !is_local(right_slab)) {
+      MPI_Irecv(r.recv, count(r.recv_bytes), MPI_BYTE, rank_of(right_slab), kTagDeviceLeftward, comm_, &requests[n++]);
+      MPI_Isend(r.send, count(r.send_bytes), MPI_BYTE, rank_of(right_slab), kTagDeviceRightward, comm_, &requests[n++]);
+    }
+    MPI_Waitall(n, requests, MPI_STATUSES_IGNORE);
   }
 
   void receive(int source, int tag, Bytes& out) {
@@ -171,6 +194,7 @@ class MpiNode final : public LocalSlabs {
   // collective and read after the second (rewritten only after the first barrier of a later one,
   // which every reader must have passed).
   std::vector<Bytes> to_left_, to_right_;
+  std::vector<SlabTransport::DeviceSpan> dev_left_, dev_right_;
   Bytes from_left_rank_, from_right_rank_;
   std::vector<double> dslot_;
   std::vector<std::int64_t> islot_;
@@ -187,6 +211,7 @@ class MpiTransport final : public SlabTransport {
   MpiTransport(MpiNode& node, int local) : node_(node), local_(local), slab_(node.first_slab() + local) {}
   int slab() const override { return slab_; }
   int slab_count() const override { return node_.slab_count(); }
+  bool shares_memory_with(int s) const override { return node_.is_local(s); }
 
   void exchange(const Bytes& to_left, const Bytes& to_right, Bytes& from_left, Bytes& from_right) override {
     node_.to_left_[local_] = to_left;
@@ -200,6 +225,14 @@ class MpiTransport final : public SlabTransport {
     from_right = r < 0 ? Bytes{} : node_.is_local(r) ? node_.to_left_[r - first] : node_.from_right_rank_;
     // The slots are rewritten by the next exchange; nobody may start it before all have read.
     node_.wait();
+  }
+  bool exchange_device(const DeviceSpan& left, const DeviceSpan& right) override {
+    node_.dev_left_[local_] = left;
+    node_.dev_right_[local_] = right;
+    node_.wait();
+    if (leader()) node_.exchange_device_across_ranks(left_of(node_.first_slab()), right_of(node_.first_slab() + node_.local_ - 1));
+    node_.wait();
+    return true;
   }
   double min(double v) override {
     return reduce_double(v, MPI_MIN, [](double a, double b) { return std::min(a, b); });

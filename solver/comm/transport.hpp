@@ -5,6 +5,7 @@
 //
 // Slabs are numbered globally left to right along x; slab s has neighbours s-1 and s+1 (wrapping
 // around when x is periodic, possibly to itself).
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -40,6 +41,27 @@ class SlabTransport {
   virtual void barrier() = 0;
   // Any slab may raise a failure; every slab learns of it at the next call to this (no hang).
   virtual bool any(bool flag) = 0;
+
+  // Whether slab `s` runs in this process (its device memory can be reached by peer copies).
+  virtual bool shares_memory_with(int s) const {
+    (void)s;
+    return true;
+  }
+
+  // CUDA-aware MPI (build option SPATE_CUDA_AWARE_MPI): moves device buffers to and from the
+  // neighbours on other ranks, the device pointers handed straight to MPI; the byte counts are
+  // known to both ends from an exchange() before. A side whose neighbour shares this process's
+  // memory is left alone. Collective like exchange(); returns false where unsupported.
+  struct DeviceSpan {
+    const void* send = nullptr;
+    std::size_t send_bytes = 0;
+    void* recv = nullptr;
+    std::size_t recv_bytes = 0;
+  };
+  virtual bool exchange_device(const DeviceSpan& left, const DeviceSpan& right) {
+    (void)left, (void)right;
+    return false;
+  }
 
   bool periodic_x = false;
   int left_of(int s) const { return s > 0 ? s - 1 : (periodic_x ? slab_count() - 1 : -1); }

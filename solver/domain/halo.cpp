@@ -3,6 +3,7 @@
 #include <numeric>
 
 #include "slab_layout.hpp"
+#include "slab_plan.hpp"
 
 namespace spate {
 
@@ -99,25 +100,17 @@ void Halo::refresh(ParticleStore& p, SlabTransport& transport) {
 
 std::int64_t migrate(ParticleStore& p, const std::vector<int>& faces, const Lattice& lattice,
                      SlabTransport& transport) {
-  SlabLayout layout{faces};
-  const int s = transport.slab();
-  const int S = transport.slab_count();
+  // One hop towards the owner per round (the plan shared with the device-resident path).
+  const std::vector<std::int8_t> hops = migration_hops(faces, transport.slab(), lattice.periodic[0]);
   p.resize(p.owned());
   std::int64_t moved_total = 0;
   for (;;) {
     std::vector<std::uint32_t> go_left, go_right;
     std::vector<std::uint8_t> leaving(p.owned(), 0);
     for (std::size_t i = 0; i < p.owned(); ++i) {
-      const int column = lattice.cell_of(p.pos[0][i], 0);
-      const int owner = layout.owner_of(column);
-      if (owner == s) continue;
-      // One hop towards the owner; with periodic x take the shorter way round.
-      bool left = owner < s;
-      if (lattice.periodic[0]) {
-        const int dl = (s - owner + S) % S, dr = (owner - s + S) % S;
-        left = dl <= dr;
-      }
-      (left ? go_left : go_right).push_back(static_cast<std::uint32_t>(i));
+      const std::int8_t hop = hops[lattice.cell_of(p.pos[0][i], 0)];
+      if (hop == 0) continue;
+      (hop < 0 ? go_left : go_right).push_back(static_cast<std::uint32_t>(i));
       leaving[i] = 1;
     }
     const std::int64_t moved = transport.sum(static_cast<std::int64_t>(go_left.size() + go_right.size()));

@@ -70,6 +70,11 @@ void CellGrid::global_coords(std::uint32_t c, int out[3]) const {
   out[0] = static_cast<int>(g / (box_[2] * box_[1])) + lo_[0];
 }
 
+void CellGrid::assign_starts(const std::uint32_t* starts) {
+  std::copy(starts, starts + start_.size(), start_.begin());
+  ghost_perm_.clear();
+}
+
 void CellGrid::sort(ParticleStore& particles) {
   sort_owned(particles);
   sort_ghosts(particles);

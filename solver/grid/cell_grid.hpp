@@ -46,6 +46,9 @@ class CellGrid {
   std::uint32_t begin(std::uint32_t c) const { return start_[c]; }
   std::uint32_t end(std::uint32_t c) const { return start_[c + 1]; }
   const std::vector<std::uint32_t>& starts() const { return start_; }
+  // Takes the table from elsewhere (a device-resident slab sorted its particles itself): the first
+  // cell_count() + 1 entries of `starts`.
+  void assign_starts(const std::uint32_t* starts);
 
   // The global cell coordinates of local cell c.
   void global_coords(std::uint32_t c, int out[3]) const;

@@ -16,6 +16,8 @@ struct CellGridView {
   std::uint32_t owned_cells;
   const std::uint32_t* start;  // prefix offsets, cell_count + 1
 
+  SPATE_HD std::uint32_t cell_count() const { return owned_cells + static_cast<std::uint32_t>(box[0] * box[1] * box[2]); }
+
   SPATE_HD std::uint32_t local_cell(int ix, int iy, int iz) const {
     if (ix >= owned_lo && ix < owned_hi && iy >= 0 && iy < cells[1] && iz >= 0 && iz < cells[2])
       return static_cast<std::uint32_t>(((ix - owned_lo) * cells[1] + iy) * cells[2] + iz);

@@ -23,7 +23,7 @@ struct Lattice {
   SPATE_HD int cell_of(float x, int axis) const {
     return static_cast<int>(floorf((x - origin[axis]) * inv_cell[axis]));
   }
-  float upper(int axis) const { return origin[axis] + static_cast<float>(cells[axis]) * cell_size[axis]; }
+  SPATE_HD float upper(int axis) const { return origin[axis] + static_cast<float>(cells[axis]) * cell_size[axis]; }
 };
 
 }  // namespace spate

@@ -1,5 +1,6 @@
 #include "slab_worker.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -8,6 +9,7 @@
 #include <sstream>
 
 #include "../backend/cpu/cpu_backend.hpp"
+#include "../domain/particle_checks.hpp"
 
 namespace spate {
 
@@ -38,9 +40,28 @@ void SlabWorker::take_share(const ParticleStore& global, const SlabLayout& layou
   }
   particles_.set_owned(particles_.size());
   grid_.configure(lattice_, layout.faces[s], layout.faces[s + 1]);
+  if (auto* r = resident()) {
+    std::uint64_t id_bound = 0;
+    for (const std::uint32_t id : global.id) id_bound = std::max<std::uint64_t>(id_bound, std::uint64_t{id} + 1);
+    r->set_id_bound(static_cast<std::uint32_t>(std::min<std::uint64_t>(id_bound, 0xffffffffu)));
+    r->upload(particles_);
+  }
+  host_stale_ = false;
+}
+
+void SlabWorker::sync_host() {
+  if (!host_stale_) return;
+  resident()->download(particles_, grid_);
+  host_stale_ = false;
 }
 
 void SlabWorker::rebuild() {
+  if (auto* r = resident()) {
+    (faces_moved_ ? handovers_ : crossings_) += topology_.rebuild(*r, grid_, layout_, transport_);
+    faces_moved_ = false;
+    host_stale_ = true;
+    return;
+  }
   (faces_moved_ ? handovers_ : crossings_) += migrate(particles_, layout_.faces, lattice_, transport_);
   faces_moved_ = false;
   grid_.sort_owned(particles_);
@@ -51,6 +72,11 @@ void SlabWorker::rebuild() {
 // Ghosts travel through the host store: the owners' Refresh fields come back from the backend, the
 // halo moves them, the ghosts' copies go back (no-ops on the CPU backend).
 void SlabWorker::refresh_halo() {
+  if (auto* r = resident()) {
+    topology_.begin_refresh(*r);
+    topology_.finish_refresh(*r, transport_);
+    return;
+  }
   kernels_->fetch(particles_, FieldSet::Refresh, 0, particles_.owned());
   halo_.refresh(particles_, transport_);
   kernels_->publish_fields(particles_, FieldSet::Refresh, particles_.owned(), particles_.size());
@@ -69,6 +95,16 @@ void SlabWorker::compute_rates() {
   kernels_->equation_of_state(particles_, params_);
   kernels_->wall_state(particles_, grid_, params_);
   const double wall = since(t0);
+  if (resident()) {
+    // The fluid phase includes the halo wait it overlaps (host time around the launches on a GPU).
+    const auto t1 = Clock::now();
+    fluid_rates_overlapping_refresh();
+    const double fluid = since(t1);
+    busy_seconds_ += wall + fluid;
+    window_wall_seconds_ += wall;
+    window_fluid_seconds_ += fluid;
+    return;
+  }
   refresh_halo();
   const auto t1 = Clock::now();
   kernels_->fluid_rates(particles_, grid_, params_);
@@ -76,6 +112,20 @@ void SlabWorker::compute_rates() {
   busy_seconds_ += wall + fluid;
   window_wall_seconds_ += wall;
   window_fluid_seconds_ += fluid;
+}
+
+// The paper's interior/boundary division: the owners' refreshed values are staged, the interior
+// (owned particles that see no ghost) is computed while the halo travels, the boundary after.
+// On a GPU the interior kernel is queued before the exchange blocks the host, so it runs during
+// the copies; each particle's rates depend only on its own neighbour loop, so the split changes
+// no result.
+void SlabWorker::fluid_rates_overlapping_refresh() {
+  SlabArrays& r = *resident();
+  topology_.begin_refresh(r);
+  kernels_->fluid_rates_range(grid_, params_, topology_.split().interior);
+  topology_.finish_refresh(r, transport_);
+  kernels_->fluid_rates_range(grid_, params_, topology_.split().before);
+  kernels_->fluid_rates_range(grid_, params_, topology_.split().after);
 }
 
 void SlabWorker::prepare(bool rates) {
@@ -88,26 +138,21 @@ void SlabWorker::prepare(bool rates) {
     kernels_->wall_state(particles_, grid_, params_);
     refresh_halo();
   }
-  kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
+  if (!resident()) kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
 }
 
-std::optional<ParticleFault> SlabWorker::wrap_and_check_domain() {
+std::optional<ParticleFault> SlabWorker::wrap_and_check_domain(bool wrap) {
   std::optional<ParticleFault> fault;
   for (int a = 0; a < lattice_.dim; ++a) {
     float* x = particles_.pos[a].data();
     const float lo = lattice_.origin[a], hi = lattice_.upper(a);
     for (std::size_t i = 0; i < particles_.owned(); ++i) {
-      if (lattice_.periodic[a]) {
-        if (x[i] >= hi) x[i] -= lattice_.period[a];
-        else if (x[i] < lo) x[i] += lattice_.period[a];
-      }
+      if (wrap) wrap_periodic(lattice_, x[i], a);
       // A NaN or infinite position is reported as such (and never converted to a cell index).
-      const bool finite = std::isfinite(x[i]);
-      const bool inside = finite && x[i] >= lo - lattice_.cell_size[a] && x[i] <= hi + lattice_.cell_size[a] &&
-                          lattice_.cell_of(x[i], a) >= 0 && lattice_.cell_of(x[i], a) < lattice_.cells[a];
-      if (!inside && (!fault || particles_.id[i] < fault->id)) {
+      const PositionFault f = position_fault(lattice_, x[i], a);
+      if (f != PositionFault::None && (!fault || particles_.id[i] < fault->id)) {
         std::ostringstream s;
-        if (!finite) s << "has a non-finite position along " << "xyz"[a] << " (" << x[i] << ")";
+        if (f == PositionFault::NonFinite) s << "has a non-finite position along " << "xyz"[a] << " (" << x[i] << ")";
         else s << "left the domain along " << "xyz"[a] << " (position " << x[i] << " m, domain [" << lo << ", " << hi << "] m)";
         fault = ParticleFault{particles_.id[i], s.str()};
       }
@@ -119,6 +164,18 @@ std::optional<ParticleFault> SlabWorker::wrap_and_check_domain() {
 // Between steps the host store holds the owned particles' whole state (health checks, probes, output
 // and the next rebuild read it), whichever backend computed it.
 std::optional<ParticleFault> SlabWorker::step(float dt) {
+  if (auto* r = resident()) {
+    // Device-resident: nothing comes back to the host but the lowest faulty id (and, on a fault,
+    // the particles, so that the message is the host's).
+    kernels_->predict(particles_, params_, dt);
+    host_stale_ = true;
+    const std::uint32_t bad = r->wrap_and_find_position_fault(lattice_);
+    if (auto fault = first_fault(transport_, position_fault_message(bad))) return fault;
+    rebuild();
+    compute_rates();
+    kernels_->correct(particles_, params_, dt);
+    return std::nullopt;
+  }
   kernels_->predict(particles_, params_, dt);
   kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
   if (auto fault = first_fault(transport_, wrap_and_check_domain())) return fault;
@@ -129,16 +186,31 @@ std::optional<ParticleFault> SlabWorker::step(float dt) {
   return std::nullopt;
 }
 
-std::optional<ParticleFault> SlabWorker::health(float min_ratio, float max_ratio) const {
+// The host's message for the position fault a device reduction found (the same predicates: the
+// host check on the mirror, already wrapped, finds the same lowest id).
+std::optional<ParticleFault> SlabWorker::position_fault_message(std::uint32_t id) {
+  if (id == SlabArrays::kNoFault) return std::nullopt;
+  sync_host();
+  auto fault = wrap_and_check_domain(false);
+  if (fault && fault->id == id) return fault;
+  return ParticleFault{id, "left the domain"};
+}
+
+std::optional<ParticleFault> SlabWorker::health(float min_ratio, float max_ratio) {
+  if (auto* r = resident()) {
+    const std::uint32_t bad = r->find_unhealthy(HealthLimits{params_.rho0, min_ratio, max_ratio});
+    if (bad == SlabArrays::kNoFault) return std::nullopt;
+    sync_host();  // the host check below writes the message for the same particle
+  }
   std::optional<ParticleFault> fault;
   const auto& p = particles_;
   for (std::size_t i = 0; i < p.owned(); ++i) {
     if (!is_fluid(p.kind[i])) continue;
     if (fault && p.id[i] >= fault->id) continue;
-    bool finite = std::isfinite(p.density[i]);
-    for (int a = 0; a < lattice_.dim; ++a) finite = finite && std::isfinite(p.pos[a][i]) && std::isfinite(p.vel[a][i]);
-    const float ratio = p.density[i] / params_.rho0;
-    if (finite && ratio >= min_ratio && ratio <= max_ratio) continue;
+    float x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+    for (int a = 0; a < lattice_.dim; ++a) x[a] = p.pos[a][i], v[a] = p.vel[a][i];
+    const bool finite = state_finite(lattice_.dim, x, v, p.density[i]);
+    if (healthy(HealthLimits{params_.rho0, min_ratio, max_ratio}, finite, p.density[i])) continue;
     // Only a faulty particle pays for building its message.
     std::ostringstream s;
     if (!finite) {
@@ -156,7 +228,7 @@ float SlabWorker::local_time_step(const TimeStepControl& c) const { return kerne
 
 std::vector<std::int64_t> SlabWorker::slab_particle_counts() {
   std::vector<std::int64_t> counts(transport_.slab_count(), 0);
-  counts[transport_.slab()] = static_cast<std::int64_t>(particles_.owned());
+  counts[transport_.slab()] = static_cast<std::int64_t>(resident() ? resident()->owned() : particles_.owned());
   transport_.sum(counts);
   return counts;
 }
@@ -200,6 +272,7 @@ PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice,
 }
 
 double SlabWorker::rebalance(int min_columns) {
+  sync_host();  // resident backends: the owned positions and kinds for the cost histogram
   // One exact integer sum of both phase histograms: every slab ends up with the same numbers and
   // therefore the same faces, although the timings themselves differ from run to run. Faces do not
   // change the physics (neighbour order is (cell, id)), so results stay bit-identical.

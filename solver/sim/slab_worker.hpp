@@ -12,6 +12,7 @@
 #include "../comm/transport.hpp"
 #include "../domain/halo.hpp"
 #include "../domain/slab_layout.hpp"
+#include "../domain/slab_topology.hpp"
 #include "../grid/cell_grid.hpp"
 #include "../particles/particle_store.hpp"
 #include "../physics/params.hpp"
@@ -40,7 +41,7 @@ class SlabWorker {
   // One full step of size dt. Returns a fault if a particle left the domain (before rates).
   std::optional<ParticleFault> step(float dt);
   // NaN/infinity or density outside [min, max] x rho0 among owned particles.
-  std::optional<ParticleFault> health(float min_ratio, float max_ratio) const;
+  std::optional<ParticleFault> health(float min_ratio, float max_ratio);
   float local_time_step(const TimeStepControl& c) const;
 
   // Moves faces to shorten the step's critical path, from the time each slab measured in its wall
@@ -58,8 +59,17 @@ class SlabWorker {
 
   void set_params(const PhysicsParams& p) { params_ = p; }
   const PhysicsParams& params() const { return params_; }
-  ParticleStore& particles() { return particles_; }
-  const CellGrid& grid() const { return grid_; }
+  // The host store and grid. With a device-resident backend they are a mirror, brought up to date
+  // here when a step changed the device copy (output steps: probes, snapshots, checkpoints, in
+  // situ); otherwise the only copy.
+  ParticleStore& particles() {
+    sync_host();
+    return particles_;
+  }
+  const CellGrid& grid() {
+    sync_host();
+    return grid_;
+  }
   const Lattice& lattice() const { return lattice_; }
   SlabTransport& transport() { return transport_; }
   const SlabLayout& layout() const { return layout_; }
@@ -71,7 +81,12 @@ class SlabWorker {
   void rebuild();        // migrate, sort, halos
   void compute_rates();  // EOS, walls, fluid rates
   void refresh_halo();   // the ghosts' Refresh fields, through the host store
-  std::optional<ParticleFault> wrap_and_check_domain();
+  std::optional<ParticleFault> wrap_and_check_domain(bool wrap = true);
+  // The device-resident path (kernels_->resident() set): the same step on the backend's arrays.
+  SlabArrays* resident() const { return kernels_->resident(); }
+  void sync_host();
+  void fluid_rates_overlapping_refresh();
+  std::optional<ParticleFault> position_fault_message(std::uint32_t id);
 
   Lattice lattice_;
   PhysicsParams params_;
@@ -80,6 +95,8 @@ class SlabWorker {
   ParticleStore particles_;
   CellGrid grid_;
   Halo halo_;
+  SlabTopology topology_;  // resident path only
+  bool host_stale_ = false;
   double busy_seconds_ = 0.0;
   // Loop seconds since the last balancing pass, per synchronised phase (see PhaseCosts).
   double window_wall_seconds_ = 0.0, window_fluid_seconds_ = 0.0;

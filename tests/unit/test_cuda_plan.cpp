@@ -1,6 +1,7 @@
 // The host-side arithmetic of the CUDA backend (backend/cuda/device_plan.hpp), on the CPU.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 #include <string>
 
@@ -39,14 +40,22 @@ TEST(CudaCapacity, GrowsWithHeadroomInQuantaAndNeverShrinks) {
 TEST(CudaFootprint, DeviceFieldsMatchTheHostStoreAndStayUnderBudget) {
   for (int dim : {2, 3}) {
     const DeviceFootprint f = device_footprint(dim);
-    // The device holds exactly the host store's per-particle fields plus one scratch float.
+    // The device holds exactly the host store's per-particle fields, the sort's words and one
+    // scratch word.
     ParticleStore host(dim);
     std::size_t host_fields = 0;
     for (auto& field : host.fields()) host_fields += field.elem_size;
     EXPECT_EQ(f.field_bytes, host_fields) << dim << "D";
+    EXPECT_EQ(f.field_bytes, staged_bytes(dim, FieldSet::All));
+    EXPECT_EQ(f.sort_bytes, 4u + 16u + 8u);
     EXPECT_EQ(f.scratch_bytes, sizeof(float));
   }
-  EXPECT_EQ(device_footprint(3).per_particle(), 73u);  // 69 bytes of fields + 4 of scratch
+  EXPECT_EQ(device_footprint(3).per_particle(), 101u);  // 69 bytes of fields + 28 of sort + 4 of scratch
+  EXPECT_EQ(device_footprint(2).per_particle(), 85u);
+  // Ghost payload in 3D: position, velocity (24), density, pressure, id (12), kind (1).
+  EXPECT_EQ(staged_bytes(3, FieldSet::Ghost), 37u);
+  EXPECT_EQ(staged_bytes(3, FieldSet::Refresh), 20u);  // velocity, density, pressure
+  EXPECT_EQ(halo_bytes_per_ghost(3), 78u);
   // The budget: <= 150 bytes per particle on the device, headroom and ghosts included.
   Lattice L;
   L.dim = 3;
@@ -65,8 +74,34 @@ TEST(CudaFootprint, DeviceFieldsMatchTheHostStoreAndStayUnderBudget) {
     }
     EXPECT_GE(owned, n);
     EXPECT_LT(owned, n + devices);
-    EXPECT_GT(bytes, static_cast<std::size_t>(n / devices) * 73);
+    EXPECT_GT(bytes, static_cast<std::size_t>(n / devices) * 101);
   }
+}
+
+TEST(CudaSort, TheSortWordHoldsEveryKeyAboveEveryIdAndNoMore) {
+  EXPECT_EQ(bits_for(0), 0);
+  EXPECT_EQ(bits_for(1), 0);
+  EXPECT_EQ(bits_for(2), 1);
+  EXPECT_EQ(bits_for(3), 2);
+  EXPECT_EQ(bits_for(4), 2);
+  EXPECT_EQ(bits_for(5), 3);
+  EXPECT_EQ(bits_for(std::uint64_t{1} << 32), 32);
+  // The paper's case (dp = 0.002, 312 x 122 x 148 cells) on 4 GPUs: 12.8 million ids (24 bits),
+  // 78 owned columns and an 80-column ghost box per GPU, 2.85 million keys (22 bits).
+  const std::uint32_t paper_keys = 78 * 122 * 148 + 80 * 122 * 148 + 3;
+  EXPECT_EQ(sort_word(paper_keys, 12'763'776).id_bits, 24);
+  EXPECT_EQ(sort_word(paper_keys, 12'763'776).end_bit, 46);
+  EXPECT_EQ(sort_word(0xffffffffu, 0xffffffffu).end_bit, 64);
+  for (std::uint32_t keys : {1u, 2u, 3u, 1000u, 65537u, 4000000u})
+    for (std::uint32_t ids : {1u, 2u, 1000u, 1u << 20, 12'763'776u}) {
+      const SortWord w = sort_word(keys, ids);
+      const std::uint64_t largest = static_cast<std::uint64_t>(keys - 1) << w.id_bits | (ids - 1);
+      EXPECT_EQ(largest >> w.end_bit, 0u) << keys << " keys, " << ids << " ids";  // fits
+      EXPECT_LT(static_cast<std::uint64_t>(ids - 1), std::uint64_t{1} << w.id_bits);  // ids never reach the key bits
+      if (w.end_bit > 0) {
+        EXPECT_NE(largest >> (w.end_bit - 1), 0u) << "a bit too many";
+      }
+    }
 }
 
 TEST(CudaFootprint, GhostColumnsOnlyWhereThereIsANeighbour) {

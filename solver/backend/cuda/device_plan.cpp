@@ -30,8 +30,34 @@ DeviceFootprint device_footprint(int dim) {
   // pos, vel, acc, acc_prev: dim floats each; density, pressure, density_rate, density_rate_prev;
   // id (uint32) and kind (uint8). The same list as ParticleStore::fields().
   f.field_bytes = 4 * d * sizeof(float) + 4 * sizeof(float) + sizeof(std::uint32_t) + sizeof(std::uint8_t);
+  // key (4), two 64-bit (key, id) words (16), two permutation entries (8): cub::DoubleBuffer.
+  f.sort_bytes = sizeof(std::uint32_t) + 2 * sizeof(std::uint64_t) + 2 * sizeof(std::uint32_t);
   f.scratch_bytes = sizeof(float);
   return f;
+}
+
+std::size_t staged_bytes(int dim, FieldSet set) {
+  std::size_t b = 0;
+  for (auto& f : ParticleStore(dim).fields())
+    if (in_set(f, set)) b += f.elem_size;
+  return b;
+}
+
+std::size_t halo_bytes_per_ghost(int dim) { return 2 * staged_bytes(dim, FieldSet::Ghost) + sizeof(std::uint32_t); }
+
+std::size_t cub_scratch_estimate(std::size_t slots) { return (std::size_t{1} << 20) + slots; }
+
+int bits_for(std::uint64_t values) {
+  int bits = 0;
+  while (bits < 64 && (std::uint64_t{1} << bits) < values) ++bits;
+  return bits;
+}
+
+SortWord sort_word(std::uint32_t key_count, std::uint32_t id_bound) {
+  SortWord w;
+  w.id_bits = bits_for(id_bound);
+  w.end_bit = w.id_bits + bits_for(key_count);
+  return w;
 }
 
 std::vector<SlabMemory> device_memory_per_slab(const Lattice& lattice, std::int64_t particles, int devices) {
@@ -41,7 +67,6 @@ std::vector<SlabMemory> device_memory_per_slab(const Lattice& lattice, std::int6
   const std::int64_t cells_per_column = static_cast<std::int64_t>(lattice.dim >= 2 ? lattice.cells[1] : 1) *
                                         (lattice.dim >= 3 ? lattice.cells[2] : 1);
   const DeviceFootprint f = device_footprint(lattice.dim);
-  constexpr std::size_t kReductionScratch = 1 << 16;  // CUB's temporary storage for one min-reduction
   std::vector<SlabMemory> out;
   for (int s = 0; s < devices; ++s) {
     SlabMemory m;
@@ -55,8 +80,9 @@ std::vector<SlabMemory> device_memory_per_slab(const Lattice& lattice, std::int6
               static_cast<std::int64_t>(m.columns + 2) * (lattice.dim >= 2 ? lattice.cells[1] + 2 : 1) *
                   (lattice.dim >= 3 ? lattice.cells[2] + 2 : 1);
     m.capacity = grown_capacity(static_cast<std::size_t>(m.owned + m.ghosts), 0);
-    m.bytes = m.capacity * f.per_particle() + static_cast<std::size_t>(m.cells + 1) * sizeof(std::uint32_t) +
-              kReductionScratch;
+    // The key table has three bins past the cells (KeyBins).
+    m.bytes = m.capacity * f.per_particle() + static_cast<std::size_t>(m.cells + 4) * sizeof(std::uint32_t) +
+              static_cast<std::size_t>(m.ghosts) * halo_bytes_per_ghost(lattice.dim) + cub_scratch_estimate(m.capacity);
     out.push_back(m);
   }
   return out;

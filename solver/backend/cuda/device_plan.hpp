@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "../../grid/lattice.hpp"
+#include "../../particles/particle_pack.hpp"
 
 namespace spate::gpu {
 
@@ -31,14 +32,34 @@ std::size_t grown_capacity(std::size_t needed, std::size_t current);
 // What the device store holds per particle slot, in bytes (the fields mirror ParticleStore's).
 struct DeviceFootprint {
   std::size_t field_bytes = 0;    // pos, vel, acc, acc_prev, density, pressure, rates, id, kind
-  std::size_t scratch_bytes = 0;  // per-particle time-step limits for the min-reduction
-  std::size_t per_particle() const { return field_bytes + scratch_bytes; }
+  std::size_t sort_bytes = 0;     // the key, CUB's double-buffered (key, id) words and permutation
+  std::size_t scratch_bytes = 0;  // one 4-byte word: gathers of the sort, reduction inputs
+  std::size_t per_particle() const { return field_bytes + sort_bytes + scratch_bytes; }
 };
 DeviceFootprint device_footprint(int dim);
+// Bytes of one particle's fields of `set` in a halo or migration buffer (FieldSet order of
+// ParticleStore::fields()).
+std::size_t staged_bytes(int dim, FieldSet set);
+// Per halo ghost besides its slot: its Ghost fields in the sender's outgoing and the receiver's
+// incoming device buffer, and its slot index for the refresh.
+std::size_t halo_bytes_per_ghost(int dim);
+// CUB's temporary storage for the sort, scans and reductions of `slots` particles: an upper
+// estimate (the real size is asked from CUB at run time and grows the buffer when needed).
+std::size_t cub_scratch_estimate(std::size_t slots);
+
+// The 64-bit word the radix sort orders by (key, id): key << id_bits | id, with just enough bits
+// for ids below `id_bound` (the largest id + 1 of the run) and keys below `key_count`; the sort
+// looks at bits [0, end_bit) only, so narrower words take fewer radix passes.
+struct SortWord {
+  int id_bits = 32;
+  int end_bit = 64;
+};
+int bits_for(std::uint64_t values);  // bits that hold 0 ... values - 1
+SortWord sort_word(std::uint32_t key_count, std::uint32_t id_bound);
 
 // The device memory one GPU needs for its slab: its share of the particles (uniform split of the
 // x columns, particles spread evenly over columns: an estimate, balancing moves faces), the two
-// ghost columns, the cell table, capacity headroom and the CUB reduction scratch.
+// ghost columns and their halo buffers, the cell table, capacity headroom and the CUB scratch.
 struct SlabMemory {
   int slab = 0;
   int columns = 0;

@@ -1,0 +1,676 @@
+// The SlabArrays primitives on the device (see device_arrays.cuh). Each primitive is a CUB call, a
+// cudaMemcpy*Async of contiguous ranges, or a kernel of a few lines; none decides what to move
+// (that is SlabTopology's, tested on the CPU). Sums are never done with atomics: the sort is a
+// radix sort, the cell table a binary search per cell, compactions a CUB exclusive scan, the
+// reductions CUB minima over integers or floats (exact, order-free).
+#include "device_arrays.cuh"
+
+#include <cub/device/device_radix_sort.cuh>
+#include <cub/device/device_reduce.cuh>
+#include <cub/device/device_scan.cuh>
+
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include "../../physics/params.hpp"
+#include "device_plan.hpp"
+#include "device_runtime.hpp"
+
+namespace spate::gpu {
+
+void check(cudaError_t e, const char* what) {
+  if (e != cudaSuccess) throw std::runtime_error(std::string("CUDA: ") + what + ": " + cudaGetErrorString(e));
+}
+
+void DeviceBuffer::reserve(std::size_t n, cudaStream_t in_use) {
+  if (n <= bytes) return;
+  const std::size_t grown = grown_capacity(n, bytes);
+  check(cudaStreamSynchronize(in_use), "buffer growth");  // nothing may still read the old one
+  cudaFree(data);
+  data = nullptr;
+  check(cudaMalloc(&data, grown), "cudaMalloc(buffer)");
+  bytes = grown;
+}
+void DeviceBuffer::release() {
+  cudaFree(data);
+  data = nullptr;
+  bytes = 0;
+}
+void PinnedBuffer::reserve(std::size_t n) {
+  if (n <= bytes) return;
+  const std::size_t grown = grown_capacity(n, bytes);
+  cudaFreeHost(data);
+  data = nullptr;
+  check(cudaMallocHost(&data, grown), "cudaMallocHost");
+  bytes = grown;
+}
+void PinnedBuffer::release() {
+  cudaFreeHost(data);
+  data = nullptr;
+  bytes = 0;
+}
+
+namespace {
+
+__device__ std::uint32_t thread_index() { return blockIdx.x * blockDim.x + threadIdx.x; }
+
+constexpr std::uint32_t kNone = SlabArrays::kNoFault;  // "no faulty particle" in the reductions
+
+template <class... Params, class... Args>
+void launch(cudaStream_t s, std::size_t items, void (*kernel)(Params...), Args... args) {
+  if (items == 0) return;
+  const LaunchShape shape = launch_shape(items);
+  kernel<<<shape.blocks, shape.threads, 0, s>>>(args...);
+  check(cudaGetLastError(), "kernel launch");
+}
+
+__global__ void key_kernel(std::uint32_t* keys, const float* x, const float* y, const float* z, CellGridView g, Lattice L,
+                           const std::int8_t* hops, std::uint32_t first, std::uint32_t n) {
+  const std::uint32_t k = thread_index();
+  if (k >= n) return;
+  const std::uint32_t i = first + k;
+  keys[i] = particle_key(g, L, hops, x[i], y ? y[i] : 0.0f, z ? z[i] : 0.0f);
+}
+
+// (key, id) as one 64-bit word (SortWord); the values are the positions in the range (the
+// permutation).
+__global__ void compose_kernel(const std::uint32_t* keys, const std::uint32_t* id, int id_bits, std::uint64_t* words,
+                               std::uint32_t* values, std::uint32_t first, std::uint32_t n) {
+  const std::uint32_t k = thread_index();
+  if (k >= n) return;
+  words[k] = static_cast<std::uint64_t>(keys[first + k]) << id_bits | id[first + k];
+  values[k] = k;
+}
+
+__global__ void key_of_word_kernel(const std::uint64_t* words, int id_bits, std::uint32_t* keys, std::uint32_t n) {
+  const std::uint32_t k = thread_index();
+  if (k < n) keys[k] = static_cast<std::uint32_t>(words[k] >> id_bits);
+}
+
+template <class T>
+__global__ void gather_kernel(const T* src, const std::uint32_t* index, T* dst, std::uint32_t n) {
+  const std::uint32_t k = thread_index();
+  if (k < n) dst[k] = src[index[k]];
+}
+
+// The first particle of every key bin: a lower bound per bin in the sorted keys.
+__global__ void table_kernel(const std::uint32_t* keys, std::uint32_t n, std::uint32_t* table, std::uint32_t entries) {
+  const std::uint32_t b = thread_index();
+  if (b >= entries) return;
+  std::uint32_t lo = 0, hi = n;
+  while (lo < hi) {
+    const std::uint32_t mid = lo + (hi - lo) / 2;
+    if (keys[mid] < b) lo = mid + 1;
+    else hi = mid;
+  }
+  table[b] = lo;
+}
+
+__global__ void shift_kernel(float* x, std::uint32_t n, float offset) {
+  const std::uint32_t k = thread_index();
+  if (k < n) x[k] += offset;
+}
+
+__global__ void scatter_kernel(const float* src, const std::uint32_t* slots, float* dst, std::uint32_t n) {
+  const std::uint32_t k = thread_index();
+  if (k < n) dst[slots[k]] = src[k];
+}
+
+__global__ void copy_within_kernel(float* f, const std::uint32_t* source, const std::uint32_t* target, std::uint32_t n) {
+  const std::uint32_t k = thread_index();
+  if (k < n) f[target[k]] = f[source[k]];
+}
+
+// 1 for the particles in cell layer `layer` along `axis` whose x column is owned (local) or not.
+__global__ void layer_flag_kernel(const float* x0, const float* x, Lattice L, int axis, int layer, int owned_lo, int owned_hi,
+                                  bool local, std::uint32_t* flags, std::uint32_t n) {
+  const std::uint32_t i = thread_index();
+  if (i >= n) return;
+  const int column = L.cell_of(x0[i], 0);
+  const bool owned = column >= owned_lo && column < owned_hi;
+  flags[i] = L.cell_of(x[i], axis) == layer && owned == local ? 1u : 0u;
+}
+
+__global__ void compact_kernel(const std::uint32_t* flags, const std::uint32_t* prefix, std::uint32_t* out, std::uint32_t n) {
+  const std::uint32_t i = thread_index();
+  if (i < n && flags[i]) out[prefix[i]] = i;
+}
+
+__global__ void iota_kernel(std::uint32_t* out, std::uint32_t first, std::uint32_t n) {
+  const std::uint32_t k = thread_index();
+  if (k < n) out[k] = first + k;
+}
+
+__global__ void inverse_kernel(const std::uint32_t* perm, std::uint32_t* slot_of, std::uint32_t owned, std::uint32_t n) {
+  const std::uint32_t k = thread_index();
+  if (k < n) slot_of[perm[k]] = owned + k;
+}
+
+__global__ void map_slots_kernel(std::uint32_t* list, const std::uint32_t* slot_of, std::uint32_t owned, std::uint32_t n) {
+  const std::uint32_t k = thread_index();
+  if (k < n && list[k] >= owned) list[k] = slot_of[list[k] - owned];
+}
+
+// Per owned particle: its id if a coordinate is faulty after wrapping, else kNoFault.
+__global__ void position_fault_kernel(DeviceFields d, Lattice L, std::uint32_t n, std::uint32_t* out) {
+  const std::uint32_t i = thread_index();
+  if (i >= n) return;
+  bool bad = false;
+  for (int a = 0; a < L.dim; ++a) {
+    wrap_periodic(L, d.pos[a][i], a);
+    bad = bad || position_fault(L, d.pos[a][i], a) != PositionFault::None;
+  }
+  out[i] = bad ? d.id[i] : kNone;
+}
+
+__global__ void health_kernel(DeviceFields d, int dim, HealthLimits h, std::uint32_t n, std::uint32_t* out) {
+  const std::uint32_t i = thread_index();
+  if (i >= n) return;
+  float x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+  for (int a = 0; a < dim; ++a) x[a] = d.pos[a][i], v[a] = d.vel[a][i];
+  const bool ok = !is_fluid(d.kind[i]) || healthy(h, state_finite(dim, x, v, d.density[i]), d.density[i]);
+  out[i] = ok ? kNone : d.id[i];
+}
+
+std::uint32_t u32(std::size_t n) { return static_cast<std::uint32_t>(n); }
+
+}  // namespace
+
+#if defined(SPATE_CUDA_AWARE_MPI)
+constexpr bool kCudaAwareMpi = true;
+#else
+constexpr bool kCudaAwareMpi = false;
+#endif
+
+DeviceSlabArrays::DeviceSlabArrays(int device, int dim) : device_(device), dim_(dim), halo_(kCudaAwareMpi) {
+  select();
+  check(cudaStreamCreateWithFlags(&compute_, cudaStreamNonBlocking), "cudaStreamCreate(compute)");
+  check(cudaStreamCreateWithFlags(&copy_, cudaStreamNonBlocking), "cudaStreamCreate(copy)");
+  check(cudaEventCreateWithFlags(&staged_, cudaEventDisableTiming), "cudaEventCreate");
+  check(cudaEventCreateWithFlags(&consumed_, cudaEventDisableTiming), "cudaEventCreate");
+  check(cudaEventRecord(consumed_, compute_), "cudaEventRecord");
+  check(cudaMalloc(&result_, 2 * sizeof(std::uint32_t)), "cudaMalloc(result)");
+  result_host_.reserve(64);
+  ParticleStore layout(dim);
+  for (auto& f : layout.fields()) arrays_.push_back({f, nullptr});
+  static constexpr std::string_view pos[3] = {"x", "y", "z"}, vel[3] = {"vx", "vy", "vz"}, acc[3] = {"ax", "ay", "az"},
+                                    prev[3] = {"ax_prev", "ay_prev", "az_prev"};
+  for (int k = 0; k < dim; ++k) {
+    pos_[k] = field(pos[k]);
+    vel_[k] = field(vel[k]);
+    acc_[k] = field(acc[k]);
+    acc_prev_[k] = field(prev[k]);
+  }
+  density_ = field("density");
+  pressure_ = field("pressure");
+  rate_ = field("density_rate");
+  rate_prev_ = field("density_rate_prev");
+  id_ = field("id");
+  kind_ = field("kind");
+}
+
+DeviceSlabArrays::~DeviceSlabArrays() {
+  cudaSetDevice(device_);
+  cudaStreamSynchronize(compute_);
+  cudaStreamSynchronize(copy_);
+  for (auto& a : arrays_) cudaFree(a.data);
+  for (DeviceBuffer* b : {&keys_, &sort_keys_[0], &sort_keys_[1], &sort_values_[0], &sort_values_[1], &scratch_, &cub_, &table_,
+                          &hops_, &outbox_[0], &outbox_[1], &inbox_[0], &inbox_[1], &slots_[0], &slots_[1]})
+    b->release();
+  for (auto& b : image_source_) b.release();
+  for (auto& b : image_target_) b.release();
+  for (auto& b : pinned_) b.release();
+  for (PinnedBuffer* b : {&mirror_, &result_host_}) b->release();
+  cudaFree(result_);
+  cudaEventDestroy(staged_);
+  cudaEventDestroy(consumed_);
+  cudaStreamDestroy(compute_);
+  cudaStreamDestroy(copy_);
+}
+
+void DeviceSlabArrays::select() const { check(cudaSetDevice(device_), "cudaSetDevice"); }
+
+int DeviceSlabArrays::field(std::string_view name) const {
+  for (std::size_t f = 0; f < arrays_.size(); ++f)
+    if (arrays_[f].meta.name == name) return static_cast<int>(f);
+  throw std::logic_error("DeviceSlabArrays: the host store has no field " + std::string(name));
+}
+
+DeviceFields DeviceSlabArrays::fields() const {
+  DeviceFields d{};
+  auto f32 = [&](int f) { return reinterpret_cast<float*>(arrays_[f].data); };
+  for (int k = 0; k < dim_; ++k) {
+    d.pos[k] = f32(pos_[k]);
+    d.vel[k] = f32(vel_[k]);
+    d.acc[k] = f32(acc_[k]);
+    d.acc_prev[k] = f32(acc_prev_[k]);
+  }
+  d.density = f32(density_);
+  d.pressure = f32(pressure_);
+  d.density_rate = f32(rate_);
+  d.density_rate_prev = f32(rate_prev_);
+  d.id = reinterpret_cast<const std::uint32_t*>(arrays_[id_].data);
+  d.kind = reinterpret_cast<const std::uint8_t*>(arrays_[kind_].data);
+  return d;
+}
+
+void DeviceSlabArrays::swap_rates() {
+  for (int k = 0; k < dim_; ++k) std::swap(arrays_[acc_[k]].data, arrays_[acc_prev_[k]].data);
+  std::swap(arrays_[rate_].data, arrays_[rate_prev_].data);
+}
+
+// Grows every per-slot array, keeping the fields and keys of [0, size_); the sort buffers and the
+// scratch word are rewritten by every use.
+void DeviceSlabArrays::reserve(std::size_t n) {
+  const std::size_t cap = grown_capacity(n, capacity_);
+  if (cap == capacity_) return;
+  check(cudaStreamSynchronize(compute_), "growth");
+  auto grow = [&](char*& data, std::size_t elem) {
+    char* fresh = nullptr;
+    check(cudaMalloc(&fresh, cap * elem), "cudaMalloc(particles)");
+    if (data && size_ > 0) check(cudaMemcpyAsync(fresh, data, size_ * elem, cudaMemcpyDeviceToDevice, compute_), "grow");
+    check(cudaStreamSynchronize(compute_), "grow");
+    cudaFree(data);
+    data = fresh;
+  };
+  for (auto& a : arrays_) grow(a.data, a.meta.elem_size);
+  keys_.bytes = capacity_ * sizeof(std::uint32_t);
+  grow(keys_.data, sizeof(std::uint32_t));
+  keys_.bytes = cap * sizeof(std::uint32_t);
+  for (auto& b : sort_keys_) b.reserve(cap * sizeof(std::uint64_t), compute_);
+  for (auto& b : sort_values_) b.reserve(cap * sizeof(std::uint32_t), compute_);
+  scratch_.reserve(cap * sizeof(std::uint32_t), compute_);
+  capacity_ = cap;
+}
+
+void* DeviceSlabArrays::cub_scratch(std::size_t bytes) {
+  cub_.reserve(bytes, compute_);
+  return cub_.data;
+}
+
+std::size_t DeviceSlabArrays::bytes() const {
+  std::size_t b = 0;
+  for (auto& a : arrays_) b += capacity_ * a.meta.elem_size;
+  for (const DeviceBuffer* x : {&keys_, &sort_keys_[0], &sort_keys_[1], &sort_values_[0], &sort_values_[1], &scratch_, &cub_, &table_,
+                                &hops_, &outbox_[0], &outbox_[1], &inbox_[0], &inbox_[1], &slots_[0], &slots_[1]})
+    b += x->bytes;
+  for (auto& x : image_source_) b += x.bytes;
+  for (auto& x : image_target_) b += x.bytes;
+  return b;
+}
+
+std::uint32_t DeviceSlabArrays::min_u32(const std::uint32_t* in, std::size_t n) {
+  if (n == 0) return kNoFault;
+  std::size_t bytes = 0;
+  check(cub::DeviceReduce::Min(nullptr, bytes, in, result_, static_cast<int>(n), compute_), "cub::DeviceReduce::Min");
+  check(cub::DeviceReduce::Min(cub_scratch(bytes), bytes, in, result_, static_cast<int>(n), compute_), "cub::DeviceReduce::Min");
+  check(cudaMemcpyAsync(result_host_.data, result_, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_), "copy minimum");
+  check(cudaStreamSynchronize(compute_), "minimum");
+  std::uint32_t v;
+  std::memcpy(&v, result_host_.data, sizeof v);
+  return v;
+}
+
+float DeviceSlabArrays::min_f32(const float* in, std::size_t n) {
+  float* out = reinterpret_cast<float*>(result_);
+  std::size_t bytes = 0;
+  check(cub::DeviceReduce::Min(nullptr, bytes, in, out, static_cast<int>(n), compute_), "cub::DeviceReduce::Min");
+  check(cub::DeviceReduce::Min(cub_scratch(bytes), bytes, in, out, static_cast<int>(n), compute_), "cub::DeviceReduce::Min");
+  check(cudaMemcpyAsync(result_host_.data, out, sizeof(float), cudaMemcpyDeviceToHost, compute_), "copy minimum");
+  check(cudaStreamSynchronize(compute_), "minimum");
+  float v;
+  std::memcpy(&v, result_host_.data, sizeof v);
+  return v;
+}
+
+// ---- host copies --------------------------------------------------------------------------------
+
+void DeviceSlabArrays::upload(const ParticleStore& host) {
+  select();
+  auto& p = const_cast<ParticleStore&>(host);
+  auto refs = p.fields();
+  reserve(p.size());
+  size_ = p.size();
+  owned_ = p.owned();
+  std::size_t total = 0;
+  for (auto& r : refs) total += size_ * r.elem_size;
+  mirror_.reserve(total);
+  std::size_t at = 0;
+  for (std::size_t f = 0; f < refs.size(); ++f) {
+    const std::size_t b = size_ * refs[f].elem_size;
+    if (b == 0) continue;
+    std::memcpy(mirror_.data + at, refs[f].bytes(), b);
+    check(cudaMemcpyAsync(arrays_[f].data, mirror_.data + at, b, cudaMemcpyHostToDevice, compute_), "upload particles");
+    at += b;
+  }
+  check(cudaStreamSynchronize(compute_), "upload");
+}
+
+// The pinned mirror: every copy queued at once on the copy stream after the compute stream's work,
+// one wait, then into the host store.
+void DeviceSlabArrays::download(ParticleStore& host, CellGrid& grid) {
+  select();
+  host.resize(size_);
+  host.set_owned(owned_);
+  auto refs = host.fields();
+  const std::size_t cells = table_entries_ > 0 ? view_.cell_count() + 1 : 0;
+  std::size_t total = cells * sizeof(std::uint32_t);
+  for (auto& r : refs) total += (in_set(r, FieldSet::Ghost) ? size_ : owned_) * r.elem_size;
+  mirror_.reserve(total);
+  check(cudaEventRecord(staged_, compute_), "cudaEventRecord");
+  check(cudaStreamWaitEvent(copy_, staged_, 0), "cudaStreamWaitEvent");
+  std::size_t at = 0;
+  std::vector<std::size_t> offset(refs.size());
+  for (std::size_t f = 0; f < refs.size(); ++f) {
+    offset[f] = at;
+    const std::size_t b = (in_set(refs[f], FieldSet::Ghost) ? size_ : owned_) * refs[f].elem_size;
+    if (b > 0) check(cudaMemcpyAsync(mirror_.data + at, arrays_[f].data, b, cudaMemcpyDeviceToHost, copy_), "download particles");
+    at += b;
+  }
+  if (cells > 0) check(cudaMemcpyAsync(mirror_.data + at, table_.data, cells * sizeof(std::uint32_t), cudaMemcpyDeviceToHost, copy_), "download table");
+  check(cudaStreamSynchronize(copy_), "download");
+  for (std::size_t f = 0; f < refs.size(); ++f) {
+    const std::size_t b = (in_set(refs[f], FieldSet::Ghost) ? size_ : owned_) * refs[f].elem_size;
+    if (b > 0) std::memcpy(refs[f].bytes(), mirror_.data + offset[f], b);
+  }
+  if (cells > 0) grid.assign_starts(reinterpret_cast<const std::uint32_t*>(mirror_.data + at));
+}
+
+// ---- keys, sort, table --------------------------------------------------------------------------
+
+void DeviceSlabArrays::truncate(std::size_t n) {
+  size_ = std::min(size_, n);
+  owned_ = std::min(owned_, n);
+}
+
+void DeviceSlabArrays::set_migration_hops(const std::vector<std::int8_t>& hops) {
+  select();
+  hops_.reserve(hops.size(), compute_);
+  check(cudaMemcpyAsync(hops_.data, hops.data(), hops.size(), cudaMemcpyHostToDevice, compute_), "upload hops");
+  check(cudaStreamSynchronize(compute_), "upload hops");  // `hops` is pageable and may go away
+}
+
+void DeviceSlabArrays::compute_keys(const CellGrid& geometry, std::size_t first, std::size_t last, bool migrating) {
+  select();
+  CellGridView g = geometry.view();
+  g.start = nullptr;
+  lattice_ = geometry.lattice();
+  key_count_ = KeyBins{g.cell_count()}.count();
+  const DeviceFields d = fields();
+  launch(compute_, last - first, key_kernel, keys_.as<std::uint32_t>(), d.pos[0], dim_ >= 2 ? d.pos[1] : nullptr,
+         dim_ >= 3 ? d.pos[2] : nullptr, g, lattice_, migrating ? hops_.as<const std::int8_t>() : nullptr, u32(first),
+         u32(last - first));
+}
+
+void DeviceSlabArrays::sort_by_key(std::size_t first, std::size_t last) {
+  select();
+  const std::size_t n = last - first;
+  sort_first_ = first;
+  sort_count_ = n;
+  if (n == 0) return;
+  const SortWord word = sort_word(key_count_, id_bound_);
+  launch(compute_, n, compose_kernel, keys_.as<const std::uint32_t>(), reinterpret_cast<const std::uint32_t*>(arrays_[id_].data),
+         word.id_bits, sort_keys_[0].as<std::uint64_t>(), sort_values_[0].as<std::uint32_t>(), u32(first), u32(n));
+  cub::DoubleBuffer<std::uint64_t> words(sort_keys_[0].as<std::uint64_t>(), sort_keys_[1].as<std::uint64_t>());
+  cub::DoubleBuffer<std::uint32_t> perm(sort_values_[0].as<std::uint32_t>(), sort_values_[1].as<std::uint32_t>());
+  const int end_bit = word.end_bit;
+  std::size_t bytes = 0;
+  check(cub::DeviceRadixSort::SortPairs(nullptr, bytes, words, perm, static_cast<int>(n), 0, end_bit, compute_), "cub::DeviceRadixSort");
+  check(cub::DeviceRadixSort::SortPairs(cub_scratch(bytes), bytes, words, perm, static_cast<int>(n), 0, end_bit, compute_),
+        "cub::DeviceRadixSort");
+  sorted_values_ = perm.selector;
+  // Every field follows the permutation: gathered into the scratch word, copied back.
+  for (auto& a : arrays_) {
+    char* at = a.data + first * a.meta.elem_size;
+    if (a.meta.elem_size == 4)
+      launch(compute_, n, gather_kernel<std::uint32_t>, reinterpret_cast<const std::uint32_t*>(at), perm.Current(),
+             scratch_.as<std::uint32_t>(), u32(n));
+    else if (a.meta.elem_size == 1)
+      launch(compute_, n, gather_kernel<std::uint8_t>, reinterpret_cast<const std::uint8_t*>(at), perm.Current(),
+             scratch_.as<std::uint8_t>(), u32(n));
+    else
+      throw std::logic_error("DeviceSlabArrays: fields are 4 or 1 bytes wide");
+    check(cudaMemcpyAsync(at, scratch_.data, n * a.meta.elem_size, cudaMemcpyDeviceToDevice, compute_), "permute");
+  }
+  launch(compute_, n, key_of_word_kernel, static_cast<const std::uint64_t*>(words.Current()), word.id_bits,
+         keys_.as<std::uint32_t>() + first, u32(n));
+}
+
+void DeviceSlabArrays::build_table(const CellGrid& geometry) {
+  select();
+  view_ = geometry.view();
+  lattice_ = geometry.lattice();
+  const std::uint32_t entries = KeyBins{view_.cell_count()}.count() + 1;
+  table_.reserve(entries * sizeof(std::uint32_t), compute_);
+  launch(compute_, entries, table_kernel, keys_.as<const std::uint32_t>(), u32(size_), table_.as<std::uint32_t>(), entries);
+  view_.start = table_.as<const std::uint32_t>();
+  table_entries_ = entries;
+}
+
+std::vector<std::uint32_t> DeviceSlabArrays::table_entries(const TableRead& read) {
+  select();
+  std::vector<std::uint32_t> out(read.count);
+  if (read.count == 0) return out;
+  if (read.first + static_cast<std::size_t>(read.count - 1) * read.stride >= table_entries_)
+    throw std::logic_error("DeviceSlabArrays: table read past the end");
+  result_host_.reserve(read.count * sizeof(std::uint32_t));
+  // A strided read of the table: one 4-byte column of a pitched 2D copy.
+  check(cudaMemcpy2DAsync(result_host_.data, sizeof(std::uint32_t), table_.as<std::uint32_t>() + read.first,
+                          read.stride * sizeof(std::uint32_t), sizeof(std::uint32_t), read.count, cudaMemcpyDeviceToHost, compute_),
+        "read table");
+  check(cudaStreamSynchronize(compute_), "read table");
+  std::memcpy(out.data(), result_host_.data, read.count * sizeof(std::uint32_t));
+  return out;
+}
+
+// ---- neighbour payload --------------------------------------------------------------------------
+
+// Fields of `set` of particles from[0 .. count) written to slots [to, to + count), shifted.
+void DeviceSlabArrays::gather_fields(FieldSet set, const std::uint32_t* from, std::size_t count, std::size_t to, Shift shift) {
+  for (std::size_t f = 0; f < arrays_.size(); ++f) {
+    Array& a = arrays_[f];
+    if (!in_set(a.meta, set)) continue;
+    char* dst = a.data + to * a.meta.elem_size;
+    if (a.meta.elem_size == 4)
+      launch(compute_, count, gather_kernel<std::uint32_t>, reinterpret_cast<const std::uint32_t*>(a.data), from,
+             reinterpret_cast<std::uint32_t*>(dst), u32(count));
+    else
+      launch(compute_, count, gather_kernel<std::uint8_t>, reinterpret_cast<const std::uint8_t*>(a.data), from,
+             reinterpret_cast<std::uint8_t*>(dst), u32(count));
+    if (shift.axis >= 0 && static_cast<int>(f) == pos_[shift.axis])
+      launch(compute_, count, shift_kernel, reinterpret_cast<float*>(dst), u32(count), shift.offset);
+  }
+}
+
+void DeviceSlabArrays::stage(Side side, FieldSet set, ParticleRange range, Shift shift) {
+  select();
+  std::size_t bytes = 0;
+  for (auto& a : arrays_)
+    if (in_set(a.meta, set)) bytes += range.count * a.meta.elem_size;
+  outbox_[side].reserve(bytes, compute_);
+  std::size_t at = 0;
+  for (std::size_t f = 0; f < arrays_.size(); ++f) {
+    const Array& a = arrays_[f];
+    if (!in_set(a.meta, set) || range.count == 0) continue;
+    const std::size_t b = range.count * a.meta.elem_size;
+    check(cudaMemcpyAsync(outbox_[side].data + at, a.data + range.first * a.meta.elem_size, b, cudaMemcpyDeviceToDevice, compute_),
+          "stage");
+    if (shift.axis >= 0 && static_cast<int>(f) == pos_[shift.axis])
+      launch(compute_, range.count, shift_kernel, reinterpret_cast<float*>(outbox_[side].data + at), u32(range.count), shift.offset);
+    at += b;
+  }
+  out_count_[side] = range.count;
+  out_bytes_[side] = bytes;
+  check(cudaEventRecord(staged_, compute_), "cudaEventRecord(staged)");
+}
+
+// The protocol is HaloExchange's (halo_exchange.cpp, tested on the CPU); these are its copies,
+// all on the copy stream, so that the compute stream keeps running what was queued after the
+// staging (the interior of the fluid loop) while the payload travels.
+std::array<std::size_t, 2> DeviceSlabArrays::exchange(SlabTransport& t, FieldSet) {
+  select();
+  const std::array<Outgoing, 2> out{Outgoing{outbox_[kLeft].data, out_count_[kLeft], out_bytes_[kLeft]},
+                                    Outgoing{outbox_[kRight].data, out_count_[kRight], out_bytes_[kRight]}};
+  in_count_ = halo_.exchange(t, *this, out);
+  return in_count_;
+}
+
+bool DeviceSlabArrays::peer_both_ways(int other) {
+  if (!can_access_peer(device_, other) || !can_access_peer(other, device_)) return false;
+  const cudaError_t e = cudaDeviceEnablePeerAccess(other, 0);
+  if (e == cudaErrorPeerAccessAlreadyEnabled) (void)cudaGetLastError();
+  else check(e, "cudaDeviceEnablePeerAccess");
+  return true;
+}
+void DeviceSlabArrays::wait_staged() { check(cudaEventSynchronize(staged_), "halo: outgoing buffers"); }
+void DeviceSlabArrays::copy_to_host(void* host, const void* device, std::size_t bytes) {
+  check(cudaMemcpyAsync(host, device, bytes, cudaMemcpyDeviceToHost, copy_), "halo D2H");
+}
+void DeviceSlabArrays::copy_from_host(void* device, const void* host, std::size_t bytes) {
+  check(cudaMemcpyAsync(device, host, bytes, cudaMemcpyHostToDevice, copy_), "halo H2D");
+}
+void DeviceSlabArrays::copy_peer(void* device, const void* their_device, int their_device_index, std::size_t bytes) {
+  check(cudaMemcpyPeerAsync(device, device_, their_device, their_device_index, bytes, copy_), "cudaMemcpyPeerAsync");
+}
+void DeviceSlabArrays::after_incoming_read() { check(cudaStreamWaitEvent(copy_, consumed_, 0), "cudaStreamWaitEvent(consumed)"); }
+void DeviceSlabArrays::wait_incoming_read() { check(cudaEventSynchronize(consumed_), "halo: incoming buffers read"); }
+void DeviceSlabArrays::wait_copies() { check(cudaStreamSynchronize(copy_), "halo copies"); }
+void* DeviceSlabArrays::incoming(Side side, std::size_t bytes) {
+  inbox_[side].reserve(bytes, compute_);
+  return inbox_[side].data;
+}
+void* DeviceSlabArrays::pinned(int which, std::size_t bytes) {
+  pinned_[which].reserve(bytes);
+  return pinned_[which].data;
+}
+
+void DeviceSlabArrays::append_received(Side side, FieldSet set) {
+  select();
+  const std::size_t n = in_count_[side];
+  if (n == 0) return;
+  reserve(size_ + n);
+  std::size_t at = 0;
+  for (auto& a : arrays_) {
+    if (!in_set(a.meta, set)) continue;
+    const std::size_t b = n * a.meta.elem_size;
+    check(cudaMemcpyAsync(a.data + size_ * a.meta.elem_size, inbox_[side].data + at, b, cudaMemcpyDeviceToDevice, compute_), "append");
+    at += b;
+  }
+  size_ += n;
+  check(cudaEventRecord(consumed_, compute_), "cudaEventRecord(consumed)");
+}
+
+void DeviceSlabArrays::scatter_received(Side side) {
+  select();
+  const std::size_t n = in_count_[side];
+  if (n != slot_count_[side]) throw std::runtime_error("halo refresh: count mismatch");
+  std::size_t at = 0;
+  for (auto& a : arrays_) {
+    if (!in_set(a.meta, FieldSet::Refresh)) continue;
+    launch(compute_, n, scatter_kernel, reinterpret_cast<const float*>(inbox_[side].data + at), slots_[side].as<const std::uint32_t>(),
+           reinterpret_cast<float*>(a.data), u32(n));
+    at += n * a.meta.elem_size;
+  }
+  check(cudaEventRecord(consumed_, compute_), "cudaEventRecord(consumed)");
+}
+
+// ---- periodic images ----------------------------------------------------------------------------
+
+void DeviceSlabArrays::forget_images() {
+  images_ = {0, 0, 0};
+  local_images_ = {0, 0, 0};
+}
+
+void DeviceSlabArrays::make_images(const CellGrid& geometry, int axis) {
+  select();
+  const std::size_t n = size_;  // images of the particles that exist before this axis
+  if (n == 0) return;
+  image_source_[axis].reserve(2 * n * sizeof(std::uint32_t), compute_);
+  image_target_[axis].reserve(2 * n * sizeof(std::uint32_t), compute_);
+  for (const bool local : {true, false}) {
+    for (const int layer : {0, geometry.lattice().cells[axis] - 1}) append_images(geometry, axis, layer, local, n);
+    if (local) local_images_[axis] = images_[axis];
+  }
+}
+
+// Images of particles [0, n) in one cell layer, of owned columns (local) or halo columns: a flag
+// per particle, an exclusive scan, a compaction (index order), then the Ghost fields gathered and
+// shifted by one period to the end.
+void DeviceSlabArrays::append_images(const CellGrid& geometry, int axis, int layer, bool local, std::size_t n) {
+  const Lattice& L = geometry.lattice();
+  std::uint32_t* flags = sort_values_[0].as<std::uint32_t>();
+  std::uint32_t* prefix = sort_values_[1].as<std::uint32_t>();
+  launch(compute_, n, layer_flag_kernel, static_cast<const float*>(fields().pos[0]), static_cast<const float*>(fields().pos[axis]), L,
+         axis, layer, geometry.owned_lo(), geometry.owned_hi(), local, flags, u32(n));
+  std::size_t bytes = 0;
+  check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, flags, prefix, static_cast<int>(n), compute_), "cub::DeviceScan");
+  check(cub::DeviceScan::ExclusiveSum(cub_scratch(bytes), bytes, flags, prefix, static_cast<int>(n), compute_), "cub::DeviceScan");
+  std::uint32_t* list = image_source_[axis].as<std::uint32_t>() + images_[axis];
+  launch(compute_, n, compact_kernel, static_cast<const std::uint32_t*>(flags), static_cast<const std::uint32_t*>(prefix), list, u32(n));
+  check(cudaMemcpyAsync(result_host_.data, prefix + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_), "image count");
+  check(cudaMemcpyAsync(result_host_.data + 4, flags + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_), "image count");
+  check(cudaStreamSynchronize(compute_), "image count");
+  std::uint32_t last_prefix, last_flag;
+  std::memcpy(&last_prefix, result_host_.data, 4);
+  std::memcpy(&last_flag, result_host_.data + 4, 4);
+  const std::size_t count = last_prefix + last_flag;
+  reserve(size_ + count);
+  const float offset = layer == 0 ? L.period[axis] : -L.period[axis];
+  gather_fields(FieldSet::Ghost, list, count, size_, Shift{axis, offset});
+  launch(compute_, count, iota_kernel, image_target_[axis].as<std::uint32_t>() + images_[axis], u32(size_), u32(count));
+  size_ += count;
+  images_[axis] += count;
+}
+
+void DeviceSlabArrays::record_halo_slots(std::size_t left, std::size_t right) {
+  select();
+  const std::size_t n = size_ - owned_;
+  if (sort_first_ != owned_ || sort_count_ != n) throw std::logic_error("DeviceSlabArrays: record_halo_slots must follow the ghost sort");
+  const std::uint32_t* perm = sort_values_[sorted_values_].as<const std::uint32_t>();
+  std::uint32_t* slot_of = sort_values_[1 - sorted_values_].as<std::uint32_t>();
+  launch(compute_, n, inverse_kernel, perm, slot_of, u32(owned_), u32(n));
+  const std::size_t count[2] = {left, right}, from[2] = {0, left};
+  for (Side side : {kLeft, kRight}) {
+    slots_[side].reserve(count[side] * sizeof(std::uint32_t), compute_);
+    if (count[side] > 0)
+      check(cudaMemcpyAsync(slots_[side].data, slot_of + from[side], count[side] * sizeof(std::uint32_t), cudaMemcpyDeviceToDevice, compute_),
+            "halo slots");
+    slot_count_[side] = count[side];
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    launch(compute_, images_[axis], map_slots_kernel, image_source_[axis].as<std::uint32_t>(), static_cast<const std::uint32_t*>(slot_of),
+           u32(owned_), u32(images_[axis]));
+    launch(compute_, images_[axis], map_slots_kernel, image_target_[axis].as<std::uint32_t>(), static_cast<const std::uint32_t*>(slot_of),
+           u32(owned_), u32(images_[axis]));
+  }
+}
+
+// Axis by axis in stream order: an image of an image copies after its source was refreshed.
+void DeviceSlabArrays::refresh_images(ImagePart part) {
+  select();
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::size_t first = part == ImagePart::Local ? 0 : local_images_[axis];
+    const std::size_t count = part == ImagePart::Local ? local_images_[axis] : images_[axis] - local_images_[axis];
+    for (auto& a : arrays_)
+      if (in_set(a.meta, FieldSet::Refresh))
+        launch(compute_, count, copy_within_kernel, reinterpret_cast<float*>(a.data),
+               image_source_[axis].as<const std::uint32_t>() + first, image_target_[axis].as<const std::uint32_t>() + first, u32(count));
+  }
+}
+
+// ---- checks -------------------------------------------------------------------------------------
+
+std::uint32_t DeviceSlabArrays::wrap_and_find_position_fault(const Lattice& L) {
+  select();
+  launch(compute_, owned_, position_fault_kernel, fields(), L, u32(owned_), scratch_.as<std::uint32_t>());
+  return min_u32(scratch_.as<const std::uint32_t>(), owned_);
+}
+
+std::uint32_t DeviceSlabArrays::find_unhealthy(const HealthLimits& limits) {
+  select();
+  launch(compute_, owned_, health_kernel, fields(), dim_, limits, u32(owned_), scratch_.as<std::uint32_t>());
+  return min_u32(scratch_.as<const std::uint32_t>(), owned_);
+}
+
+}  // namespace spate::gpu

@@ -1,0 +1,156 @@
+#pragma once
+// A slab's particles in device memory, resident for the whole run, and the SlabArrays primitives
+// over them: CUB radix sort, scans and reductions, a handful of copy kernels, and halo payloads
+// moved by peer copies or through pinned host memory. What to move is decided by the shared host
+// orchestration (domain/slab_topology.cpp), which the CPU tests run on HostSlabArrays. Shared by
+// the two CUDA translation units: device_arrays.cu (these primitives) and cuda_kernels.cu (the
+// physics loops).
+#include <cuda_runtime.h>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "../../domain/slab_arrays.hpp"
+#include "halo_exchange.hpp"
+
+namespace spate::gpu {
+
+void check(cudaError_t e, const char* what);
+
+// The device arrays of one slab, by value into every kernel. Components beyond dim are null.
+struct DeviceFields {
+  float* pos[3];
+  float* vel[3];
+  float* acc[3];
+  float* acc_prev[3];
+  float* density;
+  float* pressure;
+  float* density_rate;
+  float* density_rate_prev;
+  const std::uint32_t* id;
+  const std::uint8_t* kind;
+};
+
+// Device memory that grows (with headroom, never shrinking); growing discards the contents.
+struct DeviceBuffer {
+  char* data = nullptr;
+  std::size_t bytes = 0;
+  void reserve(std::size_t n, cudaStream_t in_use);
+  void release();
+  template <class T>
+  T* as() const {
+    return reinterpret_cast<T*>(data);
+  }
+};
+
+// Page-locked host memory (fast, asynchronous copies) that grows the same way.
+struct PinnedBuffer {
+  char* data = nullptr;
+  std::size_t bytes = 0;
+  void reserve(std::size_t n);
+  void release();
+};
+
+// The primitives (SlabArrays) and, for the halo protocol (HaloExchange), the copies it queues.
+class DeviceSlabArrays final : public SlabArrays, private DeviceCopies {
+ public:
+  DeviceSlabArrays(int device, int dim);
+  ~DeviceSlabArrays() override;
+  DeviceSlabArrays(const DeviceSlabArrays&) = delete;
+  DeviceSlabArrays& operator=(const DeviceSlabArrays&) = delete;
+
+  std::size_t size() const override { return size_; }
+  std::size_t owned() const override { return owned_; }
+  void upload(const ParticleStore& host) override;
+  void download(ParticleStore& host, CellGrid& grid) override;
+  void truncate(std::size_t n) override;
+  void set_owned(std::size_t n) override { owned_ = n; }
+  void set_id_bound(std::uint32_t bound) override { id_bound_ = bound; }
+  void set_migration_hops(const std::vector<std::int8_t>& hops) override;
+  void compute_keys(const CellGrid& geometry, std::size_t first, std::size_t last, bool migrating) override;
+  void sort_by_key(std::size_t first, std::size_t last) override;
+  void build_table(const CellGrid& geometry) override;
+  std::vector<std::uint32_t> table_entries(const TableRead& read) override;
+  void stage(Side side, FieldSet set, ParticleRange range, Shift shift) override;
+  std::array<std::size_t, 2> exchange(SlabTransport& t, FieldSet set) override;
+  void append_received(Side side, FieldSet set) override;
+  void scatter_received(Side side) override;
+  void forget_images() override;
+  void make_images(const CellGrid& geometry, int axis) override;
+  void record_halo_slots(std::size_t left, std::size_t right) override;
+  void refresh_images(ImagePart part) override;
+  std::uint32_t wrap_and_find_position_fault(const Lattice& L) override;
+  std::uint32_t find_unhealthy(const HealthLimits& limits) override;
+
+  // For the physics loops (cuda_kernels.cu), all on the compute stream.
+  void select() const;
+  DeviceFields fields() const;
+  const CellGridView& view() const { return view_; }  // start points at the device cell table
+  const Lattice& lattice() const { return lattice_; }
+  int dim() const { return dim_; }
+  cudaStream_t stream() const { return compute_; }
+  void swap_rates();                   // ParticleStore::swap_rates, on the pointers
+  float* scratch() const { return scratch_.as<float>(); }  // one word per slot
+  // The minimum of n words of `in` (CUB, exact), copied to the host.
+  std::uint32_t min_u32(const std::uint32_t* in, std::size_t n);
+  float min_f32(const float* in, std::size_t n);
+  std::size_t bytes() const;           // device memory held
+
+ private:
+  struct Array {
+    FieldRef meta;  // name, element size, sets (data unused)
+    char* data = nullptr;
+  };
+  int field(std::string_view name) const;
+  void reserve(std::size_t n);  // particle slots, keeping [0, size_)
+  void* cub_scratch(std::size_t bytes);
+  // DeviceCopies, for HaloExchange: cudaMemcpy*Async on the copy stream.
+  int device() const override { return device_; }
+  bool peer_both_ways(int other) override;
+  void wait_staged() override;
+  void copy_to_host(void* host, const void* device, std::size_t bytes) override;
+  void copy_from_host(void* device, const void* host, std::size_t bytes) override;
+  void copy_peer(void* device, const void* their_device, int their_device_index, std::size_t bytes) override;
+  void after_incoming_read() override;
+  void wait_incoming_read() override;
+  void wait_copies() override;
+  void* incoming(Side side, std::size_t bytes) override;
+  void* pinned(int which, std::size_t bytes) override;
+  void append_images(const CellGrid& geometry, int axis, int layer, bool local, std::size_t n);
+  void gather_fields(FieldSet set, const std::uint32_t* from, std::size_t count, std::size_t to, Shift shift);
+
+  int device_, dim_;
+  cudaStream_t compute_ = nullptr, copy_ = nullptr;
+  cudaEvent_t staged_ = nullptr;    // the outgoing buffers are complete
+  cudaEvent_t consumed_ = nullptr;  // the incoming buffers were read (append, scatter)
+  std::vector<Array> arrays_;
+  int pos_[3] = {-1, -1, -1}, vel_[3] = {-1, -1, -1}, acc_[3] = {-1, -1, -1}, acc_prev_[3] = {-1, -1, -1};
+  int density_ = -1, pressure_ = -1, rate_ = -1, rate_prev_ = -1, id_ = -1, kind_ = -1;
+  std::size_t capacity_ = 0, size_ = 0, owned_ = 0;
+
+  DeviceBuffer keys_, sort_keys_[2], sort_values_[2], scratch_, cub_;
+  int sorted_values_ = 0;             // which sort_values_ holds the last sort's permutation
+  std::size_t sort_first_ = 0, sort_count_ = 0;
+  std::uint32_t key_count_ = 0, id_bound_ = 0xffffffffu;
+  DeviceBuffer table_, hops_;
+  std::size_t table_entries_ = 0;
+  CellGridView view_{};
+  Lattice lattice_{};
+
+  HaloExchange halo_;
+  std::array<DeviceBuffer, 2> outbox_, inbox_;
+  std::array<PinnedBuffer, 4> pinned_;  // outgoing left/right, incoming left/right
+  std::array<std::size_t, 2> out_count_{0, 0}, out_bytes_{0, 0}, in_count_{0, 0};
+  std::array<DeviceBuffer, 2> slots_;
+  std::array<std::size_t, 2> slot_count_{0, 0};
+  // Periodic images per axis: source and target slots, the local part [0, local) first, then
+  // the halo part [local, total).
+  std::array<DeviceBuffer, 3> image_source_, image_target_;
+  std::array<std::size_t, 3> images_{0, 0, 0}, local_images_{0, 0, 0};
+  PinnedBuffer mirror_;               // the host mirror's staging (output steps)
+  std::uint32_t* result_ = nullptr;   // device word for reductions and counts
+  PinnedBuffer result_host_;
+};
+
+}  // namespace spate::gpu

@@ -1,0 +1,55 @@
+#pragma once
+// The per-particle predicates of the domain and health checks, one definition for the host worker
+// and the device reductions (SPATE_HD): a GPU that finds "the lowest faulty id" by a reduction and
+// the host that then writes the message must agree on which particles are faulty.
+#include <cmath>
+#include <cstdint>
+
+#include "../grid/lattice.hpp"
+#include "../physics/host_device.hpp"
+
+namespace spate {
+
+SPATE_HD bool finite_value(float v) {
+#if defined(__CUDA_ARCH__)
+  return isfinite(v);
+#else
+  return std::isfinite(v);
+#endif
+}
+
+// Brings a position that left a periodic axis back by one period (the owner does it once per step).
+SPATE_HD void wrap_periodic(const Lattice& L, float& x, int axis) {
+  if (!L.periodic[axis]) return;
+  if (x >= L.upper(axis)) x -= L.period[axis];
+  else if (x < L.origin[axis]) x += L.period[axis];
+}
+
+enum class PositionFault : std::uint8_t { None = 0, NonFinite = 1, Outside = 2 };
+
+// Whether a (wrapped) coordinate can be given a cell of the global lattice.
+SPATE_HD PositionFault position_fault(const Lattice& L, float x, int axis) {
+  if (!finite_value(x)) return PositionFault::NonFinite;
+  const float lo = L.origin[axis];
+  const bool inside = x >= lo - L.cell_size[axis] && x <= L.upper(axis) + L.cell_size[axis] && L.cell_of(x, axis) >= 0 &&
+                      L.cell_of(x, axis) < L.cells[axis];
+  return inside ? PositionFault::None : PositionFault::Outside;
+}
+
+// The health check of a fluid particle: finite state and density within [min, max] x rho0.
+struct HealthLimits {
+  float rho0 = 1000.0f;
+  float min_ratio = 0.0f;
+  float max_ratio = 1e30f;
+};
+SPATE_HD bool state_finite(int dim, const float pos[3], const float vel[3], float density) {
+  bool finite = finite_value(density);
+  for (int a = 0; a < dim; ++a) finite = finite && finite_value(pos[a]) && finite_value(vel[a]);
+  return finite;
+}
+SPATE_HD bool healthy(const HealthLimits& h, bool finite, float density) {
+  const float ratio = density / h.rho0;
+  return finite && ratio >= h.min_ratio && ratio <= h.max_ratio;
+}
+
+}  // namespace spate

@@ -1,0 +1,175 @@
+// The halo protocol of the CUDA backend (backend/cuda/halo_exchange.hpp) on the CPU: worker threads
+// over an InProcessHub, host memory standing in for each GPU's memory, memcpy for every copy. What
+// runs on a GPU is the same code with cudaMemcpy*Async behind DeviceCopies.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <functional>
+#include <thread>
+#include <vector>
+
+#include "backend/cuda/halo_exchange.hpp"
+#include "comm/in_process_transport.hpp"
+
+namespace spate::gpu {
+namespace {
+
+class HostCopies final : public DeviceCopies {
+ public:
+  HostCopies(int device, std::function<bool(int, int)> reach) : device_(device), reach_(std::move(reach)) {}
+  int device() const override { return device_; }
+  bool peer_both_ways(int other) override { return reach_(device_, other) && reach_(other, device_); }
+  void wait_staged() override {}
+  void copy_to_host(void* host, const void* device, std::size_t bytes) override {
+    std::memcpy(host, device, bytes);
+    ++to_host;
+  }
+  void copy_from_host(void* device, const void* host, std::size_t bytes) override {
+    std::memcpy(device, host, bytes);
+    ++from_host;
+  }
+  void copy_peer(void* device, const void* theirs, int their_device, std::size_t bytes) override {
+    std::memcpy(device, theirs, bytes);
+    ++peer;
+    peer_from.push_back(their_device);
+  }
+  void after_incoming_read() override {}
+  void wait_incoming_read() override {}
+  void wait_copies() override {}
+  void* incoming(Side side, std::size_t bytes) override {
+    in[side].resize(bytes);
+    return in[side].data();
+  }
+  void* pinned(int which, std::size_t bytes) override {
+    if (staging[which].size() < bytes) staging[which].resize(bytes);
+    return staging[which].data();
+  }
+  std::vector<char> in[2], staging[4];
+  int to_host = 0, from_host = 0, peer = 0;
+  std::vector<int> peer_from;
+
+ private:
+  int device_;
+  std::function<bool(int, int)> reach_;
+};
+
+// An endpoint whose neighbour `remote` counts as another process (as over MPI).
+class RemoteNeighbour final : public SlabTransport {
+ public:
+  RemoteNeighbour(std::unique_ptr<SlabTransport> inner, int remote) : inner_(std::move(inner)), remote_(remote) {
+    periodic_x = inner_->periodic_x;
+  }
+  int slab() const override { return inner_->slab(); }
+  int slab_count() const override { return inner_->slab_count(); }
+  void exchange(const Bytes& l, const Bytes& r, Bytes& fl, Bytes& fr) override { inner_->exchange(l, r, fl, fr); }
+  double min(double v) override { return inner_->min(v); }
+  double max(double v) override { return inner_->max(v); }
+  std::int64_t sum(std::int64_t v) override { return inner_->sum(v); }
+  void sum(std::vector<std::int64_t>& v) override { inner_->sum(v); }
+  std::vector<Bytes> allgather(const Bytes& b) override { return inner_->allgather(b); }
+  void barrier() override { inner_->barrier(); }
+  bool any(bool f) override { return inner_->any(f); }
+  bool shares_memory_with(int s) const override { return s != remote_; }
+
+ private:
+  std::unique_ptr<SlabTransport> inner_;
+  int remote_;
+};
+
+// What slab s sends to `side` in round k: a recognisable pattern of (s + 1) * 4 + side particles.
+std::vector<char> payload(int s, int side, int k) {
+  std::vector<char> b(static_cast<std::size_t>((s + 1) * 4 + side) * 8);
+  for (std::size_t i = 0; i < b.size(); ++i) b[i] = static_cast<char>(s * 31 + side * 7 + k * 3 + static_cast<int>(i));
+  return b;
+}
+
+struct SlabResult {
+  std::array<HaloLink, 2> links;
+  int to_host = 0, from_host = 0, peer = 0;
+  std::vector<int> peer_from;
+};
+
+// `slabs` workers with devices[s], three rounds of exchanges; checks every delivery.
+std::vector<SlabResult> run(int slabs, bool periodic, const std::vector<int>& devices, const std::function<bool(int, int)>& reach,
+                            int remote_face = -1) {
+  InProcessHub hub(slabs);
+  std::vector<SlabResult> results(slabs);
+  auto body = [&](int s) {
+    std::unique_ptr<SlabTransport> t = hub.endpoint(s, periodic);
+    // Faces between slab f and f + 1 at remote_face count as crossing a process boundary.
+    if (remote_face >= 0 && (s == remote_face || s == (remote_face + 1) % slabs))
+      t = std::make_unique<RemoteNeighbour>(std::move(t), s == remote_face ? (s + 1) % slabs : remote_face);
+    HostCopies copies(devices[s], reach);
+    HaloExchange halo;
+    for (int k = 0; k < 3; ++k) {
+      std::vector<char> out[2] = {payload(s, kLeft, k), payload(s, kRight, k)};
+      const std::array<Outgoing, 2> o{Outgoing{out[0].data(), out[0].size() / 8, out[0].size()},
+                                      Outgoing{out[1].data(), out[1].size() / 8, out[1].size()}};
+      const auto counts = halo.exchange(*t, copies, o);
+      // From the left neighbour: what it sent to its right, and vice versa.
+      const int l = t->left_of(s), r = t->right_of(s);
+      EXPECT_EQ(counts[kLeft], l < 0 ? 0u : payload(l, kRight, k).size() / 8) << "slab " << s;
+      EXPECT_EQ(counts[kRight], r < 0 ? 0u : payload(r, kLeft, k).size() / 8) << "slab " << s;
+      if (l >= 0) {
+        EXPECT_EQ(copies.in[kLeft], payload(l, kRight, k)) << "slab " << s << " round " << k;
+      }
+      if (r >= 0) {
+        EXPECT_EQ(copies.in[kRight], payload(r, kLeft, k)) << "slab " << s << " round " << k;
+      }
+    }
+    results[s] = {halo.links(), copies.to_host, copies.from_host, copies.peer, copies.peer_from};
+  };
+  std::vector<std::thread> pool;
+  for (int s = 0; s < slabs; ++s) pool.emplace_back(body, s);
+  for (auto& th : pool) th.join();
+  return results;
+}
+
+}  // namespace
+
+TEST(HaloExchange, LinkChoiceIsTheSameAtBothEnds) {
+  EXPECT_EQ(choose_halo_link(false, true, 0, 1, true, false), HaloLink::None);
+  EXPECT_EQ(choose_halo_link(true, true, 0, 1, true, false), HaloLink::Peer);
+  EXPECT_EQ(choose_halo_link(true, true, 0, 1, false, false), HaloLink::Staged);
+  EXPECT_EQ(choose_halo_link(true, true, 2, 2, false, false), HaloLink::Peer);  // one GPU shared by two workers
+  EXPECT_EQ(choose_halo_link(true, false, 0, 0, true, false), HaloLink::Staged);  // another rank: never peer
+  EXPECT_EQ(choose_halo_link(true, false, 0, 1, true, true), HaloLink::DeviceMpi);
+}
+
+TEST(HaloExchange, PeerWhereDevicesReachEachOtherStagedElsewhere) {
+  // GPUs 0-1 and 2-3 reach each other (two NVLink pairs), nothing else; periodic x closes the ring.
+  auto reach = [](int a, int b) { return a / 2 == b / 2; };
+  const auto r = run(4, true, {0, 1, 2, 3}, reach);
+  EXPECT_EQ(r[0].links[kRight], HaloLink::Peer);
+  EXPECT_EQ(r[1].links[kLeft], HaloLink::Peer);
+  EXPECT_EQ(r[1].links[kRight], HaloLink::Staged);
+  EXPECT_EQ(r[2].links[kLeft], HaloLink::Staged);
+  EXPECT_EQ(r[3].links[kRight], HaloLink::Staged);  // 3 -> 0 across the periodic boundary
+  EXPECT_EQ(r[0].links[kLeft], HaloLink::Staged);
+  // Three rounds: slab 1 pulls from GPU 0 by peer copy, stages to and from host on its right.
+  EXPECT_EQ(r[1].peer, 3);
+  EXPECT_EQ(r[1].peer_from, (std::vector<int>{0, 0, 0}));
+  EXPECT_EQ(r[1].to_host, 3);
+  EXPECT_EQ(r[1].from_host, 3);
+}
+
+TEST(HaloExchange, SharedGpuAndEdgesWithoutNeighbours) {
+  // Three workers on one GPU (more workers than GPUs), non-periodic: device-local copies, and
+  // nothing crosses the outer faces.
+  const auto r = run(3, false, {0, 0, 0}, [](int, int) { return false; });
+  EXPECT_EQ(r[0].links[kLeft], HaloLink::None);
+  EXPECT_EQ(r[0].links[kRight], HaloLink::Peer);
+  EXPECT_EQ(r[2].links[kRight], HaloLink::None);
+  EXPECT_EQ(r[1].to_host + r[1].from_host, 0);
+}
+
+TEST(HaloExchange, NeighboursInAnotherProcessGoThroughHostMemory) {
+  // Every device reaches every other, but the face between slabs 1 and 2 crosses processes.
+  const auto r = run(4, false, {0, 1, 0, 1}, [](int, int) { return true; }, 1);
+  EXPECT_EQ(r[1].links[kRight], HaloLink::Staged);
+  EXPECT_EQ(r[2].links[kLeft], HaloLink::Staged);
+  EXPECT_EQ(r[1].links[kLeft], HaloLink::Peer);
+  EXPECT_EQ(r[2].links[kRight], HaloLink::Peer);
+}
+
+}  // namespace spate::gpu
