@@ -212,28 +212,3 @@ float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeSt
 }
 
 }  // namespace spate::cpu
-
-namespace spate::cpu {
-std::int64_t count_fluid_interactions(const ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
-  std::int64_t total = 0;
-  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-    const CellGridView v = grid.view();
-    for (std::uint32_t c = 0; c < grid.owned_cell_count(); ++c) {
-      int g[3];
-      grid.global_coords(c, g);
-      for (std::uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
-        if (!is_fluid(p.kind[i])) continue;
-        const Vec<Dim> xi = load_vec<Dim>(p.pos, i);
-        v.for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
-          for (std::uint32_t j = b; j < e; ++j) {
-            const Vec<Dim> r = xi - load_vec<Dim>(p.pos, j);
-            const float r2 = dot(r, r);
-            total += r2 < P.support2 && r2 > 0.0f;
-          }
-        });
-      }
-    }
-  });
-  return total;
-}
-}  // namespace spate::cpu
