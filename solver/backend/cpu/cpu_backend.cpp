@@ -104,19 +104,16 @@ struct NeighbourBatch {
   std::vector<std::uint8_t> kind;
   // Neighbours of the current particle: candidate numbers, then the pair terms per neighbour.
   std::vector<std::uint32_t> index;
+  std::vector<NeighbourRecord> record;
   int capacity = 0;
   void reserve(int n) {
     capacity = n;
+    record.resize(n);
     for (int k = 0; k < Dim; ++k) x[k].resize(n), v[k].resize(n);
     rho.resize(n), p.resize(n), r2.resize(n), index.resize(n);
     kind.resize(n);
   }
 };
-
-template <class T>
-void gather(const T* __restrict from, const std::uint32_t* __restrict index, int count, T* __restrict to) {
-  for (int n = 0; n < count; ++n) to[n] = from[index[n]];
-}
 
 template <class Kernel, int Dim>
 void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params) {
@@ -147,23 +144,25 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
       v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) { candidates += static_cast<int>(je - jb); });
       if (candidates + kSelectSlack > batch.capacity) batch.reserve(candidates + kSelectSlack);
       float* cx[Dim];
-      float* cv[Dim];
-      SPATE_UNROLL for (int k = 0; k < Dim; ++k) cx[k] = batch.x[k].data(), cv[k] = batch.v[k].data();
-      float* crho = batch.rho.data();
-      float* cp = batch.p.data();
+      SPATE_UNROLL for (int k = 0; k < Dim; ++k) cx[k] = batch.x[k].data();
       float* cr2 = batch.r2.data();
       std::uint8_t* ckind = batch.kind.data();
       std::uint32_t* index = batch.index.data();
+      NeighbourRecord* record = batch.record.data();
       int m = 0;
       v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
         const int len = static_cast<int>(je - jb);
-        SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
-          std::copy_n(ps.pos[k].data() + jb, len, cx[k] + m);
-          std::copy_n(ps.vel[k].data() + jb, len, cv[k] + m);
-        }
-        std::copy_n(ps.density.data() + jb, len, crho + m);
-        std::copy_n(ps.pressure.data() + jb, len, cp + m);
+        SPATE_UNROLL for (int k = 0; k < Dim; ++k) std::copy_n(ps.pos[k].data() + jb, len, cx[k] + m);
         std::copy_n(ps.kind.data() + jb, len, ckind + m);
+        for (int q = 0; q < len; ++q) {
+          float* f = record[m + q].f;
+          for (int k = 0; k < 3; ++k) {
+            f[kRecX + k] = k < Dim ? ps.pos[k][jb + q] : 0.0f;
+            f[kRecV + k] = k < Dim ? ps.vel[k][jb + q] : 0.0f;
+          }
+          f[kRecRho] = ps.density[jb + q];
+          f[kRecP] = ps.pressure[jb + q];
+        }
         m += len;
       });
       for (std::uint32_t i = b; i < e; ++i) {
@@ -188,21 +187,17 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
         for (int s0 = 0; s0 < count; s0 += kChunk) {
           const int len = std::min(kChunk, count - s0);
           const std::uint32_t* chunk = index + s0;
-          float jx[Dim][kChunk], jv[Dim][kChunk], jrho[kChunk], jp[kChunk];
+          alignas(64) float jf[8][kChunk];
+          float* const fields[8] = {jf[0], jf[1], jf[2], jf[3], jf[4], jf[5], jf[6], jf[7]};
+          gather_records(record, chunk, len, fields);
           std::uint8_t jkind[kChunk];
-          SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
-            gather(cx[k], chunk, len, jx[k]);
-            gather(cv[k], chunk, len, jv[k]);
-          }
-          gather(crho, chunk, len, jrho);
-          gather(cp, chunk, len, jp);
           gather(ckind, chunk, len, jkind);
           float tacc[Dim][kChunk], tdrho[kChunk];
           for (int n = 0; n < len; ++n) {
             ParticleState<Dim> sj;
-            SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.x[k] = jx[k][n], sj.v[k] = jv[k][n];
-            sj.rho = jrho[n];
-            sj.p = jp[n];
+            SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.x[k] = jf[kRecX + k][n], sj.v[k] = jf[kRecV + k][n];
+            sj.rho = jf[kRecRho][n];
+            sj.p = jf[kRecP][n];
             sj.kind = jkind[n];
             const FluidRates<Dim> t = fluid_pair_terms<Kernel, Dim>(P, si, sj);
             SPATE_UNROLL for (int k = 0; k < Dim; ++k) tacc[k][n] = t.acc[k];
