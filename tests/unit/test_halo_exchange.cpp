@@ -67,6 +67,7 @@ class RemoteNeighbour final : public SlabTransport {
   std::int64_t sum(std::int64_t v) override { return inner_->sum(v); }
   void sum(std::vector<std::int64_t>& v) override { inner_->sum(v); }
   std::vector<Bytes> allgather(const Bytes& b) override { return inner_->allgather(b); }
+  std::vector<Bytes> gather(Bytes b) override { return inner_->gather(std::move(b)); }
   void barrier() override { inner_->barrier(); }
   bool any(bool f) override { return inner_->any(f); }
   bool shares_memory_with(int s) const override { return s != remote_; }
