@@ -39,4 +39,25 @@ TEST(NeighbourSelect, SimdAndPortableSelectTheSameCandidatesInOrder) {
   }
 }
 
+// The transposing gather (8 records at a time with AVX2, then one by one) must hand the pair terms
+// exactly the fields of the selected candidates, in the selection order.
+TEST(NeighbourSelect, RecordGatherDeliversTheSelectedFieldsInOrder) {
+  std::mt19937 rng(11);
+  std::vector<cpu::NeighbourRecord> records(100);
+  for (std::size_t q = 0; q < records.size(); ++q)
+    for (int f = 0; f < 8; ++f) records[q].f[f] = static_cast<float>(q) + 0.125f * static_cast<float>(f);
+  std::uniform_int_distribution<std::uint32_t> pick(0, 99);
+  for (int count : {0, 1, 7, 8, 9, 16, 37}) {
+    std::vector<std::uint32_t> index(count);
+    for (auto& q : index) q = pick(rng);
+    std::vector<float> out[8];
+    float* fields[8];
+    for (int f = 0; f < 8; ++f) out[f].assign(count + 1, -1.0f), fields[f] = out[f].data();
+    cpu::gather_records(records.data(), index.data(), count, fields);
+    for (int n = 0; n < count; ++n)
+      for (int f = 0; f < 8; ++f) ASSERT_EQ(out[f][n], records[index[n]].f[f]) << "count " << count << ", n " << n << ", field " << f;
+    for (int f = 0; f < 8; ++f) EXPECT_EQ(out[f][count], -1.0f) << "wrote past the end";
+  }
+}
+
 }  // namespace spate
