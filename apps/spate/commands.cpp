@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "backend/cpu/cpu_backend.hpp"
+#include "backend/cpu/interaction_count.hpp"
 #include "backend/cuda/device_plan.hpp"
 #include "backend/cuda/device_runtime.hpp"
 #include "case/case.hpp"
@@ -356,8 +357,9 @@ int bench_command(const BenchArgs& a) {
   Case c = load(a.case_file, overrides);
   if (a.steps < 1) throw BadInput(fmt::format("--steps {}: must be >= 1", a.steps));
   check_backend(a.backend);
-  // Neighbour interactions per step: fluid-particle pairs inside the support at the initial state.
-  std::int64_t interactions = 0;
+  // Neighbour interactions per step at the initial state: every pair inside the support that the
+  // step's neighbour passes evaluate (fluid rates, wall state, summation density if enabled).
+  cpu::InteractionCounts interactions;
   {
     InProcessHub hub(1);
     auto t = hub.endpoint(0, false);
@@ -365,7 +367,7 @@ int bench_command(const BenchArgs& a) {
     SlabWorker w(L, physics_params(c), *t);
     w.take_share(generate_particles(c), SlabLayout::uniform(L.cells[0], 1));
     w.prepare(false);
-    interactions = cpu::count_fluid_interactions(w.particles(), w.grid(), w.params());
+    interactions = cpu::count_interactions(w.particles(), w.grid(), w.params());
   }
   RunOptions o;
   o.out_dir = std::filesystem::temp_directory_path() / fmt::format("spate-bench-{}", ::getpid());
@@ -378,7 +380,9 @@ int bench_command(const BenchArgs& a) {
   std::filesystem::remove_all(o.out_dir);
   if (process_group().rank != 0) return 0;
   const double psps = r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds;
-  const double ips = r.steps * static_cast<double>(interactions) / r.wall_seconds;
+  const double per_step = r.steps / r.wall_seconds;
+  const double ips = per_step * static_cast<double>(interactions.total());
+  const double fluid_ips = per_step * static_cast<double>(interactions.fluid);
   const int threads = a.threads > 0 ? a.threads : hardware_threads();
   if (a.json) {
     nlohmann::ordered_json j;
@@ -392,8 +396,12 @@ int bench_command(const BenchArgs& a) {
     j["wall_seconds"] = r.wall_seconds;
     j["seconds_per_step"] = r.wall_seconds / r.steps;
     j["particle_steps_per_second"] = psps;
-    j["interactions_per_step"] = interactions;
+    j["interactions_per_step"] = interactions.total();
     j["interactions_per_second"] = ips;
+    j["fluid_interactions_per_step"] = interactions.fluid;
+    j["fluid_interactions_per_second"] = fluid_ips;
+    j["wall_interactions_per_step"] = interactions.wall;
+    j["summation_interactions_per_step"] = interactions.summation;
     j["bytes_per_particle"] = r.bytes_per_particle;
     j["ghost_particles"] = r.ghosts;
     // Decomposition diagnostics (as in summary.json): per-slab loop seconds and the balancer's work.
@@ -403,9 +411,10 @@ int bench_command(const BenchArgs& a) {
     j["face_moves"] = r.face_moves;
     std::printf("%s\n", j.dump(2).c_str());
   } else {
-    std::printf("%s: %lld particles, %d threads, %d devices: %.4f s/step, %.3g particle-steps/s, %.3g interactions/s, %.1f B/particle\n",
+    std::printf("%s: %lld particles, %d threads, %d devices: %.4f s/step, %.3g particle-steps/s, %.3g interactions/s "
+                "(fluid %.3g), %.1f B/particle\n",
                 c.name.c_str(), static_cast<long long>(r.particles.total()), threads, a.devices, r.wall_seconds / r.steps, psps,
-                ips, r.bytes_per_particle);
+                ips, fluid_ips, r.bytes_per_particle);
   }
   return 0;
 }

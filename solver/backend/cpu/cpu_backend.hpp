@@ -24,11 +24,6 @@ float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeSt
 
 }  // namespace spate::cpu
 
-namespace spate::cpu {
-// Pairs (fluid i, any j) inside the support: the neighbour interactions one rate evaluation does.
-std::int64_t count_fluid_interactions(const ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
-}  // namespace spate::cpu
-
 #include "../step_kernels.hpp"
 
 namespace spate::cpu {

@@ -1,0 +1,105 @@
+#pragma once
+// Selecting the candidates inside the kernel support, for the OpenMP pair loops. Only about 1
+// candidate in 7 of the 27 cells around a particle is inside the support (3D, h = 1.73 dp), so
+// this selection, not the pair terms, is most of a neighbour pass once the pair terms are
+// vectorised. Both versions write the same list in the same (increasing) order, so which one runs
+// never changes a result.
+#include <cstdint>
+
+#if defined(__AVX512F__) || defined(__AVX2__)
+#include <immintrin.h>
+#endif
+
+namespace spate::cpu {
+
+// Room select_inside() may write beyond the last selected entry.
+constexpr int kSelectSlack = 16;
+
+// Writes the numbers q in [0, n) with r2[q] < limit to index, in increasing order, and returns how
+// many there are. Branch-free (a branch on "inside" mispredicts about every seventh candidate).
+inline int select_inside_portable(const float* r2, int n, float limit, std::uint32_t* index) {
+  int count = 0;
+  for (int q = 0; q < n; ++q) {
+    index[count] = static_cast<std::uint32_t>(q);
+    count += r2[q] < limit;
+  }
+  return count;
+}
+
+// The same with AVX-512 compress where the build targets it (16 candidates per instruction
+// group). index needs room for n + kSelectSlack entries.
+inline int select_inside(const float* r2, int n, float limit, std::uint32_t* index) {
+#if defined(__AVX512F__)
+  const __m512 bound = _mm512_set1_ps(limit);
+  const __m512i sixteen = _mm512_set1_epi32(16);
+  __m512i q16 = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  int count = 0, q = 0;
+  for (; q + 16 <= n; q += 16) {
+    // Ordered, non-signalling "<": false for NaN, like the scalar comparison.
+    const __mmask16 inside = _mm512_cmp_ps_mask(_mm512_loadu_ps(r2 + q), bound, _CMP_LT_OQ);
+    _mm512_storeu_si512(index + count, _mm512_maskz_compress_epi32(inside, q16));
+    count += __builtin_popcount(inside);
+    q16 = _mm512_add_epi32(q16, sixteen);
+  }
+  for (; q < n; ++q) {
+    index[count] = static_cast<std::uint32_t>(q);
+    count += r2[q] < limit;
+  }
+  return count;
+#else
+  return select_inside_portable(r2, n, limit, index);
+#endif
+}
+
+// to[n] = from[index[n]] for n in [0, count): the selected neighbours' fields, contiguous for the
+// vectorised pair terms. This is about a third of the fluid pass; neither the AVX-512 hardware
+// gather nor a scalar (non-vectorised) loop was faster on the development machine than what GCC
+// makes of this loop.
+template <class T>
+void gather(const T* __restrict from, const std::uint32_t* __restrict index, int count, T* __restrict to) {
+  for (int n = 0; n < count; ++n) to[n] = from[index[n]];
+}
+
+// A candidate's fields for the fluid pair terms as one 32-byte record: position, velocity (3
+// components each, the unused third 0 in 2D), density, pressure. Copying one record per selected
+// neighbour (then transposing to the arrays the vectorised pair terms read) costs a fraction of
+// gathering eight separate arrays element by element.
+struct alignas(32) NeighbourRecord {
+  float f[8];
+};
+enum NeighbourField { kRecX = 0, kRecV = 3, kRecRho = 6, kRecP = 7 };
+
+// out[f][n] = records[index[n]].f[f] for n in [0, count), f in [0, 8).
+inline void gather_records(const NeighbourRecord* __restrict records, const std::uint32_t* __restrict index, int count,
+                           float* const out[8]) {
+  int n = 0;
+#if defined(__AVX2__)
+  for (; n + 8 <= count; n += 8) {
+    // Eight records as rows of an 8 x 8 matrix, transposed so that row f holds field f.
+    const __m256 r0 = _mm256_load_ps(records[index[n + 0]].f), r1 = _mm256_load_ps(records[index[n + 1]].f);
+    const __m256 r2 = _mm256_load_ps(records[index[n + 2]].f), r3 = _mm256_load_ps(records[index[n + 3]].f);
+    const __m256 r4 = _mm256_load_ps(records[index[n + 4]].f), r5 = _mm256_load_ps(records[index[n + 5]].f);
+    const __m256 r6 = _mm256_load_ps(records[index[n + 6]].f), r7 = _mm256_load_ps(records[index[n + 7]].f);
+    const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);
+    const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
+    const __m256 t4 = _mm256_unpacklo_ps(r4, r5), t5 = _mm256_unpackhi_ps(r4, r5);
+    const __m256 t6 = _mm256_unpacklo_ps(r6, r7), t7 = _mm256_unpackhi_ps(r6, r7);
+    const __m256 u0 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0)), u1 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+    const __m256 u2 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0)), u3 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
+    const __m256 u4 = _mm256_shuffle_ps(t4, t6, _MM_SHUFFLE(1, 0, 1, 0)), u5 = _mm256_shuffle_ps(t4, t6, _MM_SHUFFLE(3, 2, 3, 2));
+    const __m256 u6 = _mm256_shuffle_ps(t5, t7, _MM_SHUFFLE(1, 0, 1, 0)), u7 = _mm256_shuffle_ps(t5, t7, _MM_SHUFFLE(3, 2, 3, 2));
+    _mm256_storeu_ps(out[0] + n, _mm256_permute2f128_ps(u0, u4, 0x20));
+    _mm256_storeu_ps(out[1] + n, _mm256_permute2f128_ps(u1, u5, 0x20));
+    _mm256_storeu_ps(out[2] + n, _mm256_permute2f128_ps(u2, u6, 0x20));
+    _mm256_storeu_ps(out[3] + n, _mm256_permute2f128_ps(u3, u7, 0x20));
+    _mm256_storeu_ps(out[4] + n, _mm256_permute2f128_ps(u0, u4, 0x31));
+    _mm256_storeu_ps(out[5] + n, _mm256_permute2f128_ps(u1, u5, 0x31));
+    _mm256_storeu_ps(out[6] + n, _mm256_permute2f128_ps(u2, u6, 0x31));
+    _mm256_storeu_ps(out[7] + n, _mm256_permute2f128_ps(u3, u7, 0x31));
+  }
+#endif
+  for (; n < count; ++n)
+    for (int f = 0; f < 8; ++f) out[f][n] = records[index[n]].f[f];
+}
+
+}  // namespace spate::cpu
