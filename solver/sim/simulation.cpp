@@ -313,6 +313,7 @@ class Worker {
       progress.update(taken, time, end_time, s_.start.time);
     }
     progress.finish();
+    const double stepping_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
 
     if (!unstable.empty()) {
       write_snapshot(pvd, time, step, "diagnostic", /*index=*/false);
@@ -340,6 +341,7 @@ class Worker {
       r.final_step = step;
       r.simulated_time = time;
       r.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+      r.stepping_seconds = stepping_seconds;
       r.last_checkpoint = last_checkpoint;
       r.slab_particles = counts;
       r.slab_busy_seconds = busy;

@@ -39,6 +39,7 @@ struct RunResult {
   std::int64_t final_step = 0;
   double simulated_time = 0.0;
   double wall_seconds = 0.0;
+  double stepping_seconds = 0.0;  // the time loop alone: no final checkpoint, no summary
   ParticleCounts particles;
   std::filesystem::path last_checkpoint;
   std::vector<std::int64_t> slab_particles;
