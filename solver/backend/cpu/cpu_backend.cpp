@@ -169,14 +169,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
         if (!is_fluid(ps.kind[i])) continue;
         const ParticleState<Dim> si = load_state<Dim>(ps, i);
         // 1. Squared distances, summed in the order of distance_squared() and dot().
-        for (int q = 0; q < candidates; ++q) {
-          float r2 = 0.0f;
-          SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
-            const float d = si.x[k] - cx[k][q];
-            r2 += d * d;
-          }
-          cr2[q] = r2;
-        }
+        candidate_distances<Dim>(si.x, cx, candidates, cr2);
         // 2. In-support candidates, in order.
         const int count = select_inside(cr2, candidates, P.support2, index);
         // 3.-4. In chunks (a multiple of kLanes, so lanes do not depend on the chunking): the
@@ -279,14 +272,7 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
       for (std::uint32_t w = b; w < e; ++w) {
         if (is_fluid(ps.kind[w])) continue;
         const Vec<Dim> xw = load_vec<Dim>(ps.pos, w);
-        for (int q = 0; q < m; ++q) {
-          float r2 = 0.0f;
-          SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
-            const float d = xw[k] - cx[k][q];
-            r2 += d * d;
-          }
-          cr2[q] = r2;
-        }
+        candidate_distances<Dim>(xw, cx, m, cr2);
         const int count = select_inside(cr2, m, P.support2, index);
         WallSums<Dim> sums;
         for (int n = 0; n < count; ++n) {

@@ -6,6 +6,8 @@
 // never changes a result.
 #include <cstdint>
 
+#include "../../physics/host_device.hpp"
+
 #if defined(__AVX512F__) || defined(__AVX2__)
 #include <immintrin.h>
 #endif
@@ -24,6 +26,21 @@ inline int select_inside_portable(const float* r2, int n, float limit, std::uint
     count += r2[q] < limit;
   }
   return count;
+}
+
+// r2[q] = |x - (cx[0][q], cx[1][q], ...)|^2 for the n candidates of a cell, the components added in
+// the order of distance_squared() (particles/particle_access.hpp), so a candidate passes the
+// support test here exactly when the per-particle body would keep it. Vectorised over candidates.
+template <int Dim, class Point>
+inline void candidate_distances(const Point& x, float* const (&cx)[Dim], int n, float* __restrict r2) {
+  for (int q = 0; q < n; ++q) {
+    float d2 = 0.0f;
+    SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
+      const float d = x[k] - cx[k][q];
+      d2 += d * d;
+    }
+    r2[q] = d2;
+  }
 }
 
 // The same with AVX-512 compress where the build targets it (16 candidates per instruction
