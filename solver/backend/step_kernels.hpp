@@ -5,6 +5,8 @@
 // physics loops. A device-resident backend (CUDA) also offers the data-movement primitives of
 // SlabArrays, and the worker runs the same topology on its arrays instead (SlabTopology).
 #include <cstddef>
+#include <stdexcept>
+#include <string>
 
 #include "../grid/cell_grid.hpp"
 #include "../domain/slab_arrays.hpp"
@@ -26,7 +28,14 @@ class StepKernels {
   virtual void equation_of_state(ParticleStore& p, const PhysicsParams& P) = 0;
   virtual void summation_density(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) = 0;
   virtual void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) = 0;
-  virtual void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) = 0;
+  // Host-store backends: fluid rates of the owned particles in owned cells [first_cell, last_cell)
+  // (the worker computes the interior while the halo refresh travels, then the boundary cells).
+  // Resident backends use fluid_rates_range instead.
+  virtual void fluid_rates_cells(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, std::uint32_t first_cell,
+                                 std::uint32_t last_cell) {
+    (void)p, (void)g, (void)P, (void)first_cell, (void)last_cell;
+    throw std::logic_error(std::string(name()) + " backend: fluid_rates_cells is for host-store backends");
+  }
   virtual float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) = 0;
 
   // Residency. `publish`: every field of every particle (owned and ghosts) and the cell table of

@@ -1,6 +1,8 @@
 #include "halo.hpp"
 
+#include <algorithm>
 #include <numeric>
+#include <stdexcept>
 
 #include "slab_layout.hpp"
 #include "slab_plan.hpp"
@@ -8,20 +10,41 @@
 namespace spate {
 
 namespace {
-// Owned particles in x column `column` are contiguous after the owned sort (x is the slowest axis).
-void column_range(const CellGrid& grid, int column, std::vector<std::uint32_t>& out) {
-  out.clear();
+// Owned particles (in storage order) of the first and last owned x columns.
+void edge_columns(const ParticleStore& p, const CellGrid& grid, std::vector<std::uint32_t>& first,
+                  std::vector<std::uint32_t>& last) {
+  first.clear();
+  last.clear();
   const Lattice& L = grid.lattice();
-  const int ny = L.dim >= 2 ? L.cells[1] : 1;
-  const int nz = L.dim >= 3 ? L.cells[2] : 1;
-  const std::uint32_t first_cell = static_cast<std::uint32_t>((column - grid.owned_lo()) * ny * nz);
-  const std::uint32_t b = grid.begin(first_cell), e = grid.begin(first_cell + ny * nz);
-  out.resize(e - b);
-  std::iota(out.begin(), out.end(), b);
+  const float* x = p.pos[0].data();
+  for (std::size_t i = 0; i < p.owned(); ++i) {
+    const int c = L.cell_of(x[i], 0);
+    if (c == grid.owned_lo()) first.push_back(static_cast<std::uint32_t>(i));
+    if (c == grid.owned_hi() - 1) last.push_back(static_cast<std::uint32_t>(i));
+  }
+}
+
+// `sent` lists the storage positions of one owned x column, in increasing order, from before the
+// owned sort; rewrites them as positions after it, keeping the list's order (the order in which
+// the neighbour received them). After the sort the column is one contiguous range.
+void follow_sort(std::vector<std::uint32_t>& sent, const CellGrid& grid, int column) {
+  if (sent.empty()) return;
+  const Lattice& L = grid.lattice();
+  const std::uint32_t per_column = (L.dim >= 2 ? L.cells[1] : 1) * (L.dim >= 3 ? L.cells[2] : 1);
+  const std::uint32_t first_cell = static_cast<std::uint32_t>(column - grid.owned_lo()) * per_column;
+  const std::uint32_t b = grid.begin(first_cell), e = grid.begin(first_cell + per_column);
+  if (e - b != sent.size()) throw std::logic_error("Halo: edge column changed during the owned sort");
+  const auto& perm = grid.owned_permutation();
+  std::vector<std::uint32_t> now(sent.size());
+  for (std::uint32_t k = b; k < e; ++k) {
+    const auto at = std::lower_bound(sent.begin(), sent.end(), perm[k]) - sent.begin();
+    now[static_cast<std::size_t>(at)] = k;
+  }
+  sent.swap(now);
 }
 }  // namespace
 
-void Halo::build(ParticleStore& p, CellGrid& grid, SlabTransport& transport) {
+void Halo::send(ParticleStore& p, const CellGrid& grid, SlabTransport& transport) {
   const Lattice& L = grid.lattice();
   const int s = transport.slab();
   const bool has_left = transport.left_of(s) >= 0, has_right = transport.right_of(s) >= 0;
@@ -30,19 +53,29 @@ void Halo::build(ParticleStore& p, CellGrid& grid, SlabTransport& transport) {
   Shift to_left, to_right;
   if (has_left && grid.owned_lo() == 0) to_left = Shift{0, L.period[0]};
   if (has_right && grid.owned_hi() == L.cells[0]) to_right = Shift{0, -L.period[0]};
-  column_range(grid, grid.owned_lo(), send_left_);
-  column_range(grid, grid.owned_hi() - 1, send_right_);
+  p.resize(p.owned());  // ghosts are stale once owned particles moved
+  edge_columns(p, grid, send_left_, send_right_);
   if (!has_left) send_left_.clear();
   if (!has_right) send_right_.clear();
-  Bytes from_left, from_right;
   transport.exchange(pack_particles(p, send_left_, FieldSet::Ghost, to_left),
-                     pack_particles(p, send_right_, FieldSet::Ghost, to_right), from_left, from_right);
+                     pack_particles(p, send_right_, FieldSet::Ghost, to_right), from_left_, from_right_);
+}
+
+void Halo::receive(ParticleStore& p, CellGrid& grid) {
+  const Lattice& L = grid.lattice();
+  grid.sort_owned(p);
+  // The scan took the edge columns in storage order; the refresh sends them in that same order.
+  follow_sort(send_left_, grid, grid.owned_lo());
+  follow_sort(send_right_, grid, grid.owned_hi() - 1);
   const std::size_t owned = p.owned();
-  const std::size_t n_left = unpack_append(p, from_left, FieldSet::Ghost);
-  const std::size_t n_right = unpack_append(p, from_right, FieldSet::Ghost);
+  const std::size_t n_left = unpack_append(p, from_left_, FieldSet::Ghost);
+  const std::size_t n_right = unpack_append(p, from_right_, FieldSet::Ghost);
+  from_left_.clear();
+  from_right_.clear();
 
   image_source_.clear();
   image_target_.clear();
+  image_local_.clear();
   for (int axis = 1; axis < L.dim; ++axis)
     if (L.periodic[axis]) make_periodic_images(p, grid, axis);
 
@@ -79,22 +112,34 @@ void Halo::make_periodic_images(ParticleStore& p, const CellGrid& grid, int axis
     for (std::size_t k = 0; k < list->size(); ++k) {
       image_source_.push_back((*list)[k]);
       image_target_.push_back(static_cast<std::uint32_t>(first + k));
+      image_local_.push_back(grid.owns_column(L.cell_of(p.pos[0][(*list)[k]], 0)) ? 1 : 0);
     }
   }
 }
 
-void Halo::refresh(ParticleStore& p, SlabTransport& transport) {
+void Halo::begin_refresh(ParticleStore& p) {
+  refresh_left_ = pack_particles(p, send_left_, FieldSet::Refresh);
+  refresh_right_ = pack_particles(p, send_right_, FieldSet::Refresh);
+  refresh_images(p, true);
+}
+
+void Halo::finish_refresh(ParticleStore& p, SlabTransport& transport) {
   Bytes from_left, from_right;
-  transport.exchange(pack_particles(p, send_left_, FieldSet::Refresh),
-                     pack_particles(p, send_right_, FieldSet::Refresh), from_left, from_right);
+  transport.exchange(refresh_left_, refresh_right_, from_left, from_right);
   unpack_into(p, from_left, FieldSet::Refresh, slots_left_);
   unpack_into(p, from_right, FieldSet::Refresh, slots_right_);
-  // Images in creation order (an image of an image copies after its source was refreshed).
+  refresh_images(p, false);
+}
+
+// Images in creation order (an image of an image copies after its source was refreshed; both lie
+// in the same x column, so in the same half).
+void Halo::refresh_images(ParticleStore& p, bool local) {
   for (auto& f : p.fields()) {
     if (!in_set(f, FieldSet::Refresh)) continue;
     char* data = f.bytes();
     for (std::size_t k = 0; k < image_source_.size(); ++k)
-      std::copy_n(data + image_source_[k] * f.elem_size, f.elem_size, data + image_target_[k] * f.elem_size);
+      if (image_local_[k] == (local ? 1 : 0))
+        std::copy_n(data + image_source_[k] * f.elem_size, f.elem_size, data + image_target_[k] * f.elem_size);
   }
 }
 

@@ -14,21 +14,43 @@ namespace spate {
 
 class Halo {
  public:
-  // Owned particles must be sorted (CellGrid::sort_owned); appends ghosts, then sorts them.
-  void build(ParticleStore& p, CellGrid& grid, SlabTransport& transport);
+  // Sorts the owned particles (CellGrid::sort_owned), appends the ghosts and sorts them. In two
+  // halves: send() picks the owned particles of the edge columns by a scan (no sort needed) and
+  // exchanges them; receive() sorts the owned particles and takes the ghosts in. The sort thus
+  // runs after the slabs met, in the same stretch of work as the neighbour loops, which is where
+  // the balancer evens out the time.
+  void build(ParticleStore& p, CellGrid& grid, SlabTransport& transport) {
+    send(p, grid, transport);
+    receive(p, grid);
+  }
+  void send(ParticleStore& p, const CellGrid& grid, SlabTransport& transport);
+  void receive(ParticleStore& p, CellGrid& grid);
   // Copies the FieldSet::Refresh fields of every ghost from its source again.
-  void refresh(ParticleStore& p, SlabTransport& transport);
+  void refresh(ParticleStore& p, SlabTransport& transport) {
+    begin_refresh(p);
+    finish_refresh(p, transport);
+  }
+  // The refresh in two halves, so that work which sees no halo ghost can run in between: the first
+  // packs what the neighbours get and refreshes the periodic images of owned columns; the second
+  // exchanges and refreshes the halo ghosts and their images.
+  void begin_refresh(ParticleStore& p);
+  void finish_refresh(ParticleStore& p, SlabTransport& transport);
 
   std::size_t ghost_count() const { return ghosts_; }
 
  private:
   void make_periodic_images(ParticleStore& p, const CellGrid& grid, int axis);
+  void refresh_images(ParticleStore& p, bool local);
 
   std::vector<std::uint32_t> send_left_, send_right_;  // owned indices sent each way
   // Slots (absolute indices) that the particles received from the left/right landed in.
   std::vector<std::uint32_t> slots_left_, slots_right_;
   // Periodic images: copy source -> target (absolute indices after the ghost sort), in creation order.
+  // An image is local when its source lies in an owned column (images keep their source's x).
   std::vector<std::uint32_t> image_source_, image_target_;
+  std::vector<std::uint8_t> image_local_;
+  Bytes refresh_left_, refresh_right_;  // staged by begin_refresh
+  Bytes from_left_, from_right_;        // received by send(), taken in by receive()
   std::size_t ghosts_ = 0;
 };
 

@@ -62,7 +62,9 @@ std::vector<std::int64_t> slab_totals(const SlabLayout& layout, const std::vecto
 
 std::int64_t critical_path(const SlabLayout& layout, const PhaseCosts& costs) {
   const auto wall = slab_totals(layout, costs.wall), fluid = slab_totals(layout, costs.fluid);
-  return *std::max_element(wall.begin(), wall.end()) + *std::max_element(fluid.begin(), fluid.end());
+  std::int64_t longest = 0;
+  for (std::size_t s = 0; s < wall.size(); ++s) longest = std::max(longest, wall[s] + fluid[s]);
+  return longest;
 }
 
 double phase_imbalance(const SlabLayout& layout, const PhaseCosts& costs) {

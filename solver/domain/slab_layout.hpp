@@ -23,22 +23,24 @@ SlabLayout balanced_layout(const std::vector<std::int64_t>& weight, int slabs, i
 // max/mean of per-slab totals (1 is perfect balance).
 double imbalance(const std::vector<std::int64_t>& per_slab);
 
-// Work per x column split by the synchronised phases of a step: the slabs wait for each other after
-// the wall phase (halo refresh) and after the fluid phase (time step), so a step lasts about
-// max_s wall_s + max_s fluid_s, not max_s (wall_s + fluid_s).
+// Work per x column in the two neighbour phases of a step. They are timed apart because they scale
+// with different particles (walls, fluid), but the slabs no longer wait for each other between
+// them: the halo refresh that separates them is waited for after the interior fluid pass, so a
+// step lasts about max_s (wall_s + fluid_s).
 struct PhaseCosts {
   std::vector<std::int64_t> wall;   // equation of state and wall state, per column
   std::vector<std::int64_t> fluid;  // fluid rates (and summation density), per column
 };
 // Per-slab totals of one phase histogram under `layout`.
 std::vector<std::int64_t> slab_totals(const SlabLayout& layout, const std::vector<std::int64_t>& per_column);
-// max_s wall_s + max_s fluid_s: the length of a step (in the histogram's units) under `layout`.
+// max_s (wall_s + fluid_s): the length of a step (in the histogram's units) under `layout`.
 std::int64_t critical_path(const SlabLayout& layout, const PhaseCosts& costs);
-// critical_path / mean over slabs of (wall_s + fluid_s): 1 when both phases are perfectly even.
+// critical_path / mean over slabs of (wall_s + fluid_s): 1 when the work is perfectly even.
 double phase_imbalance(const SlabLayout& layout, const PhaseCosts& costs);
 // Faces that shorten the critical path: the balanced layout of the summed histogram, then single
-// faces moved a column at a time while the critical path shrinks. Deterministic: depends only on
-// the histograms, so every slab that holds the same (summed) histograms picks the same faces.
+// faces moved a column at a time while the critical path shrinks (the rounding to whole columns).
+// Deterministic: depends only on the histograms, so every slab that holds the same (summed)
+// histograms picks the same faces.
 SlabLayout balanced_layout(const PhaseCosts& costs, int slabs, int min_columns);
 
 }  // namespace spate

@@ -56,6 +56,9 @@ class CellGrid {
   const CellGridView& view() const { return view_; }
   // After sort(): ghost slot k (counted from owned()) holds the ghost that was at owned() + perm[k].
   const std::vector<std::uint32_t>& ghost_permutation() const { return ghost_perm_; }
+  // Right after sort_owned(): owned slot k holds the particle that was at perm[k] (overwritten by
+  // the next sort of either half).
+  const std::vector<std::uint32_t>& owned_permutation() const { return perm_; }
 
   std::size_t bytes() const { return start_.capacity() * sizeof(std::uint32_t); }
 

@@ -16,6 +16,9 @@
 #include <fstream>
 #include <thread>
 
+#include <pthread.h>
+#include <sched.h>
+
 #include "../backend/cuda/device_plan.hpp"
 #include "../backend/cuda/device_runtime.hpp"
 #include "../comm/in_process_transport.hpp"
@@ -36,10 +39,15 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr int kMinColumnsPerSlab = 3;
-// The first balancing pass comes after this many steps whatever balance_every says (if balancing is
-// on): the first faces follow an estimated cost, this pass replaces it with the slabs' measured
-// loop times.
-constexpr std::int64_t kCalibrationSteps = 2;
+// Balancing passes (balance_every > 0): every balance_every steps, and before the first of those
+// after 2, 4, 8, ... steps of the run. The first faces follow an estimated cost; these calibration
+// passes replace it with the slabs' measured times, each over twice the steps of the one before,
+// so that the faces settle within a few steps, then follow the flow without chasing noise.
+bool balancing_pass_due(std::int64_t taken, std::int64_t step, std::int64_t every) {
+  if (every <= 0 || taken <= 0) return false;
+  if (step % every == 0) return true;
+  return taken < every && taken >= 2 && (taken & (taken - 1)) == 0;
+}
 
 std::string step_name(std::int64_t step) { return fmt::format("step_{:08d}", step); }
 
@@ -55,6 +63,7 @@ struct Shared {
   bool restarted = false;
   SlabLayout layout;
   int omp_threads = 1;
+  int local_slabs = 1;
   RunResult result;
   std::mutex result_mutex;
   std::vector<SlabWorker*> workers;  // local slabs, for in-situ views
@@ -175,10 +184,30 @@ class Progress {
 
 class Worker {
  public:
+  // One single-threaded worker per CPU of this process's affinity mask, when they fit: the kernel
+  // then never puts two workers on one core while the other idles (they wait for each other every
+  // step, so one descheduled worker stalls all).
+  void pin_worker() {
+    if (s_.omp_threads != 1 || s_.local_slabs < 2) return;
+    cpu_set_t allowed;
+    if (sched_getaffinity(0, sizeof allowed, &allowed) != 0) return;
+    if (CPU_COUNT(&allowed) < s_.local_slabs) return;
+    const int d = t_.slab() - s_.workers_first_slab;
+    for (int cpu = 0, seen = 0; cpu < CPU_SETSIZE; ++cpu) {
+      if (!CPU_ISSET(cpu, &allowed)) continue;
+      if (seen++ != d) continue;
+      cpu_set_t one;
+      CPU_ZERO(&one);
+      CPU_SET(cpu, &one);
+      pthread_setaffinity_np(pthread_self(), sizeof one, &one);
+      return;
+    }
+  }
   Worker(Shared& s, SlabTransport& t) : s_(s), t_(t), w_(s.lattice, s.params, t) {}
 
   void run() {
     omp_set_num_threads(s_.omp_threads);
+    pin_worker();
     const bool writer = t_.slab() == 0;
     if (s_.opts.backend == "cuda") {
       const int worker = t_.slab() % s_.opts.devices;
@@ -282,7 +311,7 @@ class Worker {
         break;
       }
       if (s_.opts.steps ? taken >= *s_.opts.steps : time >= end_time - 1e-12) break;
-      if (s_.c.balance_every > 0 && t_.slab_count() > 1 && taken > 0 && (step % s_.c.balance_every == 0 || taken == kCalibrationSteps))
+      if (t_.slab_count() > 1 && balancing_pass_due(taken, step, s_.c.balance_every))
         imbalance_log.push_back(w_.rebalance(kMinColumnsPerSlab));
       if (auto fault = w_.step(static_cast<float>(dt))) {
         unstable = describe(*fault, step + 1, time + dt);
@@ -497,6 +526,7 @@ RunResult Simulation::run() {
   const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const int threads = options_.threads > 0 ? options_.threads : std::max(1, hw / group.ranks_on_node);
   s.omp_threads = std::max(1, threads / local_slabs);
+  s.local_slabs = local_slabs;
   s.workers.assign(local_slabs, nullptr);
   std::filesystem::create_directories(options_.out_dir);
 

@@ -64,8 +64,13 @@ void SlabWorker::rebuild() {
   }
   (faces_moved_ ? handovers_ : crossings_) += migrate(particles_, layout_.faces, lattice_, transport_);
   faces_moved_ = false;
-  grid_.sort_owned(particles_);
-  halo_.build(particles_, grid_, transport_);
+  halo_.send(particles_, grid_, transport_);
+  // The sort and the ghosts' arrival: per-particle work in the same stretch as the loops.
+  const auto t = std::chrono::steady_clock::now();
+  halo_.receive(particles_, grid_);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  busy_seconds_ += seconds;
+  window_sort_seconds_ += seconds;
   kernels_->publish(particles_, grid_);
 }
 
@@ -95,37 +100,52 @@ void SlabWorker::compute_rates() {
   kernels_->equation_of_state(particles_, params_);
   kernels_->wall_state(particles_, grid_, params_);
   const double wall = since(t0);
-  if (resident()) {
-    // The fluid phase includes the halo wait it overlaps (host time around the launches on a GPU).
-    const auto t1 = Clock::now();
-    fluid_rates_overlapping_refresh();
-    const double fluid = since(t1);
-    busy_seconds_ += wall + fluid;
-    window_wall_seconds_ += wall;
-    window_fluid_seconds_ += fluid;
-    return;
-  }
-  refresh_halo();
-  const auto t1 = Clock::now();
-  kernels_->fluid_rates(particles_, grid_, params_);
-  const double fluid = since(t1);
+  // The fluid phase excludes the wait for the halo (on a GPU: host time around the launches).
+  const double fluid = fluid_rates_overlapping_refresh();
   busy_seconds_ += wall + fluid;
   window_wall_seconds_ += wall;
   window_fluid_seconds_ += fluid;
 }
 
 // The paper's interior/boundary division: the owners' refreshed values are staged, the interior
-// (owned particles that see no ghost) is computed while the halo travels, the boundary after.
-// On a GPU the interior kernel is queued before the exchange blocks the host, so it runs during
-// the copies; each particle's rates depend only on its own neighbour loop, so the split changes
-// no result.
-void SlabWorker::fluid_rates_overlapping_refresh() {
-  SlabArrays& r = *resident();
-  topology_.begin_refresh(r);
-  kernels_->fluid_rates_range(grid_, params_, topology_.split().interior);
-  topology_.finish_refresh(r, transport_);
-  kernels_->fluid_rates_range(grid_, params_, topology_.split().before);
-  kernels_->fluid_rates_range(grid_, params_, topology_.split().after);
+// (owned particles that see no ghost) is computed before the slab waits for its neighbours'
+// refresh, the boundary after. On a GPU the interior kernel is queued before the exchange blocks
+// the host, so it runs during the copies; on the CPU the wait comes after the interior, so slabs
+// only need to agree on wall + fluid time, not on each phase. Each particle's rates depend only
+// on its own neighbour loop, so the split changes no result. Returns the seconds spent computing.
+double SlabWorker::fluid_rates_overlapping_refresh() {
+  using Clock = std::chrono::steady_clock;
+  auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+  if (SlabArrays* r = resident()) {
+    const auto t0 = Clock::now();
+    topology_.begin_refresh(*r);
+    kernels_->fluid_rates_range(grid_, params_, topology_.split().interior);
+    double seconds = since(t0);
+    topology_.finish_refresh(*r, transport_);
+    const auto t1 = Clock::now();
+    kernels_->fluid_rates_range(grid_, params_, topology_.split().before);
+    kernels_->fluid_rates_range(grid_, params_, topology_.split().after);
+    return seconds + since(t1);
+  }
+  // Interior: x columns without halo ghosts within one cell (all of them at a slab without
+  // neighbours); a column is ny * nz consecutive owned cells.
+  const int s = transport_.slab();
+  const int width = grid_.owned_hi() - grid_.owned_lo();
+  const std::uint32_t per_column = width > 0 ? grid_.owned_cell_count() / static_cast<std::uint32_t>(width) : 0;
+  const int first = transport_.left_of(s) >= 0 ? 1 : 0;
+  const int last = std::max(first, width - (transport_.right_of(s) >= 0 ? 1 : 0));
+  const auto t0 = Clock::now();
+  kernels_->fetch(particles_, FieldSet::Refresh, 0, particles_.owned());
+  halo_.begin_refresh(particles_);
+  kernels_->publish_fields(particles_, FieldSet::Refresh, particles_.owned(), particles_.size());  // local images
+  kernels_->fluid_rates_cells(particles_, grid_, params_, first * per_column, last * per_column);
+  double seconds = since(t0);
+  halo_.finish_refresh(particles_, transport_);
+  kernels_->publish_fields(particles_, FieldSet::Refresh, particles_.owned(), particles_.size());
+  const auto t1 = Clock::now();
+  kernels_->fluid_rates_cells(particles_, grid_, params_, 0, first * per_column);
+  kernels_->fluid_rates_cells(particles_, grid_, params_, last * per_column, grid_.owned_cell_count());
+  return seconds + since(t1);
 }
 
 void SlabWorker::prepare(bool rates) {
@@ -249,7 +269,8 @@ PhaseCosts column_costs(const ParticleStore& p, const Lattice& lattice) {
   return c;
 }
 
-PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice, double wall_seconds, double fluid_seconds) {
+PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice, double wall_seconds, double fluid_seconds,
+                                 double sort_seconds) {
   const int columns = lattice.cells[0];
   std::vector<std::int64_t> fluid_count(columns, 0), wall_count(columns, 0);
   std::int64_t fluids = 0, walls = 0;
@@ -260,8 +281,10 @@ PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice,
   }
   if (fluids == 0) wall_seconds += std::exchange(fluid_seconds, 0.0);
   if (walls == 0) fluid_seconds += std::exchange(wall_seconds, 0.0);
-  const double per_wall = walls ? 1e9 * wall_seconds / static_cast<double>(walls) : 0.0;
-  const double per_fluid = fluids ? 1e9 * fluid_seconds / static_cast<double>(fluids) : 0.0;
+  // The sort costs the same for every particle: each kind's phase gets its share.
+  const double per_particle = fluids + walls ? 1e9 * sort_seconds / static_cast<double>(fluids + walls) : 0.0;
+  const double per_wall = walls ? 1e9 * wall_seconds / static_cast<double>(walls) + per_particle : 0.0;
+  const double per_fluid = fluids ? 1e9 * fluid_seconds / static_cast<double>(fluids) + per_particle : 0.0;
   // The wall phase also runs the equation of state over the fluid, but wall_state dominates it.
   PhaseCosts c{std::vector<std::int64_t>(columns, 0), std::vector<std::int64_t>(columns, 0)};
   for (int k = 0; k < columns; ++k) {
@@ -277,8 +300,8 @@ double SlabWorker::rebalance(int min_columns) {
   // therefore the same faces, although the timings themselves differ from run to run. Faces do not
   // change the physics (neighbour order is (cell, id)), so results stay bit-identical.
   const int columns = lattice_.cells[0];
-  PhaseCosts mine = measured_column_costs(particles_, lattice_, window_wall_seconds_, window_fluid_seconds_);
-  window_wall_seconds_ = window_fluid_seconds_ = 0.0;
+  PhaseCosts mine = measured_column_costs(particles_, lattice_, window_wall_seconds_, window_fluid_seconds_, window_sort_seconds_);
+  window_wall_seconds_ = window_fluid_seconds_ = window_sort_seconds_ = 0.0;
   std::vector<std::int64_t> both(mine.wall);
   both.insert(both.end(), mine.fluid.begin(), mine.fluid.end());
   transport_.sum(both);

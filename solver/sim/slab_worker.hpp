@@ -74,7 +74,7 @@ class SlabWorker {
   SlabTransport& transport() { return transport_; }
   const SlabLayout& layout() const { return layout_; }
   std::size_t allocated_bytes() const;
-  // Wall-clock seconds this slab spent in its own neighbour loops (not waiting for others).
+  // Wall-clock seconds this slab spent in its neighbour loops and its sort (not waiting for others).
   double busy_seconds() const { return busy_seconds_; }
 
  private:
@@ -85,7 +85,7 @@ class SlabWorker {
   // The device-resident path (kernels_->resident() set): the same step on the backend's arrays.
   SlabArrays* resident() const { return kernels_->resident(); }
   void sync_host();
-  void fluid_rates_overlapping_refresh();
+  double fluid_rates_overlapping_refresh();
   std::optional<ParticleFault> position_fault_message(std::uint32_t id);
 
   Lattice lattice_;
@@ -99,7 +99,7 @@ class SlabWorker {
   bool host_stale_ = false;
   double busy_seconds_ = 0.0;
   // Loop seconds since the last balancing pass, per synchronised phase (see PhaseCosts).
-  double window_wall_seconds_ = 0.0, window_fluid_seconds_ = 0.0;
+  double window_wall_seconds_ = 0.0, window_fluid_seconds_ = 0.0, window_sort_seconds_ = 0.0;
   std::unique_ptr<StepKernels> kernels_;
   std::int64_t crossings_ = 0, handovers_ = 0, face_moves_ = 0;
   bool faces_moved_ = false;
@@ -113,7 +113,9 @@ PhaseCosts column_costs(const ParticleStore& p, const Lattice& lattice);
 // proportion to the owned particles' wall-phase share, the fluid phase to the fluid particles (a
 // slab without fluid charges both phases to its walls and vice versa). Summed over slabs it is
 // the measured histogram the balancer evens out.
-PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice, double wall_seconds, double fluid_seconds);
+// `sort_seconds` (the owned sort and the ghosts' arrival) are spread evenly over all particles.
+PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice, double wall_seconds, double fluid_seconds,
+                                 double sort_seconds = 0.0);
 
 // The fault with the lowest particle id over all slabs (collective), or none.
 std::optional<ParticleFault> first_fault(SlabTransport& t, const std::optional<ParticleFault>& mine);

@@ -154,7 +154,8 @@ TEST(Transport, GatherBringsEverySlabsBufferToSlabZeroOnly) {
 }
 
 // The measured balancer spreads a slab's timed seconds over its columns: the wall phase over the
-// walls, the fluid phase over the fluid, so the histogram sums back to the measured time.
+// walls, the fluid phase over the fluid, the sort over every particle, so the histogram sums back
+// to the measured time.
 TEST(MeasuredCosts, SpreadTheTimedSecondsOverTheColumns) {
   const Lattice L = periodic_lattice(2);
   ParticleStore p = random_store(L, 90, 7);
@@ -170,6 +171,12 @@ TEST(MeasuredCosts, SpreadTheTimedSecondsOverTheColumns) {
   for (int k = 0; k < L.cells[0]; ++k) {
     EXPECT_NEAR(static_cast<double>(c.wall[k]), 0.3e9 * walls[k] / 30.0, 1.0) << "column " << k;
     EXPECT_NEAR(static_cast<double>(c.fluid[k]), 1.2e9 * fluids[k] / 60.0, 1.0) << "column " << k;
+  }
+  // The sort's seconds are shared evenly by all particles of both kinds.
+  const PhaseCosts sorted = measured_column_costs(p, L, 0.3, 1.2, 0.9);
+  for (int k = 0; k < L.cells[0]; ++k) {
+    EXPECT_NEAR(static_cast<double>(sorted.wall[k]), (0.3e9 / 30.0 + 0.9e9 / 90.0) * walls[k], 1.0) << "column " << k;
+    EXPECT_NEAR(static_cast<double>(sorted.fluid[k]), (1.2e9 / 60.0 + 0.9e9 / 90.0) * fluids[k], 1.0) << "column " << k;
   }
   // A slab without fluid charges all its time to its walls (its fluid loop still ran over cells).
   for (std::size_t i = 0; i < p.owned(); ++i) p.kind[i] = kTankWall;

@@ -6,11 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstring>
 #include <functional>
 #include <memory>
 #include <numeric>
 #include <thread>
+#include <utility>
 
 #include "backend/cpu/cpu_backend.hpp"
 #include "backend/cuda/device_runtime.hpp"
@@ -35,7 +37,10 @@ class MirrorKernels final : public StepKernels {
     cpu::summation_density(dev_, g, P);
   }
   void wall_state(ParticleStore&, const CellGrid& g, const PhysicsParams& P) override { cpu::wall_state(dev_, g, P); }
-  void fluid_rates(ParticleStore&, const CellGrid& g, const PhysicsParams& P) override { cpu::fluid_rates(dev_, g, P); }
+  void fluid_rates_cells(ParticleStore&, const CellGrid& g, const PhysicsParams& P, std::uint32_t first_cell,
+                         std::uint32_t last_cell) override {
+    cpu::fluid_rates(dev_, g, P, first_cell, last_cell);
+  }
   float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
     return cpu::min_time_step(dev_, P, c);
   }
@@ -76,7 +81,6 @@ class ResidentKernels : public StepKernels {
     cpu::summation_density(store(), arrays_.grid(), P);
   }
   void wall_state(ParticleStore&, const CellGrid&, const PhysicsParams& P) override { cpu::wall_state(store(), arrays_.grid(), P); }
-  void fluid_rates(ParticleStore&, const CellGrid&, const PhysicsParams& P) override { cpu::fluid_rates(store(), arrays_.grid(), P); }
   // The CPU loop computes every owned particle; only [range) keeps its new rates, so a particle
   // computed in the interior pass (before the halo arrived) keeps what it got from stale ghosts.
   void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
@@ -124,10 +128,46 @@ class ResidentKernels : public StepKernels {
   PoisoningArrays arrays_;
 };
 
+// The CPU backend's loops on the host store, except that the halo ghosts (and their periodic
+// images: every ghost outside the owned x columns) get NaN in their Refresh fields when a refresh
+// starts, until the first fluid pass after it is done. That first pass is the interior one: if it
+// read a halo ghost, NaN would reach the results. The halo then overwrites the poison.
+class PoisonedInteriorKernels final : public StepKernels {
+ public:
+  explicit PoisonedInteriorKernels(bool every_pass = false) : every_pass_(every_pass) {}
+  const char* name() const override { return "poisoned interior"; }
+  void predict(ParticleStore& p, const PhysicsParams& P, float dt) override { cpu::predict(p, P, dt); }
+  void correct(ParticleStore& p, const PhysicsParams& P, float dt) override { cpu::correct(p, P, dt); }
+  void equation_of_state(ParticleStore& p, const PhysicsParams& P) override { cpu::equation_of_state(p, P); }
+  void summation_density(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::summation_density(p, g, P); }
+  void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::wall_state(p, g, P); }
+  void fluid_rates_cells(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, std::uint32_t first_cell,
+                         std::uint32_t last_cell) override {
+    if (std::exchange(armed_, every_pass_)) {
+      for (auto& f : p.fields()) {
+        if (!in_set(f, FieldSet::Refresh)) continue;
+        float* v = reinterpret_cast<float*>(f.bytes());
+        for (std::size_t i = p.owned(); i < p.size(); ++i)
+          if (!g.owns_column(g.lattice().cell_of(p.pos[0][i], 0))) v[i] = NAN;
+      }
+    }
+    cpu::fluid_rates(p, g, P, first_cell, last_cell);
+  }
+  float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) override {
+    return cpu::min_time_step(p, P, c);
+  }
+  // The worker asks for the owners' Refresh fields right before it stages a refresh.
+  void fetch(ParticleStore&, FieldSet set, std::size_t, std::size_t) override { armed_ = armed_ || set == FieldSet::Refresh; }
+
+ private:
+  bool every_pass_;
+  bool armed_ = false;
+};
+
 // Every checkpoint field of every particle, ordered by id, after `steps` fixed steps on `slabs`
 // in-process slabs, each with the kernels `make` gives it.
 std::vector<std::vector<char>> run(const Case& c, int slabs, int steps, const std::function<std::unique_ptr<StepKernels>()>& make,
-                                   std::vector<float>* dts = nullptr, int balance_every = 0) {
+                                   std::vector<float>* dts = nullptr, int balance_every = 0, std::atomic<bool>* faulted = nullptr) {
   const Lattice L = make_lattice(c);
   const PhysicsParams P = physics_params(c);
   const ParticleStore initial = generate_particles(c);
@@ -145,7 +185,8 @@ std::vector<std::vector<char>> run(const Case& c, int slabs, int steps, const st
       const float dt = static_cast<float>(t->min(w.local_time_step(TimeStepControl{})));
       step_sizes[s].push_back(dt);
       if (w.step(dt)) {  // a fault is collective: every slab stops here
-        ADD_FAILURE() << "unstable at step " << k;
+        if (faulted) *faulted = true;
+        else ADD_FAILURE() << "unstable at step " << k;
         break;
       }
     }
@@ -208,6 +249,24 @@ TEST(StepKernels, SummationDensityRefreshesGhostsThroughTheInterface) {
 void expect_same(const std::vector<std::vector<char>>& a, const std::vector<std::vector<char>>& b) {
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t f = 0; f < a.size(); ++f) EXPECT_TRUE(a[f] == b[f]) << "checkpoint field " << f;
+}
+
+TEST(HostPath, TheInteriorFluidPassNeedsNoHaloGhost) {
+  // The CPU backend computes the interior columns' fluid rates before it waits for the halo
+  // refresh. With the halo ghosts poisoned during that pass the results must still be the plain
+  // CPU backend's: on the dam break (faces in the water) and with periodic y (images of owned
+  // columns are refreshed before the interior pass, images of halo ghosts after it).
+  const Case dam = small_dam_break();
+  expect_same(run(dam, 3, 8, nullptr), run(dam, 3, 8, [] { return std::make_unique<PoisonedInteriorKernels>(); }));
+  const Case periodic = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/hydrostatic_3d.yaml",
+                                  {"tank.size=[0.3, 0.2, 0.3]", "fluid_blocks=[{min: [0, 0, 0], max: [0.3, 0.2, 0.1]}]",
+                                   "tank.periodic=[y]"});
+  expect_same(run(periodic, 3, 4, nullptr), run(periodic, 3, 4, [] { return std::make_unique<PoisonedInteriorKernels>(); }));
+  // The poison is effective: poisoned again before the boundary passes, which do read the halo,
+  // it makes the first step fail the health check.
+  std::atomic<bool> faulted = false;
+  run(dam, 3, 8, [] { return std::make_unique<PoisonedInteriorKernels>(true); }, nullptr, 0, &faulted);
+  EXPECT_TRUE(faulted);
 }
 
 TEST(ResidentTopology, ReproducesTheCpuBackendOnOneTwoAndThreeSlabs) {

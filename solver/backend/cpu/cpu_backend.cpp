@@ -116,16 +116,18 @@ struct NeighbourBatch {
 };
 
 template <class Kernel, int Dim>
-void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params) {
+void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params, std::uint32_t first_cell,
+                         std::uint32_t last_cell) {
   const PhysicsParams P = params;  // a local copy: the vectoriser must see that nothing aliases it
   const CellGridView v = grid.view();
-  const auto cells = static_cast<std::int64_t>(grid.owned_cell_count());
-  const auto particles = static_cast<std::int64_t>(v.start[cells]);
+  const auto cells = static_cast<std::int64_t>(std::min(last_cell, grid.owned_cell_count()));
+  const auto first = static_cast<std::int64_t>(std::min<std::int64_t>(first_cell, cells));
+  const auto particles = static_cast<std::int64_t>(v.start[cells] - v.start[first]);
 #pragma omp parallel if (particles > kPairGrain)
   {
     NeighbourBatch<Dim> batch;
 #pragma omp for schedule(dynamic, 64)
-    for (std::int64_t c = 0; c < cells; ++c) {
+    for (std::int64_t c = first; c < cells; ++c) {
       const std::uint32_t b = v.start[c], e = v.start[c + 1];
       if (b == e) continue;
       bool any_fluid = false;
@@ -295,8 +297,9 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
 
 }  // namespace
 
-void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
-  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() { fluid_rates_batched<Kernel, Dim>(p, grid, P); });
+void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P, std::uint32_t first_cell,
+                 std::uint32_t last_cell) {
+  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() { fluid_rates_batched<Kernel, Dim>(p, grid, P, first_cell, last_cell); });
 }
 
 void wall_state(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {

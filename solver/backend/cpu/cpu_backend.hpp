@@ -17,8 +17,11 @@ void equation_of_state(ParticleStore& p, const PhysicsParams& P);
 void summation_density(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 // Adami wall pressure, density and no-slip velocity of owned wall particles.
 void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
-// Acceleration and density rate of owned fluid particles.
-void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+// Acceleration and density rate of the owned fluid particles in owned cells [first_cell,
+// last_cell) (all by default). Each particle's rates depend only on its own neighbour loop, so a
+// pass split into cell ranges gives the same bits as one pass.
+void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, std::uint32_t first_cell = 0,
+                 std::uint32_t last_cell = 0xffffffffu);
 // Smallest stable time step over owned fluid particles (infinity when there are none).
 float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c);
 
@@ -38,7 +41,10 @@ class Kernels final : public StepKernels {
     cpu::summation_density(p, g, P);
   }
   void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::wall_state(p, g, P); }
-  void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::fluid_rates(p, g, P); }
+  void fluid_rates_cells(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, std::uint32_t first_cell,
+                         std::uint32_t last_cell) override {
+    cpu::fluid_rates(p, g, P, first_cell, last_cell);
+  }
   float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) override {
     return cpu::min_time_step(p, P, c);
   }

@@ -131,9 +131,6 @@ class CudaKernels final : public StepKernels {
   void wall_state(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
     neighbour_pass<WallStatePass>(P, ParticleRange{0, owned()});
   }
-  void fluid_rates(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
-    neighbour_pass<FluidRatesPass>(P, ParticleRange{0, owned()});
-  }
   void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
     neighbour_pass<FluidRatesPass>(P, range);
   }
