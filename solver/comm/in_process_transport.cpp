@@ -19,6 +19,28 @@ class InProcessTransport final : public SlabTransport {
     from_right = r >= 0 ? hub_.to_left_[r] : Bytes{};
     hub_.wait();
   }
+  void post(Bytes to_left, Bytes to_right) override {
+    const int l = left_of(slab_), r = right_of(slab_);
+    std::unique_lock lock(hub_.post_mutex_);
+    const std::uint64_t k = hub_.posts_[slab_];
+    wait_for(lock, [&] { return k < 2 || ((l < 0 || hub_.collects_[l] + 1 >= k) && (r < 0 || hub_.collects_[r] + 1 >= k)); });
+    auto& box = hub_.mailbox_[k % 2][slab_];
+    box.to_left = std::move(to_left);
+    box.to_right = std::move(to_right);
+    ++hub_.posts_[slab_];
+    hub_.post_cv_.notify_all();
+  }
+  void collect(Bytes& from_left, Bytes& from_right) override {
+    const int l = left_of(slab_), r = right_of(slab_);
+    std::unique_lock lock(hub_.post_mutex_);
+    const std::uint64_t k = hub_.collects_[slab_];
+    wait_for(lock, [&] { return (l < 0 || hub_.posts_[l] > k) && (r < 0 || hub_.posts_[r] > k); });
+    // Each mailbox side has exactly one reader, so it can be moved out.
+    from_left = l >= 0 ? std::move(hub_.mailbox_[k % 2][l].to_right) : Bytes{};
+    from_right = r >= 0 ? std::move(hub_.mailbox_[k % 2][r].to_left) : Bytes{};
+    ++hub_.collects_[slab_];
+    hub_.post_cv_.notify_all();
+  }
   double min(double v) override {
     return reduce_double(v, [](double a, double b) { return std::min(a, b); });
   }
@@ -72,6 +94,11 @@ class InProcessTransport final : public SlabTransport {
     hub_.wait();
     return r;
   }
+  template <class Ready>
+  void wait_for(std::unique_lock<std::mutex>& lock, Ready ready) {
+    hub_.post_cv_.wait(lock, [&] { return hub_.failed_.load() || ready(); });
+    if (hub_.failed_) throw PeerFailure();
+  }
   InProcessHub& hub_;
   int slab_;
 };
@@ -84,7 +111,10 @@ InProcessHub::InProcessHub(int slabs)
       dslot_(slabs),
       islot_(slabs),
       vslot_(slabs),
-      gslot_(slabs) {}
+      gslot_(slabs),
+      mailbox_{std::vector<Mailbox>(slabs), std::vector<Mailbox>(slabs)},
+      posts_(slabs, 0),
+      collects_(slabs, 0) {}
 
 std::unique_ptr<SlabTransport> InProcessHub::endpoint(int slab, bool periodic_x) {
   auto t = std::make_unique<InProcessTransport>(*this, slab);
@@ -99,7 +129,11 @@ void InProcessHub::wait() {
 }
 
 void InProcessHub::abandon() {
-  failed_ = true;
+  {
+    std::lock_guard lock(post_mutex_);
+    failed_ = true;
+  }
+  post_cv_.notify_all();
   barrier_.arrive_and_drop();
 }
 

@@ -4,7 +4,10 @@
 // `abandon()`: the others see PeerFailure at their next collective instead of waiting forever.
 #include <atomic>
 #include <barrier>
+#include <condition_variable>
+#include <cstdint>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "transport.hpp"
@@ -34,6 +37,15 @@ class InProcessHub final : public LocalSlabs {
   std::vector<std::int64_t> islot_;
   std::vector<std::vector<std::int64_t>> vslot_;
   std::vector<Bytes> gslot_;
+  // post()/collect(): per slab, two mailboxes used alternately (post k writes mailbox k % 2 only
+  // once both neighbours collected post k - 2) and the number of posts and collects so far.
+  struct Mailbox {
+    Bytes to_left, to_right;
+  };
+  std::mutex post_mutex_;
+  std::condition_variable post_cv_;
+  std::vector<Mailbox> mailbox_[2];
+  std::vector<std::uint64_t> posts_, collects_;
 };
 
 }  // namespace spate

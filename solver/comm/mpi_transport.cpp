@@ -32,6 +32,8 @@ namespace {
 constexpr int kTagLeftward = 11;
 constexpr int kTagRightward = 12;
 constexpr int kTagGather = 13;
+constexpr int kTagPostLeftward = 14;  // post()/collect()
+constexpr int kTagPostRightward = 15;
 constexpr int kTagDeviceLeftward = 21;  // exchange_device (CUDA-aware MPI)
 constexpr int kTagDeviceRightward = 22;
 constexpr std::int64_t kChunk = std::int64_t{1} << 30;  // broadcast pieces stay below INT_MAX bytes
@@ -226,6 +228,31 @@ class MpiTransport final : public SlabTransport {
     // The slots are rewritten by the next exchange; nobody may start it before all have read.
     node_.wait();
   }
+  // With one slab per rank, post() starts the sends to the neighbouring ranks and collect() waits
+  // for theirs: a rank that is early waits only for its neighbours to post. With several slabs per
+  // rank the in-node workers would have to meet anyway, so both halves happen in collect().
+  void post(Bytes to_left, Bytes to_right) override {
+    if (node_.local_ > 1) return SlabTransport::post(std::move(to_left), std::move(to_right));
+    post_left_ = std::move(to_left);
+    post_right_ = std::move(to_right);
+    const int l = left_of(slab_), r = right_of(slab_);
+    posted_ = 0;
+    if (l >= 0 && l != slab_)
+      MPI_Isend(post_left_.data(), byte_count(post_left_), MPI_BYTE, node_.rank_of(l), kTagPostLeftward, node_.comm_, &sends_[posted_++]);
+    if (r >= 0 && r != slab_)
+      MPI_Isend(post_right_.data(), byte_count(post_right_), MPI_BYTE, node_.rank_of(r), kTagPostRightward, node_.comm_, &sends_[posted_++]);
+  }
+  void collect(Bytes& from_left, Bytes& from_right) override {
+    if (node_.local_ > 1) return SlabTransport::collect(from_left, from_right);
+    const int l = left_of(slab_), r = right_of(slab_);
+    // A slab that is its own neighbour (one slab, periodic x) receives what it sent the other way.
+    from_left = l < 0 ? Bytes{} : l == slab_ ? post_right_ : Bytes{};
+    from_right = r < 0 ? Bytes{} : r == slab_ ? post_left_ : Bytes{};
+    if (l >= 0 && l != slab_) node_.receive(node_.rank_of(l), kTagPostRightward, from_left);
+    if (r >= 0 && r != slab_) node_.receive(node_.rank_of(r), kTagPostLeftward, from_right);
+    MPI_Waitall(posted_, sends_, MPI_STATUSES_IGNORE);
+    posted_ = 0;
+  }
   bool exchange_device(const DeviceSpan& left, const DeviceSpan& right) override {
     node_.dev_left_[local_] = left;
     node_.dev_right_[local_] = right;
@@ -311,6 +338,9 @@ class MpiTransport final : public SlabTransport {
   MpiNode& node_;
   int local_;
   int slab_;
+  Bytes post_left_, post_right_;  // kept alive until collect() completes their sends
+  MPI_Request sends_[2] = {MPI_REQUEST_NULL, MPI_REQUEST_NULL};
+  int posted_ = 0;
 };
 
 std::unique_ptr<SlabTransport> MpiNode::endpoint(int local, bool periodic_x) {

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace spate {
@@ -25,6 +26,19 @@ class SlabTransport {
   // this way. A slab without a neighbour on a side receives an empty buffer from it.
   virtual void exchange(const Bytes& to_left, const Bytes& to_right, Bytes& from_left,
                         Bytes& from_right) = 0;
+
+  // The same exchange in two halves, so that a slab can work in between: post() hands the buffers
+  // over and returns without waiting for the neighbours; collect() waits until both neighbours
+  // have posted theirs and returns them. A slab that is early therefore waits only for its
+  // neighbours to post, not for them to reach collect(). Every slab calls post() then collect(),
+  // in the same order relative to its other calls. By default both halves happen in collect().
+  virtual void post(Bytes to_left, Bytes to_right) {
+    posted_left_ = std::move(to_left);
+    posted_right_ = std::move(to_right);
+  }
+  virtual void collect(Bytes& from_left, Bytes& from_right) {
+    exchange(posted_left_, posted_right_, from_left, from_right);
+  }
 
   // Collectives over every slab. Each is exact and independent of the number of slabs:
   // minimum/maximum are order-free, integer sums are exact.
@@ -66,6 +80,9 @@ class SlabTransport {
   bool periodic_x = false;
   int left_of(int s) const { return s > 0 ? s - 1 : (periodic_x ? slab_count() - 1 : -1); }
   int right_of(int s) const { return s + 1 < slab_count() ? s + 1 : (periodic_x ? 0 : -1); }
+
+ private:
+  Bytes posted_left_, posted_right_;  // the default post()
 };
 
 // Raised in a slab's collective when another slab of this process gave up.

@@ -70,8 +70,8 @@ void Halo::receive(ParticleStore& p, CellGrid& grid) {
   const std::size_t owned = p.owned();
   const std::size_t n_left = unpack_append(p, from_left_, FieldSet::Ghost);
   const std::size_t n_right = unpack_append(p, from_right_, FieldSet::Ghost);
-  from_left_.clear();
-  from_right_.clear();
+  Bytes().swap(from_left_);  // freed, not kept: they are as large as the ghosts' fields
+  Bytes().swap(from_right_);
 
   image_source_.clear();
   image_target_.clear();
@@ -117,15 +117,14 @@ void Halo::make_periodic_images(ParticleStore& p, const CellGrid& grid, int axis
   }
 }
 
-void Halo::begin_refresh(ParticleStore& p) {
-  refresh_left_ = pack_particles(p, send_left_, FieldSet::Refresh);
-  refresh_right_ = pack_particles(p, send_right_, FieldSet::Refresh);
+void Halo::begin_refresh(ParticleStore& p, SlabTransport& transport) {
+  transport.post(pack_particles(p, send_left_, FieldSet::Refresh), pack_particles(p, send_right_, FieldSet::Refresh));
   refresh_images(p, true);
 }
 
 void Halo::finish_refresh(ParticleStore& p, SlabTransport& transport) {
   Bytes from_left, from_right;
-  transport.exchange(refresh_left_, refresh_right_, from_left, from_right);
+  transport.collect(from_left, from_right);
   unpack_into(p, from_left, FieldSet::Refresh, slots_left_);
   unpack_into(p, from_right, FieldSet::Refresh, slots_right_);
   refresh_images(p, false);

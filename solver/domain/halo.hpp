@@ -27,13 +27,14 @@ class Halo {
   void receive(ParticleStore& p, CellGrid& grid);
   // Copies the FieldSet::Refresh fields of every ghost from its source again.
   void refresh(ParticleStore& p, SlabTransport& transport) {
-    begin_refresh(p);
+    begin_refresh(p, transport);
     finish_refresh(p, transport);
   }
   // The refresh in two halves, so that work which sees no halo ghost can run in between: the first
-  // packs what the neighbours get and refreshes the periodic images of owned columns; the second
-  // exchanges and refreshes the halo ghosts and their images.
-  void begin_refresh(ParticleStore& p);
+  // posts what the neighbours get (SlabTransport::post) and refreshes the periodic images of
+  // owned columns; the second collects the neighbours' and refreshes the halo ghosts and their
+  // images.
+  void begin_refresh(ParticleStore& p, SlabTransport& transport);
   void finish_refresh(ParticleStore& p, SlabTransport& transport);
 
   std::size_t ghost_count() const { return ghosts_; }
@@ -49,7 +50,6 @@ class Halo {
   // An image is local when its source lies in an owned column (images keep their source's x).
   std::vector<std::uint32_t> image_source_, image_target_;
   std::vector<std::uint8_t> image_local_;
-  Bytes refresh_left_, refresh_right_;  // staged by begin_refresh
   Bytes from_left_, from_right_;        // received by send(), taken in by receive()
   std::size_t ghosts_ = 0;
 };

@@ -136,7 +136,7 @@ double SlabWorker::fluid_rates_overlapping_refresh() {
   const int last = std::max(first, width - (transport_.right_of(s) >= 0 ? 1 : 0));
   const auto t0 = Clock::now();
   kernels_->fetch(particles_, FieldSet::Refresh, 0, particles_.owned());
-  halo_.begin_refresh(particles_);
+  halo_.begin_refresh(particles_, transport_);
   kernels_->publish_fields(particles_, FieldSet::Refresh, particles_.owned(), particles_.size());  // local images
   kernels_->fluid_rates_cells(particles_, grid_, params_, first * per_column, last * per_column);
   double seconds = since(t0);

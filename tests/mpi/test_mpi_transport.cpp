@@ -4,6 +4,7 @@
 // 2 or 3 ranks (ctest label mpi); without several ranks the tests skip.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstring>
 #include <numeric>
 #include <string>
@@ -65,6 +66,32 @@ TEST_P(MpiTransportTest, NeighbourMessagesArriveFromTheRightSlab) {
       Bytes from_left, from_right;
       t.exchange(bytes(message('L', s, round)), bytes(message('R', s, round)), from_left, from_right);
       const int l = t.left_of(s), r = t.right_of(s);
+      EXPECT_EQ(text(from_left), l >= 0 ? message('R', l, round) : "") << "slab " << s << " round " << round;
+      EXPECT_EQ(text(from_right), r >= 0 ? message('L', r, round) : "") << "slab " << s << " round " << round;
+    }
+  });
+}
+
+// post()/collect() (the halo refresh): the same neighbour messages, with the ranks running apart
+// (each slab sleeps a different time before posting) and an exchange() between a post and its
+// collect in one round.
+TEST_P(MpiTransportTest, PostedMessagesArriveFromTheRightSlab) {
+  const auto [devices, periodic] = GetParam();
+  auto local = make_mpi_slabs(devices);
+  on_every_slab(*local, periodic, [&](SlabTransport& t) {
+    const int s = t.slab();
+    const int l = t.left_of(s), r = t.right_of(s);
+    for (int round = 0; round < 4; ++round) {
+      std::this_thread::sleep_for(std::chrono::milliseconds((s * 3 + round) % 4));
+      t.post(bytes(message('L', s, round)), bytes(message('R', s, round)));
+      if (round == 2) {
+        Bytes a, b;
+        t.exchange(bytes("x"), bytes("y"), a, b);
+        EXPECT_EQ(text(a), l >= 0 ? "y" : "");
+        EXPECT_EQ(text(b), r >= 0 ? "x" : "");
+      }
+      Bytes from_left, from_right;
+      t.collect(from_left, from_right);
       EXPECT_EQ(text(from_left), l >= 0 ? message('R', l, round) : "") << "slab " << s << " round " << round;
       EXPECT_EQ(text(from_right), r >= 0 ? message('L', r, round) : "") << "slab " << s << " round " << round;
     }

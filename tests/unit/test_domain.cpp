@@ -1,6 +1,8 @@
 // Domain (solver/domain/halo.hpp): a halo refresh brings every ghost the current value of its
 // source particle; migration sends every particle to the slab that owns its column, losing none.
 #include <gtest/gtest.h>
+#include <atomic>
+#include <chrono>
 
 #include <mutex>
 #include <random>
@@ -151,6 +153,60 @@ TEST(Transport, GatherBringsEverySlabsBufferToSlabZeroOnly) {
   for (int round = 0; round < 2; ++round)
     for (int k = 0; k < 3; ++k)
       EXPECT_EQ(seen[0][round * 3 + k], std::to_string(round) + ":" + std::string(static_cast<std::size_t>(k + 1) * 1000, static_cast<char>('a' + k)));
+}
+
+// post()/collect(): each slab gets exactly its neighbours' buffers of the same round although the
+// slabs run apart (each sleeps a different, changing time before posting) and nothing else makes
+// them meet between rounds (the mailboxes are reused every second round). Also after an
+// exchange() in between, and with a slab that is its own neighbour (one slab, periodic x).
+TEST(Transport, PostedBuffersArriveInOrderWhileSlabsRunApart) {
+  auto msg = [](char side, int slab, int round) { return std::string(1, side) + std::to_string(slab) + "/" + std::to_string(round) + std::string(static_cast<std::size_t>(slab) * 5, '.'); };
+  for (const bool periodic : {false, true}) {
+    on_three_slabs(periodic, [&](int s, SlabTransport& t) {
+      const int l = t.left_of(s), r = t.right_of(s);
+      for (int round = 0; round < 8; ++round) {
+        std::this_thread::sleep_for(std::chrono::milliseconds((s * 3 + round) % 4));
+        const std::string to_left = msg('L', s, round), to_right = msg('R', s, round);
+        t.post(Bytes(to_left.begin(), to_left.end()), Bytes(to_right.begin(), to_right.end()));
+        if (round == 5) {
+          Bytes a, b;
+          t.exchange(Bytes{'x'}, Bytes{'y'}, a, b);
+          EXPECT_EQ(a, l >= 0 ? Bytes{'y'} : Bytes{});
+        }
+        Bytes from_left, from_right;
+        t.collect(from_left, from_right);
+        EXPECT_EQ(std::string(from_left.begin(), from_left.end()), l >= 0 ? msg('R', l, round) : "") << "slab " << s << " round " << round;
+        EXPECT_EQ(std::string(from_right.begin(), from_right.end()), r >= 0 ? msg('L', r, round) : "") << "slab " << s << " round " << round;
+      }
+    });
+  }
+  InProcessHub alone(1);
+  auto t = alone.endpoint(0, true);
+  t->post(Bytes{'l'}, Bytes{'r'});
+  Bytes from_left, from_right;
+  t->collect(from_left, from_right);
+  EXPECT_EQ(from_left, Bytes{'r'});
+  EXPECT_EQ(from_right, Bytes{'l'});
+}
+
+// A slab that fails while its neighbour waits in collect() releases it with PeerFailure.
+TEST(Transport, CollectDoesNotHangWhenANeighbourFails) {
+  InProcessHub hub(2);
+  std::atomic<bool> released = false;
+  std::thread waiter([&] {
+    auto t = hub.endpoint(0, false);
+    t->post(Bytes{}, Bytes{'a'});
+    Bytes a, b;
+    try {
+      t->collect(a, b);
+    } catch (const PeerFailure&) {
+      released = true;
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  hub.abandon();
+  waiter.join();
+  EXPECT_TRUE(released);
 }
 
 // The measured balancer spreads a slab's timed seconds over its columns: the wall phase over the
