@@ -141,9 +141,10 @@ void CellGrid::sort_range(ParticleStore& particles, std::size_t first, std::size
     }
   }
   particles.permute(first, perm_);
-  sorted_keys_.resize(n);
-  for (std::size_t k = 0; k < n; ++k) sorted_keys_[k] = keys_[first + perm_[k]];
-  std::copy(sorted_keys_.begin(), sorted_keys_.end(), keys_.begin() + static_cast<std::ptrdiff_t>(first));
+  // The sorted keys are the cells in order, each as often as it holds particles.
+  std::uint32_t* sorted = keys_.data() + first;
+  for (std::uint32_t c = 0, b = 0; c < cells; b = counts_[c++])
+    std::fill(sorted + b, sorted + counts_[c], c);
 }
 
 }  // namespace spate

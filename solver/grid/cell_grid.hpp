@@ -73,7 +73,7 @@ class CellGrid {
   std::uint32_t owned_cells_ = 0, ghost_cells_ = 0;
   std::vector<std::uint32_t> start_;  // cell_count + 1 prefix offsets
   CellGridView view_{};
-  std::vector<std::uint32_t> keys_, sorted_keys_, perm_, counts_, ghost_perm_;
+  std::vector<std::uint32_t> keys_, perm_, counts_, ghost_perm_;
 };
 
 }  // namespace spate

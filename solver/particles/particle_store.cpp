@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <type_traits>
 #include <utility>
 
 namespace spate {
@@ -21,15 +22,23 @@ template <class T>
 FieldRef ref(std::string_view name, std::vector<T>& v, bool ghost, bool checkpoint) {
   return FieldRef{name, &v, sizeof(T), ghost, checkpoint, &resize_vector<T>, &vector_storage<T>};
 }
+// One 32-bit scratch word per particle serves every field type (bit copies), so the sort's
+// scratch costs 4 bytes per particle, not one array per type.
 template <class T>
 void permute_range(std::vector<T>& v, std::size_t first, std::span<const std::uint32_t> perm,
-                   std::vector<T>& scratch) {
+                   std::vector<std::uint32_t>& scratch) {
+  static_assert(sizeof(T) <= sizeof(std::uint32_t) && std::is_trivially_copyable_v<T>);
   if (v.empty()) return;
   const std::size_t n = perm.size();
   scratch.resize(n);
 #pragma omp parallel for schedule(static) if (n > cpu::kCheapGrain)
-  for (std::size_t k = 0; k < n; ++k) scratch[k] = v[first + perm[k]];
-  std::copy(scratch.begin(), scratch.end(), v.begin() + static_cast<std::ptrdiff_t>(first));
+  for (std::size_t k = 0; k < n; ++k) {
+    std::uint32_t word = 0;
+    std::memcpy(&word, &v[first + perm[k]], sizeof(T));
+    scratch[k] = word;
+  }
+#pragma omp parallel for schedule(static) if (n > cpu::kCheapGrain)
+  for (std::size_t k = 0; k < n; ++k) std::memcpy(&v[first + k], &scratch[k], sizeof(T));
 }
 }  // namespace
 
@@ -60,23 +69,23 @@ void ParticleStore::resize(std::size_t n) {
 std::size_t ParticleStore::bytes_per_particle() const {
   std::size_t b = 0;
   for (auto& f : const_cast<ParticleStore*>(this)->fields()) b += f.elem_size;
-  // The cell sort keeps a key and a permutation per particle, and permute() one scratch value.
+  // The cell sort keeps a key and a permutation per particle, and permute() one scratch word.
   return b + 3 * sizeof(std::uint32_t);
 }
 
 void ParticleStore::permute(std::size_t first, std::span<const std::uint32_t> perm) {
   for (int k = 0; k < 3; ++k) {
-    permute_range(pos[k], first, perm, scratch_f32_);
-    permute_range(vel[k], first, perm, scratch_f32_);
-    permute_range(acc[k], first, perm, scratch_f32_);
-    permute_range(acc_prev[k], first, perm, scratch_f32_);
+    permute_range(pos[k], first, perm, scratch_);
+    permute_range(vel[k], first, perm, scratch_);
+    permute_range(acc[k], first, perm, scratch_);
+    permute_range(acc_prev[k], first, perm, scratch_);
   }
-  permute_range(density, first, perm, scratch_f32_);
-  permute_range(pressure, first, perm, scratch_f32_);
-  permute_range(density_rate, first, perm, scratch_f32_);
-  permute_range(density_rate_prev, first, perm, scratch_f32_);
-  permute_range(id, first, perm, scratch_u32_);
-  permute_range(kind, first, perm, scratch_u8_);
+  permute_range(density, first, perm, scratch_);
+  permute_range(pressure, first, perm, scratch_);
+  permute_range(density_rate, first, perm, scratch_);
+  permute_range(density_rate_prev, first, perm, scratch_);
+  permute_range(id, first, perm, scratch_);
+  permute_range(kind, first, perm, scratch_);
 }
 
 void ParticleStore::append_from(const ParticleStore& from, std::size_t src) {

@@ -63,9 +63,7 @@ class ParticleStore {
  private:
   int dim_;
   std::size_t owned_ = 0;
-  std::vector<std::uint32_t> scratch_u32_;
-  std::vector<float> scratch_f32_;
-  std::vector<std::uint8_t> scratch_u8_;
+  std::vector<std::uint32_t> scratch_;  // permute(): one word per particle for every field type
 };
 
 }  // namespace spate
