@@ -98,6 +98,7 @@ def scaling(args, raw):
     times = {label: [] for label, *_ in CONFIGS}
     ratios = {label: [] for label, *_ in CONFIGS}
     ratios_t2 = {label: [] for label, *_ in CONFIGS}
+    shares = {label: [] for label, *_ in CONFIGS}
     ceiling, last = [], {}
     for r in range(args.rounds):
         # Rotate the order so that no configuration always runs first (or right after the pair).
@@ -106,6 +107,7 @@ def scaling(args, raw):
         for label, ranks, devices, threads in order:
             j = bench(args, ranks, devices, threads)
             this_round[label] = j["seconds_per_step"]
+            shares[label].append(busy_share(j))
             last[label] = j
             raw.append({"round": r, "config": label, **j})
         pair = concurrent_pair(args)
@@ -121,13 +123,16 @@ def scaling(args, raw):
     print()
     print(f"Medians over {args.rounds} rounds, {args.steps} timed steps per run (s/step includes the final checkpoint):\n")
     print("| configuration | median s/step | min-max s/step | median speed-up vs 1 rank, D = 1, 1 thread | "
-          "median speed-up vs D = 1, 2 threads | face moves | command |")
-    print("|---|---|---|---|---|---|---|")
+          "median speed-up vs D = 1, 2 threads | median busy share | face moves | command |")
+    print("|---|---|---|---|---|---|---|---|")
     for label, ranks, devices, threads in CONFIGS:
         t = times[label]
         cmd = printable(bench_command(args, ranks, devices, threads), args)
         print(f"| {label} | {statistics.median(t):.3f} | {min(t):.3f}-{max(t):.3f} | {statistics.median(ratios[label]):.2f} | "
-              f"{statistics.median(ratios_t2[label]):.2f} | {last[label].get('face_moves')} | `{cmd}` |")
+              f"{statistics.median(ratios_t2[label]):.2f} | {statistics.median(shares[label]):.2f} | {last[label].get('face_moves')} | `{cmd}` |")
+    print("\nBusy share: the slabs' seconds in their own neighbour loops and sort over slabs x stepping "
+          "seconds, within one run (so independent of the machine's speed that day); the rest is waiting "
+          "for other slabs and the per-particle updates outside the loops.")
     print(f"\nMachine ceiling (two 1-thread runs at once vs one alone, 2 = perfect): median "
           f"{statistics.median(ceiling):.2f}, rounds {', '.join(f'{c:.2f}' for c in ceiling)}.\n")
     print("Per-round speed-ups vs the baseline:\n")
@@ -135,6 +140,14 @@ def scaling(args, raw):
         print(f"- {label}: " + ", ".join(f"{v:.2f}" for v in ratios[label]))
     print()
     return last
+
+
+def busy_share(j):
+    """Fraction of the slabs' time spent in their own loops and sort (device_busy_seconds) rather than
+    waiting or in the per-particle updates, within one run."""
+    busy = j.get("device_busy_seconds") or []
+    stepping = j.get("stepping_seconds") or 0
+    return sum(busy) / (len(busy) * stepping) if busy and stepping else float("nan")
 
 
 def ghosts(last):
