@@ -22,23 +22,29 @@ template <class T>
 FieldRef ref(std::string_view name, std::vector<T>& v, bool ghost, bool checkpoint) {
   return FieldRef{name, &v, sizeof(T), ghost, checkpoint, &resize_vector<T>, &vector_storage<T>};
 }
-// One 32-bit scratch word per particle serves every field type (bit copies), so the sort's
-// scratch costs 4 bytes per particle, not one array per type.
+// Reorders only the runs of slots whose particle changes (perm[k] != k): between two steps walls
+// never move and most fluid stays in its cell, so most of a sorted slab keeps its place. The moved
+// slots map onto each other (the fixed ones are fixed points of a bijection), so gathering all
+// runs before writing any back is a complete permutation. One 32-bit scratch word per particle
+// serves every field type (bit copies), so the scratch costs 4 bytes per particle.
 template <class T>
-void permute_range(std::vector<T>& v, std::size_t first, std::span<const std::uint32_t> perm,
-                   std::vector<std::uint32_t>& scratch) {
+void permute_runs(std::vector<T>& v, std::size_t first, std::span<const std::uint32_t> perm,
+                  const std::vector<std::pair<std::uint32_t, std::uint32_t>>& runs, std::vector<std::uint32_t>& scratch) {
   static_assert(sizeof(T) <= sizeof(std::uint32_t) && std::is_trivially_copyable_v<T>);
   if (v.empty()) return;
-  const std::size_t n = perm.size();
-  scratch.resize(n);
-#pragma omp parallel for schedule(static) if (n > cpu::kCheapGrain)
-  for (std::size_t k = 0; k < n; ++k) {
-    std::uint32_t word = 0;
-    std::memcpy(&word, &v[first + perm[k]], sizeof(T));
-    scratch[k] = word;
+  T* data = v.data() + first;
+  for (const auto& [b, e] : runs) {
+#pragma omp parallel for schedule(static) if (e - b > cpu::kCheapGrain)
+    for (std::uint32_t k = b; k < e; ++k) {
+      std::uint32_t word = 0;
+      std::memcpy(&word, data + perm[k], sizeof(T));
+      scratch[k] = word;
+    }
   }
-#pragma omp parallel for schedule(static) if (n > cpu::kCheapGrain)
-  for (std::size_t k = 0; k < n; ++k) std::memcpy(&v[first + k], &scratch[k], sizeof(T));
+  for (const auto& [b, e] : runs) {
+#pragma omp parallel for schedule(static) if (e - b > cpu::kCheapGrain)
+    for (std::uint32_t k = b; k < e; ++k) std::memcpy(data + k, &scratch[k], sizeof(T));
+  }
 }
 }  // namespace
 
@@ -74,18 +80,34 @@ std::size_t ParticleStore::bytes_per_particle() const {
 }
 
 void ParticleStore::permute(std::size_t first, std::span<const std::uint32_t> perm) {
-  for (int k = 0; k < 3; ++k) {
-    permute_range(pos[k], first, perm, scratch_);
-    permute_range(vel[k], first, perm, scratch_);
-    permute_range(acc[k], first, perm, scratch_);
-    permute_range(acc_prev[k], first, perm, scratch_);
+  const auto n = static_cast<std::uint32_t>(perm.size());
+  runs_.clear();
+  for (std::uint32_t k = 0; k < n;) {
+    if (perm[k] == k) {
+      ++k;
+      continue;
+    }
+    const std::uint32_t b = k;
+    while (k < n && perm[k] != k) ++k;
+    // Gaps of fewer than 64 fixed slots join the runs around them (copying a fixed slot is
+    // harmless): fewer, longer runs, at most one per 64 particles.
+    if (!runs_.empty() && b - runs_.back().second < 64) runs_.back().second = k;
+    else runs_.emplace_back(b, k);
   }
-  permute_range(density, first, perm, scratch_);
-  permute_range(pressure, first, perm, scratch_);
-  permute_range(density_rate, first, perm, scratch_);
-  permute_range(density_rate_prev, first, perm, scratch_);
-  permute_range(id, first, perm, scratch_);
-  permute_range(kind, first, perm, scratch_);
+  if (runs_.empty()) return;
+  scratch_.resize(n);
+  for (int k = 0; k < 3; ++k) {
+    permute_runs(pos[k], first, perm, runs_, scratch_);
+    permute_runs(vel[k], first, perm, runs_, scratch_);
+    permute_runs(acc[k], first, perm, runs_, scratch_);
+    permute_runs(acc_prev[k], first, perm, runs_, scratch_);
+  }
+  permute_runs(density, first, perm, runs_, scratch_);
+  permute_runs(pressure, first, perm, runs_, scratch_);
+  permute_runs(density_rate, first, perm, runs_, scratch_);
+  permute_runs(density_rate_prev, first, perm, runs_, scratch_);
+  permute_runs(id, first, perm, runs_, scratch_);
+  permute_runs(kind, first, perm, runs_, scratch_);
 }
 
 void ParticleStore::append_from(const ParticleStore& from, std::size_t src) {

@@ -8,6 +8,7 @@
 #include <functional>
 #include <span>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace spate {
@@ -64,6 +65,7 @@ class ParticleStore {
   int dim_;
   std::size_t owned_ = 0;
   std::vector<std::uint32_t> scratch_;  // permute(): one word per particle for every field type
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> runs_;  // permute(): the slot ranges that change
 };
 
 }  // namespace spate
