@@ -1,9 +1,10 @@
 #pragma once
 // Headless by default: when ParaView renders through X11 (Debian's build) and there is no
 // DISPLAY, the adaptor starts a private Xvfb (Mesa llvmpipe renders into it) that ends with the
-// process. Xvfb picks a free display itself (-displayfd), so parallel runs on one
-// machine never race for a number. A ParaView built with EGL or OSMesa needs no display, and an
-// existing DISPLAY is used as it is.
+// process. The display number is drawn at random from [100, 10000) and another is tried if that
+// one is taken: letting Xvfb pick the first free number itself (-displayfd alone) made parallel
+// runs probe :0, :1, ... together, and one such race broke another process's X connection in CI.
+// A ParaView built with EGL or OSMesa needs no display, and an existing DISPLAY is used as it is.
 #include <sys/types.h>
 
 #include <string>
