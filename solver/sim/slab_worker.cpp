@@ -13,6 +13,12 @@
 
 namespace spate {
 
+namespace {
+// The worker times its own work (not the waits) for the balancer and device_busy_seconds.
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+}  // namespace
+
 SlabWorker::SlabWorker(const Lattice& lattice, const PhysicsParams& params, SlabTransport& transport)
     : lattice_(lattice), params_(params), transport_(transport), particles_(lattice.dim),
       kernels_(std::make_unique<cpu::Kernels>()) {}
@@ -66,9 +72,9 @@ void SlabWorker::rebuild() {
   faces_moved_ = false;
   halo_.send(particles_, grid_, transport_);
   // The sort and the ghosts' arrival: per-particle work in the same stretch as the loops.
-  const auto t = std::chrono::steady_clock::now();
+  const auto t = Clock::now();
   halo_.receive(particles_, grid_);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  const double seconds = since(t);
   busy_seconds_ += seconds;
   window_sort_seconds_ += seconds;
   kernels_->publish(particles_, grid_);
@@ -88,8 +94,6 @@ void SlabWorker::refresh_halo() {
 }
 
 void SlabWorker::compute_rates() {
-  using Clock = std::chrono::steady_clock;
-  auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   if (params_.density_mode == DensityMode::Summation) {
     const auto t = Clock::now();
     kernels_->summation_density(particles_, grid_, params_);
@@ -114,8 +118,6 @@ void SlabWorker::compute_rates() {
 // only need to agree on wall + fluid time, not on each phase. Each particle's rates depend only
 // on its own neighbour loop, so the split changes no result. Returns the seconds spent computing.
 double SlabWorker::fluid_rates_overlapping_refresh() {
-  using Clock = std::chrono::steady_clock;
-  auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   if (SlabArrays* r = resident()) {
     const auto t0 = Clock::now();
     topology_.begin_refresh(*r);

@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "../unit/host_copies.hpp"
 #include "backend/cuda/halo_exchange.hpp"
 #include "comm/mpi_transport.hpp"
 #include "comm/process_group.hpp"
@@ -121,39 +122,13 @@ TEST_P(MpiTransportTest, LargeMessagesCrossRanks) {
 // (MPI takes host and device pointers alike): neighbours on other ranks go through the transport's
 // messages or buffer to buffer through exchange_device, those on this rank by "peer" copies.
 // Every payload must arrive, three rounds running.
-class HostMemoryCopies final : public gpu::DeviceCopies {
- public:
-  explicit HostMemoryCopies(int device) : device_(device) {}
-  int device() const override { return device_; }
-  bool peer_both_ways(int) override { return true; }
-  void wait_staged() override {}
-  void copy_to_host(void* h, const void* d, std::size_t n) override { std::memcpy(h, d, n); }
-  void copy_from_host(void* d, const void* h, std::size_t n) override { std::memcpy(d, h, n); }
-  void copy_peer(void* d, const void* theirs, int, std::size_t n) override { std::memcpy(d, theirs, n); }
-  void after_incoming_read() override {}
-  void wait_incoming_read() override {}
-  void wait_copies() override {}
-  void* incoming(Side side, std::size_t n) override {
-    in[side].resize(n);
-    return in[side].data();
-  }
-  void* pinned(int which, std::size_t n) override {
-    if (staging[which].size() < n) staging[which].resize(n);
-    return staging[which].data();
-  }
-  std::vector<char> in[2], staging[4];
-
- private:
-  int device_;
-};
-
 TEST_P(MpiTransportTest, GpuHaloProtocolDeliversEveryPayload) {
   const auto [devices, periodic] = GetParam();
   auto local = make_mpi_slabs(devices);
   for (const bool cuda_aware : {false, true})
   on_every_slab(*local, periodic, [&](SlabTransport& t) {
     const int s = t.slab();
-    HostMemoryCopies copies(s % devices);
+    gpu::HostCopies copies(s % devices);
     gpu::HaloExchange halo(cuda_aware);
     for (int round = 0; round < 3; ++round) {
       const std::string out[2] = {message('L', s, round), message('R', s, round)};

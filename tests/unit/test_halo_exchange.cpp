@@ -9,49 +9,11 @@
 #include <vector>
 
 #include "backend/cuda/halo_exchange.hpp"
+#include "host_copies.hpp"
 #include "comm/in_process_transport.hpp"
 
 namespace spate::gpu {
 namespace {
-
-class HostCopies final : public DeviceCopies {
- public:
-  HostCopies(int device, std::function<bool(int, int)> reach) : device_(device), reach_(std::move(reach)) {}
-  int device() const override { return device_; }
-  bool peer_both_ways(int other) override { return reach_(device_, other) && reach_(other, device_); }
-  void wait_staged() override {}
-  void copy_to_host(void* host, const void* device, std::size_t bytes) override {
-    std::memcpy(host, device, bytes);
-    ++to_host;
-  }
-  void copy_from_host(void* device, const void* host, std::size_t bytes) override {
-    std::memcpy(device, host, bytes);
-    ++from_host;
-  }
-  void copy_peer(void* device, const void* theirs, int their_device, std::size_t bytes) override {
-    std::memcpy(device, theirs, bytes);
-    ++peer;
-    peer_from.push_back(their_device);
-  }
-  void after_incoming_read() override {}
-  void wait_incoming_read() override {}
-  void wait_copies() override {}
-  void* incoming(Side side, std::size_t bytes) override {
-    in[side].resize(bytes);
-    return in[side].data();
-  }
-  void* pinned(int which, std::size_t bytes) override {
-    if (staging[which].size() < bytes) staging[which].resize(bytes);
-    return staging[which].data();
-  }
-  std::vector<char> in[2], staging[4];
-  int to_host = 0, from_host = 0, peer = 0;
-  std::vector<int> peer_from;
-
- private:
-  int device_;
-  std::function<bool(int, int)> reach_;
-};
 
 // An endpoint whose neighbour `remote` counts as another process (as over MPI).
 class RemoteNeighbour final : public SlabTransport {
