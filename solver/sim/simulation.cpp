@@ -11,6 +11,7 @@
 #include <cstring>
 #include <exception>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <mutex>
 #include <numeric>
 #include <fstream>
@@ -149,9 +150,12 @@ SlabView slab_view(SlabWorker& w, int slab, int slab_count) {
   return v;
 }
 
+// The progress line: on a terminal one line rewritten in place every second; otherwise (a log
+// file) an info message every 5 s, timestamped by the log.
 class Progress {
  public:
-  Progress(bool enabled, std::int64_t particles) : enabled_(enabled), particles_(particles), tty_(isatty(STDOUT_FILENO)) {}
+  Progress(bool enabled, std::int64_t particles)
+      : enabled_(enabled && spdlog::should_log(spdlog::level::info)), particles_(particles), tty_(isatty(STDOUT_FILENO)) {}
   void update(std::int64_t steps, double time, double end_time, double start_time, bool force = false) {
     if (!enabled_) return;
     const auto now = Clock::now();
@@ -164,10 +168,13 @@ class Progress {
     const double eta = done > 0 ? wall * (1 - done) / done : 0.0;
     const std::string line = fmt::format("t = {:.5f} s  step {}  {:.2f} steps/s  {:.3g} particle-steps/s  ETA {:.0f} s",
                                          time, steps, sps, sps * particles_, eta);
-    if (tty_) std::printf("\r%s   ", line.c_str());
-    else std::printf("%s\n", line.c_str());
-    std::fflush(stdout);
-    wrote_tty_ = tty_;
+    if (tty_) {
+      std::printf("\r%s   ", line.c_str());
+      std::fflush(stdout);
+      wrote_tty_ = true;
+    } else {
+      spdlog::info("{}", line);
+    }
   }
   void finish() {
     if (enabled_ && wrote_tty_) std::printf("\n");
@@ -287,8 +294,7 @@ class Worker {
         change.step = step;
         change.time = time;
         if (auto why = validate(change, s_.c.dim)) {
-          if (writer) std::fprintf(stderr, "spate: steering: rejected %s at step %lld: %s\n", change.name.c_str(),
-                                   static_cast<long long>(step), why->c_str());
+          if (writer) spdlog::warn("steering: rejected {} at step {}: {}", change.name, step, *why);
           if (writer) ++s_.result.steering_rejected;
           continue;
         }
@@ -299,7 +305,7 @@ class Worker {
           ++s_.result.steering_accepted;
           steering_log << to_log_line(change) << '\n';
           steering_log.flush();
-          if (!s_.opts.quiet) std::printf("\nspate: steering: %s applied from step %lld\n", to_log_line(change).c_str(), static_cast<long long>(step + 1));
+          spdlog::info("steering: {} applied from step {}", to_log_line(change), step + 1);
         }
       }
       w_.set_params(params);
