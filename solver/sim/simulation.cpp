@@ -436,6 +436,7 @@ class Worker {
     for (int s = 0; s < t_.slab_count(); ++s) pieces.push_back(step_name(step) + "/slab_" + std::to_string(s) + ".vtp");
     write_vtm(dir / (step_name(step) + ".vtm"), pieces);
     if (index) pvd.add(time, folder + "/" + step_name(step) + ".vtm");
+    spdlog::debug("snapshot of step {} (t = {:.6g} s): {}", step, time, (dir / (step_name(step) + ".vtm")).string());
   }
 
   std::filesystem::path write_checkpoint_now(double time, std::int64_t step, double dt) {
@@ -451,6 +452,7 @@ class Worker {
         const std::size_t size = fields[0][k].elem_size;
         for (const auto& e : all.by_id) std::memcpy(out, fields[e.slab][k].bytes() + e.index * size, size), out += size;
       });
+      spdlog::debug("checkpoint of step {} (t = {:.6g} s): {}", step, time, path.string());
       prune_checkpoints(path);
     }
     t_.barrier();
