@@ -10,7 +10,7 @@ namespace spate {
 
 // Positions: dp. Velocities: c0 (weakly compressible SPH keeps speeds below c0 / 10).
 // Density: rho0. Accelerations: c0^2 / h (the pressure gradient of a 1 % density jump over h is
-// 0.01 c0^2 / h up to the Tait factor). Density rates: rho0 c0 / h. Anything else (kind, id): 0,
+// 0.01 c0^2 / h up to the Tait factor). Density rates: rho0 c0 / h. Anything else (material, id): 0,
 // compared exactly.
 inline double field_scale(std::string_view field, const PhysicsParams& P) {
   auto is = [&](std::initializer_list<std::string_view> names) {

@@ -238,7 +238,7 @@ std::vector<std::vector<char>> run(const Case& c, int slabs, int steps, const st
   all.permute(0, order);
   std::vector<std::vector<char>> out;
   for (auto& f : all.fields())
-    if (f.checkpoint) out.emplace_back(f.bytes(), f.bytes() + all.size() * f.elem_size);
+    if (f.has(kCheckpointed)) out.emplace_back(f.bytes(), f.bytes() + all.size() * f.elem_size);
   return out;
 }
 
@@ -271,7 +271,7 @@ std::vector<CheckedCase> gpu_checked_cases() {
 }
 
 // The largest difference of two run() results over every checkpoint field, as a fraction of the
-// field's scale (io/field_scale.hpp); a kind that differs counts as infinite.
+// field's scale (io/field_scale.hpp); a material that differs counts as infinite.
 struct ScaledDifference {
   double worst = 0.0;
   std::string field;
@@ -282,7 +282,7 @@ ScaledDifference scaled_difference(const Case& c, const std::vector<std::vector<
   ParticleStore layout(c.dim);
   std::size_t k = 0;
   for (auto& f : layout.fields()) {
-    if (!f.checkpoint) continue;
+    if (!f.has(kCheckpointed)) continue;
     const double scale = field_scale(f.name, P);
     double worst = a[k] == b[k] ? 0.0 : INFINITY;
     if (f.elem_size == 4 && scale > 0) {
@@ -439,7 +439,7 @@ TEST(ResidentTopology, DeviceHealthAndDomainChecksFindTheHostsFault) {
   };
   std::vector<std::uint32_t> fluid;
   for (std::size_t i = 0; i < device.owned(); ++i)
-    if (is_fluid(device.kind[i])) fluid.push_back(device.id[i]);
+    if (is_fluid(device.material[i])) fluid.push_back(device.id[i]);
   ASSERT_GE(fluid.size(), 2u);
   std::sort(fluid.begin(), fluid.end());
   for (ParticleStore* p : {&host.particles(), &device}) {
@@ -466,7 +466,7 @@ TEST(TimeStep, ANanParticleAllowsZeroWhereverItSits) {
   const ParticleStore p = generate_particles(c);
   EXPECT_GT(cpu::min_time_step(p, P, ctl), 0.0f);
   for (std::size_t i = 0; i < p.owned(); i += p.owned() / 7) {
-    if (!is_fluid(p.kind[i])) continue;
+    if (!is_fluid(p.material[i])) continue;
     for (int field : {0, 1}) {
       ParticleStore q = p;
       (field == 0 ? q.vel[0] : q.acc[1])[i] = NAN;
@@ -565,13 +565,13 @@ TEST(CudaBackend, ANanTimeStepIsZeroWhereverThatParticleSits) {
   ParticleStore p = generate_particles(c);
   auto kernels = gpu::make_cuda_kernels(0, c.dim);
   std::size_t first_fluid = 0;
-  while (!is_fluid(p.kind[first_fluid])) ++first_fluid;
+  while (!is_fluid(p.material[first_fluid])) ++first_fluid;
   kernels->resident()->upload(p);
   const float healthy = kernels->min_time_step(p, P, TimeStepControl{});
   EXPECT_EQ(healthy, cpu::min_time_step(p, P, TimeStepControl{}));
   EXPECT_GT(healthy, 0.0f);
   for (std::size_t i : {first_fluid, p.owned() / 2, p.owned() - 1}) {
-    if (!is_fluid(p.kind[i])) continue;
+    if (!is_fluid(p.material[i])) continue;
     ParticleStore q = p;
     q.vel[0][i] = NAN;
     kernels->resident()->upload(q);
