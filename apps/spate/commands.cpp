@@ -342,18 +342,17 @@ int compare_command(const CompareArgs& a) {
   std::printf("%-18s %-14s %s\n", "field", "max |a - b|", "at id");
   auto fa = pa.fields(), fb = pb.fields();
   for (std::size_t f = 0; f < fa.size(); ++f) {
-    if (!fa[f].checkpoint || fa[f].name == "id") continue;
+    if (!fa[f].has(kCheckpointed) || fa[f].name == "id") continue;
     double worst = 0.0;
     std::uint32_t at = 0;
+    const FieldType type = fa[f].spec->type;
+    auto value = [type](const FieldRef& r, std::size_t i) -> double {
+      if (type == FieldType::U8) return static_cast<unsigned char>(r.bytes()[i]);
+      if (type == FieldType::U32) return reinterpret_cast<const std::uint32_t*>(r.bytes())[i];
+      return reinterpret_cast<const float*>(r.bytes())[i];
+    };
     for (std::size_t i = 0; i < pa.size(); ++i) {
-      double x, y;
-      if (fa[f].elem_size == 1) {
-        x = static_cast<unsigned char>(fa[f].bytes()[i]);
-        y = static_cast<unsigned char>(fb[f].bytes()[i]);
-      } else {
-        x = reinterpret_cast<const float*>(fa[f].bytes())[i];
-        y = reinterpret_cast<const float*>(fb[f].bytes())[i];
-      }
+      const double x = value(fa[f], i), y = value(fb[f], i);
       const double d = (std::isnan(x) != std::isnan(y)) ? INFINITY : (std::isnan(x) ? 0.0 : std::fabs(x - y));
       if (d > worst) worst = d, at = pa.id[i];
     }

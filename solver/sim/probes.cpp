@@ -34,7 +34,7 @@ ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const std::vector<float
   ShepardSums<Dim> s;
   w.grid().view().for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t j = b; j < e; ++j)
-      if (is_fluid(p.kind[j]))
+      if (is_fluid(p.material[j]))
         accumulate_shepard<Kernel, Dim>(w.params(), x, load_vec<Dim>(p.pos, j), p.density[j], field ? (*field)[j] : 0.0f, s);
   });
   return s;
@@ -130,7 +130,7 @@ double local_front(SlabWorker& w, int axis, double lowest) {
   const int v = p.dim() - 1;
   double front = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < p.owned(); ++i)
-    if (is_fluid(p.kind[i]) && p.pos[v][i] >= lowest) front = std::max(front, static_cast<double>(p.pos[axis][i]));
+    if (is_fluid(p.material[i]) && p.pos[v][i] >= lowest) front = std::max(front, static_cast<double>(p.pos[axis][i]));
   return front;
 }
 
@@ -147,12 +147,12 @@ Bytes solid_force_records(SlabWorker& w, std::uint8_t kind) {
       int g[3];
       grid.global_coords(c, g);
       for (std::uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
-        if (p.kind[i] != kind) continue;
+        if (p.material[i] != kind) continue;
         const auto wi = load_state<Dim>(p, i);
         Vec<Dim> f = zero_vec<Dim>();
         view.for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
           for (std::uint32_t j = b; j < e; ++j)
-            if (is_fluid(p.kind[j])) f += wall_pressure_force<Kernel, Dim>(w.params(), wi, load_state<Dim>(p, j));
+            if (is_fluid(p.material[j])) f += wall_pressure_force<Kernel, Dim>(w.params(), wi, load_state<Dim>(p, j));
         });
         float rec[4] = {0, 0, 0, 0};
         std::memcpy(&rec[0], &p.id[i], sizeof(float));

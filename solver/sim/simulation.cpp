@@ -132,24 +132,6 @@ GatheredParticles gather_to_writer(SlabWorker& w, const std::vector<SlabWorker*>
   return g;
 }
 
-SlabView slab_view(SlabWorker& w, int slab, int slab_count) {
-  ParticleStore& p = w.particles();
-  SlabView v;
-  v.slab = slab;
-  v.slab_count = slab_count;
-  v.dim = p.dim();
-  v.owned = p.owned();
-  for (int k = 0; k < p.dim(); ++k) {
-    v.pos[k] = p.pos[k].data();
-    v.vel[k] = p.vel[k].data();
-  }
-  v.pressure = p.pressure.data();
-  v.density = p.density.data();
-  v.id = p.id.data();
-  v.kind = p.kind.data();
-  return v;
-}
-
 // The progress line: on a terminal one line rewritten in place every second; otherwise (a log
 // file) an info message every 5 s, timestamped by the log.
 class Progress {
@@ -409,7 +391,7 @@ class Worker {
     if (first != s_.workers.end() && *first == &w_) {
       std::vector<SlabView> views;
       for (std::size_t k = 0; k < s_.workers.size(); ++k)
-        if (s_.workers[k]) views.push_back(slab_view(*s_.workers[k], s_.workers_first_slab + static_cast<int>(k), t_.slab_count()));
+        if (s_.workers[k]) views.push_back(slab_view(s_.workers[k]->particles(), s_.workers_first_slab + static_cast<int>(k), t_.slab_count()));
       sink->execute(step, time, views);
     }
     t_.barrier();
