@@ -20,6 +20,7 @@
 #include "backend/cuda/device_runtime.hpp"
 #include "case/case.hpp"
 #include "case/generator.hpp"
+#include "case/thin_features.hpp"
 #include "comm/in_process_transport.hpp"
 #include "comm/process_group.hpp"
 #include "io/checkpoint.hpp"
@@ -98,6 +99,15 @@ std::filesystem::path pipelines_dir() {
 }
 #endif
 
+// Thin fluid features (case/thin_features.hpp), each a warning; returns the messages.
+std::vector<std::string> warn_thin_features(const Case& c) {
+  std::vector<std::string> messages;
+  for (const ThinFeature& f : thin_features(c)) messages.push_back(c.file + ": " + f.message(c.dp));
+  if (process_group().rank == 0)
+    for (auto& m : messages) spdlog::warn("{}", m);
+  return messages;
+}
+
 int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 }  // namespace
@@ -105,6 +115,7 @@ int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardw
 int run_command(const RunArgs& a) {
   Case c = load(a.case_file, a.overrides);
   check_backend(a.backend);
+  const std::vector<std::string> warnings = warn_thin_features(c);
   // In situ: the command line replaces the case file's `insitu:` section.
   const std::vector<std::string> pipelines = a.pipelines.empty() ? c.insitu_pipelines : a.pipelines;
   [[maybe_unused]] const int insitu_every = a.insitu_every.value_or(c.insitu_every);
@@ -229,6 +240,7 @@ int run_command(const RunArgs& a) {
   x.devices = a.devices;
   x.backend = a.backend;
   x.ranks = group.ranks;
+  x.warnings = warnings;
   write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
   if (r.exit_code == 3) {
     spdlog::error("the run went unstable: {}", r.message);
@@ -244,6 +256,8 @@ int info_command(const InfoArgs& a) {
   Case c = load(a.case_file, a.overrides);
   if (a.backend != "cpu" && a.backend != "cuda") throw BadInput(fmt::format("--backend {}: expected 'cpu' or 'cuda'", a.backend));
   if (a.devices < 1) throw BadInput(fmt::format("--devices {}: must be at least 1", a.devices));
+  const std::vector<ThinFeature> thin = thin_features(c);
+  if (!a.json) warn_thin_features(c);
   const ParticleCounts n = count_particles(c);
   if (n.fluid == 0) throw BadInput(c.file + ": the case generates no fluid particles (check fluid_blocks, wet_bed and dp)");
   const PhysicsParams P = physics_params(c);
@@ -271,6 +285,10 @@ int info_command(const InfoArgs& a) {
     j["bytes_per_particle"] = bpp;
     j["memory_bytes"] = memory;
     j["backend"] = a.backend;
+    j["warnings"] = nlohmann::ordered_json::array();
+    for (const ThinFeature& f : thin)
+      j["warnings"].push_back({{"key", f.key}, {"what", f.what}, {"thickness", f.thickness}, {"layers", f.layers},
+                               {"resolving_dp", f.resolving_dp}, {"message", c.file + ": " + f.message(c.dp)}});
     if (a.backend == "cuda") {
       j["device_bytes_per_particle"] = gpu::device_footprint(c.dim).per_particle();
       j["devices"] = a.devices;

@@ -95,5 +95,29 @@ def log_levels_and_format(env):
     check(p.returncode == 2 and "--log-level" in p.stderr, "a bad --log-level is not bad input")
 
 
+# ---- thin features ------------------------------------------------------------------------------
+
+@test
+def thin_feature_warning(env):
+    """The column case's 1 cm wet bed at dp = 0.015 (0.67 layers): info and run say so, with the dp
+    that resolves it; a resolved case says nothing."""
+    column = os.path.join(env.shipped, "dam_break_column_3d.yaml")
+    needle = "wet_bed: the wet bed is 0.01 m deep: 0.67 particle layers at dp = 0.015 m"
+    p = env.run("info", column, "--set", "dp=0.015")
+    check(p.returncode == 0 and needle in p.stderr and "dp <= 0.00333 m resolves it" in p.stderr,
+          "info: no thin-feature warning on stderr")
+    check("spate: warning:" in p.stderr, "info: the warning is not a warning line")
+    p = env.run("info", column, "--set", "dp=0.015", "--json")
+    w = json.loads(p.stdout)["warnings"]
+    check(len(w) == 1 and w[0]["key"] == "wet_bed" and abs(w[0]["resolving_dp"] - 0.01 / 3) < 1e-9, f"info --json warnings {w}")
+    out = env.path("out")
+    p = env.run("run", column, "--set", "dp=0.015", "--steps", "0", "--out", out, "--quiet")
+    check(p.returncode == 0 and needle in p.stderr, "run: no thin-feature warning")
+    s = summary(out)
+    check(len(s["warnings"]) == 1 and needle in s["warnings"][0], f"summary.json warnings {s['warnings']}")
+    p = env.run("info", column, "--set", "dp=0.015", "--set", "wet_bed=0")
+    check(p.returncode == 0 and "warning" not in p.stderr, "a case without thin features warns")
+
+
 if __name__ == "__main__":
     sys.exit(main(TESTS))
