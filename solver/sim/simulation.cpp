@@ -11,6 +11,7 @@
 #include <cstring>
 #include <exception>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <mutex>
 #include <numeric>
 #include <fstream>
@@ -131,9 +132,12 @@ GatheredParticles gather_to_writer(SlabWorker& w, const std::vector<SlabWorker*>
   return g;
 }
 
+// The progress line: on a terminal one line rewritten in place every second; otherwise (a log
+// file) an info message every 5 s, timestamped by the log.
 class Progress {
  public:
-  Progress(bool enabled, std::int64_t particles) : enabled_(enabled), particles_(particles), tty_(isatty(STDOUT_FILENO)) {}
+  Progress(bool enabled, std::int64_t particles)
+      : enabled_(enabled && spdlog::should_log(spdlog::level::info)), particles_(particles), tty_(isatty(STDOUT_FILENO)) {}
   void update(std::int64_t steps, double time, double end_time, double start_time, bool force = false) {
     if (!enabled_) return;
     const auto now = Clock::now();
@@ -146,10 +150,13 @@ class Progress {
     const double eta = done > 0 ? wall * (1 - done) / done : 0.0;
     const std::string line = fmt::format("t = {:.5f} s  step {}  {:.2f} steps/s  {:.3g} particle-steps/s  ETA {:.0f} s",
                                          time, steps, sps, sps * particles_, eta);
-    if (tty_) std::printf("\r%s   ", line.c_str());
-    else std::printf("%s\n", line.c_str());
-    std::fflush(stdout);
-    wrote_tty_ = tty_;
+    if (tty_) {
+      std::printf("\r%s   ", line.c_str());
+      std::fflush(stdout);
+      wrote_tty_ = true;
+    } else {
+      spdlog::info("{}", line);
+    }
   }
   void finish() {
     if (enabled_ && wrote_tty_) std::printf("\n");
@@ -269,8 +276,7 @@ class Worker {
         change.step = step;
         change.time = time;
         if (auto why = validate(change, s_.c.dim)) {
-          if (writer) std::fprintf(stderr, "spate: steering: rejected %s at step %lld: %s\n", change.name.c_str(),
-                                   static_cast<long long>(step), why->c_str());
+          if (writer) spdlog::warn("steering: rejected {} at step {}: {}", change.name, step, *why);
           if (writer) ++s_.result.steering_rejected;
           continue;
         }
@@ -281,7 +287,7 @@ class Worker {
           ++s_.result.steering_accepted;
           steering_log << to_log_line(change) << '\n';
           steering_log.flush();
-          if (!s_.opts.quiet) std::printf("\nspate: steering: %s applied from step %lld\n", to_log_line(change).c_str(), static_cast<long long>(step + 1));
+          spdlog::info("steering: {} applied from step {}", to_log_line(change), step + 1);
         }
       }
       w_.set_params(params);
@@ -412,6 +418,7 @@ class Worker {
     for (int s = 0; s < t_.slab_count(); ++s) pieces.push_back(step_name(step) + "/slab_" + std::to_string(s) + ".vtp");
     write_vtm(dir / (step_name(step) + ".vtm"), pieces);
     if (index) pvd.add(time, folder + "/" + step_name(step) + ".vtm");
+    spdlog::debug("snapshot of step {} (t = {:.6g} s): {}", step, time, (dir / (step_name(step) + ".vtm")).string());
   }
 
   std::filesystem::path write_checkpoint_now(double time, std::int64_t step, double dt) {
@@ -427,6 +434,7 @@ class Worker {
         const std::size_t size = fields[0][k].elem_size;
         for (const auto& e : all.by_id) std::memcpy(out, fields[e.slab][k].bytes() + e.index * size, size), out += size;
       });
+      spdlog::debug("checkpoint of step {} (t = {:.6g} s): {}", step, time, path.string());
       prune_checkpoints(path);
     }
     t_.barrier();
