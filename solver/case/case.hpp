@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "../physics/params.hpp"
+#include "motion.hpp"
 
 namespace spate {
 
@@ -27,6 +28,7 @@ struct SolidSpec {
   std::string name;
   Box box;
   bool hollow = true;  // only `wall_layers` layers under its surface are particles
+  int motion = -1;     // index into Case::motions, or -1: static
 };
 
 enum class ProbeType { Pressure, Velocity, Height, Force, Front };
@@ -39,6 +41,7 @@ struct ProbeSpec {
   int axis = 0;             // front: the axis along which the front advances
   bool connected = false;   // height: the top of the water column standing on the floor (spray above ignored)
   double min_depth = 0.0;   // front: only water at least this deep counts (a bore over a wet bed)
+  int follow = -1;          // pressure, velocity, height: moves with this motion (Case::motions), -1: fixed
 };
 
 // A fluid (a material, physics/materials.hpp). The case's `fluid:` section is fluid 0; every fluid
@@ -81,6 +84,10 @@ struct Case {
   bool open_top = true;
   std::array<bool, 3> periodic{false, false, false};
   double headroom = 0.5;  // domain extends this fraction of the tank height above an open top
+
+  int tank_motion = -1;  // index into `motions`, or -1: the tank stands still
+  // Prescribed wall motions (motion.hpp), of the tank and of solids; at most kMaxMotions.
+  std::vector<MotionSpec> motions;
 
   std::vector<Box> fluid_blocks;
   double wet_bed = 0.0;  // depth of still water on the rest of the floor

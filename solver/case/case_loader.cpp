@@ -280,6 +280,80 @@ bool overlap(const Box& a, const Box& b, int dim, double tol) {
   return true;
 }
 
+constexpr double kDegrees = 3.14159265358979323846 / 180.0;
+
+// A `motion:` map of the tank or of a solid (docs/cases.md, Motions). `lo`, `hi`: the moving body's
+// extent (for its default centre and its reach).
+MotionSpec read_motion(Section& m, const Case& c, const std::string& body, const Vec3d& lo, const Vec3d& hi) {
+  const int d = c.dim;
+  MotionSpec spec;
+  spec.body = body;
+  if (m.has("file")) {
+    for (const char* key : {"period", "frequency", "translation", "rotation", "phase"})
+      if (m.has(key)) m.fail(m.raw(key), key, "a time series (file) takes no '" + std::string(key) + "'");
+    const std::filesystem::path given(m.text("file"));
+    const std::filesystem::path path = given.is_absolute() ? given : std::filesystem::path(c.file).parent_path() / given;
+    spec.file = path.lexically_normal().string();
+    try {
+      read_motion_csv(spec.file, spec);
+    } catch (const std::exception& e) {
+      m.fail(m.raw("file"), "file", e.what());
+    }
+    if (d == 2)
+      for (const auto& v : spec.values)
+        if (v[2] != 0.0) m.fail(m.raw("file"), "file", "a 2D case has no z displacement");
+  } else {
+    if (m.has("period") == m.has("frequency")) m.fail(m.node(), "period", "a sinusoidal motion needs a period or a frequency (one of them)");
+    if (m.has("period")) {
+      const double period = m.number("period");
+      if (!(period > 0)) m.fail(m.raw("period"), "period", "must be > 0");
+      spec.omega = 2.0 * 3.14159265358979323846 / period;
+    } else {
+      const double f = m.number("frequency");
+      if (!(f > 0)) m.fail(m.raw("frequency"), "frequency", "must be > 0");
+      spec.omega = 2.0 * 3.14159265358979323846 * f;
+    }
+    const Vec3d t = m.vector("translation", d, Vec3d{0, 0, 0});
+    for (int k = 0; k < 3; ++k) spec.translation[k] = t[k];
+    spec.rotation = m.number("rotation", 0.0) * kDegrees;
+    spec.phase = m.number("phase", 0.0) * kDegrees;
+    if (t[0] == 0 && t[1] == 0 && t[2] == 0 && spec.rotation == 0)
+      m.fail(m.node(), "translation", "a motion needs a translation or a rotation amplitude");
+  }
+  if (d == 3) {
+    const Vec3d axis = m.vector("axis", 3, Vec3d{0, 0, 1});
+    const double n = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    if (!(n > 0)) m.fail(m.raw("axis"), "axis", "the rotation axis must not be zero");
+    for (int k = 0; k < 3; ++k) spec.axis[k] = axis[k] / n;
+  } else if (m.has("axis")) {
+    m.fail(m.raw("axis"), "axis", "a 2D case rotates about z; it takes no axis");
+  }
+  Vec3d middle{0, 0, 0};
+  for (int k = 0; k < d; ++k) middle[k] = 0.5 * (lo[k] + hi[k]);
+  const Vec3d centre = m.vector("centre", d, middle);
+  for (int k = 0; k < 3; ++k) spec.centre[k] = centre[k];
+  spec.ramp = m.number("ramp", 0.0);
+  if (spec.ramp < 0) m.fail(m.raw("ramp"), "ramp", "must be >= 0 (seconds)");
+  if (m.has("end")) {
+    spec.end = m.number("end");
+    if (!(*spec.end > 0)) m.fail(m.raw("end"), "end", "must be > 0 (seconds)");
+  }
+  spec.end_ramp = m.number("end_ramp", spec.ramp);
+  if (spec.end_ramp < 0 || (spec.end && spec.end_ramp > *spec.end))
+    m.fail(m.raw("end_ramp"), "end_ramp", "must be >= 0 and not longer than 'end'");
+  // The farthest corner of the body from the centre.
+  for (int corner = 0; corner < (1 << d); ++corner) {
+    double r2 = 0.0;
+    for (int k = 0; k < d; ++k) {
+      const double x = (corner >> k & 1) ? hi[k] : lo[k];
+      r2 += (x - spec.centre[k]) * (x - spec.centre[k]);
+    }
+    spec.reach = std::max(spec.reach, std::sqrt(r2));
+  }
+  m.finish();
+  return spec;
+}
+
 Case read(Section& root, const std::string& file) {
   Case c;
   c.file = file;
@@ -373,6 +447,15 @@ Case read(Section& root, const std::string& file) {
       c.periodic[k] = true;
     }
   }
+  if (auto m = tank->child("motion")) {
+    Vec3d lo = c.tank_origin, hi = c.tank_origin;
+    for (int k = 0; k < d; ++k) {
+      lo[k] -= c.wall_layers * c.dp;
+      hi[k] += c.tank_size[k] + c.wall_layers * c.dp;
+    }
+    c.tank_motion = static_cast<int>(c.motions.size());
+    c.motions.push_back(read_motion(*m, c, "tank", lo, hi));
+  }
   tank->finish();
 
   const Vec3d tank_hi{c.tank_origin[0] + c.tank_size[0], c.tank_origin[1] + c.tank_size[1], c.tank_origin[2] + c.tank_size[2]};
@@ -391,6 +474,10 @@ Case read(Section& root, const std::string& file) {
     spec.name = s.text("name");
     spec.box = read_box(s, d);
     spec.hollow = s.boolean("hollow", true);
+    if (auto m = s.child("motion")) {
+      spec.motion = static_cast<int>(c.motions.size());
+      c.motions.push_back(read_motion(*m, c, spec.name, spec.box.min, spec.box.max));
+    }
     s.finish();
     if (!solid_names.insert(spec.name).second) s.fail(s.raw("name"), "name", "solid '" + spec.name + "' is defined twice");
     if (!inside(spec.box, c.tank_origin, tank_hi, d, tol)) s.fail(s.node(), "max", "solid lies (partly) outside the tank");
@@ -399,6 +486,10 @@ Case read(Section& root, const std::string& file) {
     c.solids.push_back(spec);
   }
   if (c.solids.size() > 200) root.fail(root.raw("solids"), "solids", "at most 200 solids");
+  if (static_cast<int>(c.motions.size()) > kMaxMotions)
+    root.fail(root.raw("solids"), "solids", "at most " + std::to_string(kMaxMotions) + " motions (tank and solids together)");
+  if (!c.motions.empty() && (c.periodic[0] || c.periodic[1] || c.periodic[2]))
+    tank->fail(tank->raw("periodic"), "periodic", "moving walls need a closed tank: no periodic axes with a motion");
   if (c.fluid_blocks.empty() && c.wet_bed <= 0) root.fail(root.node(), "fluid_blocks", "the case has no fluid (no fluid_blocks and no wet_bed)");
 
   for (auto& p : root.list("probes")) {
@@ -430,6 +521,19 @@ Case read(Section& root, const std::string& file) {
           p.fail(p.raw("min_depth"), "min_depth", "must be >= 0 and below the tank top");
         break;
       }
+    }
+    if (p.has("follow")) {
+      // The probe rides with a moving body: a gauge on a sloshing tank's wall.
+      if (probe.type == ProbeType::Force || probe.type == ProbeType::Front)
+        p.fail(p.raw("follow"), "follow", "only pressure, velocity and height probes follow a moving body");
+      const std::string body = p.text("follow");
+      int motion = -1;
+      if (body == "tank") motion = c.tank_motion;
+      for (const SolidSpec& solid : c.solids)
+        if (solid.name == body) motion = solid.motion;
+      if (body != "tank" && !solid_names.count(body)) p.fail(p.raw("follow"), "follow", "no solid named '" + body + "' (or 'tank')");
+      if (motion < 0) p.fail(p.raw("follow"), "follow", "'" + body + "' does not move (it has no motion)");
+      probe.follow = motion;
     }
     p.finish();
     c.probes.push_back(probe);
@@ -551,6 +655,11 @@ PhysicsParams physics_params(const Case& c) {
                                       static_cast<float>(f.density * std::pow(c.dp, c.dim)),
                                       static_cast<float>(f.background_pressure));
   }
+  if (c.tank_motion >= 0) P.materials.motion[P.materials.tank()] = static_cast<std::uint8_t>(c.tank_motion + 1);
+  for (std::size_t k = 0; k < c.solids.size(); ++k)
+    if (c.solids[k].motion >= 0) P.materials.motion[P.materials.solid(static_cast<int>(k))] = static_cast<std::uint8_t>(c.solids[k].motion + 1);
+  // The walls' state at t = 0; the time loop sets it again before every step.
+  MotionSet(c.motions, c.dim).set_step(P, 0.0, 0.0);
   P.artificial_viscosity = static_cast<float>(c.artificial_viscosity);
   P.delta = static_cast<float>(c.delta);
   P.diffusion = c.diffusion;

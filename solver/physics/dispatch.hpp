@@ -25,13 +25,17 @@ inline bool all_fluids_gamma7(const PhysicsParams& P) {
   return true;
 }
 
-// As dispatch_kernel_dim, for the fluid pair loop: f.template operator()<Kernel, Dim, Gamma7>().
+// As dispatch_kernel_dim, for the fluid pair loop: f.template operator()<Kernel, Dim, Gamma7,
+// MovingWalls>(). Gamma7: every fluid has the Tait exponent 7; MovingWalls: some walls move. A
+// run without either pays for neither.
 template <class F>
 void dispatch_pair_loop(const PhysicsParams& P, F&& f) {
-  const bool gamma7 = all_fluids_gamma7(P);
+  const bool gamma7 = all_fluids_gamma7(P), moving = P.moving_walls();
   dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-    if (gamma7) f.template operator()<Kernel, Dim, true>();
-    else f.template operator()<Kernel, Dim, false>();
+    if (gamma7 && !moving) f.template operator()<Kernel, Dim, true, false>();
+    else if (gamma7) f.template operator()<Kernel, Dim, true, true>();
+    else if (!moving) f.template operator()<Kernel, Dim, false, false>();
+    else f.template operator()<Kernel, Dim, false, true>();
   });
 }
 

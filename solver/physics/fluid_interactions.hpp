@@ -19,7 +19,17 @@ struct ParticleState {
   float rho;     // density
   float p;       // pressure
   std::uint8_t material;  // index into PhysicsParams::materials (materials.hpp)
+  // With moving walls only (the MovingWalls pair terms): the velocity continuity and artificial
+  // viscosity see, a fluid's own, a wall's prescribed rigid motion (boundary_velocity()).
+  Vec<Dim> w;
 };
+
+// What continuity and artificial viscosity see of neighbour j: a fluid's velocity, a wall's
+// prescribed velocity (its `v` holds the no-slip velocity the viscous term sees).
+template <int Dim>
+SPATE_HD Vec<Dim> boundary_velocity(const PhysicsParams& P, const ParticleState<Dim>& j) {
+  return P.is_fluid(j.material) ? j.v : wall_velocity<Dim>(P, j.material, j.x);
+}
 
 template <int Dim>
 struct FluidRates {
@@ -31,7 +41,8 @@ struct FluidRates {
 // driver's inner loop vectorises: beyond the support the kernel gradient is exactly 0, and for
 // j = i the offset r is 0, so every term vanishes by itself and adds +0 to the sums (which leaves
 // them unchanged). Gamma7: M.gamma == 7 (the exact product instead of pow, chosen per run).
-template <class Kernel, int Dim, bool Gamma7 = true>
+// MovingWalls: some walls move (j.w holds what continuity sees of j); without it walls are at rest.
+template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false>
 SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
                                           const ParticleState<Dim>& j) {
   const Vec<Dim> r = i.x - j.x;  // r_ij
@@ -44,12 +55,14 @@ SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const FluidMat
   const float volume_j = M.mass * inv_rho_j;
   const float inv_r2_eta = 1.0f / (r2 + P.eta2);
 
-  // Walls are static: continuity and artificial viscosity see their real (zero) velocity, the
-  // laminar term their extrapolated no-slip velocity (Adami et al. 2012).
+  // Continuity and artificial viscosity see a wall's real velocity (zero for static walls, the
+  // prescribed motion for moving ones), the laminar term its extrapolated no-slip velocity
+  // (Adami et al. 2012).
   Vec<Dim> v_ij_wall, v_ij_visc;
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
     v_ij_visc[k] = i.v[k] - j.v[k];
-    v_ij_wall[k] = i.v[k] - j_fluid * j.v[k];
+    if constexpr (MovingWalls) v_ij_wall[k] = i.v[k] - j.w[k];
+    else v_ij_wall[k] = i.v[k] - j_fluid * j.v[k];
   }
   const float vr = dot(v_ij_wall, r);
 
@@ -85,10 +98,10 @@ SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const FluidMat
   return out;
 }
 
-template <class Kernel, int Dim, bool Gamma7>
+template <class Kernel, int Dim, bool Gamma7, bool MovingWalls>
 SPATE_HD void accumulate_fluid_pair(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
                                     const ParticleState<Dim>& j, FluidRates<Dim>& out) {
-  const FluidRates<Dim> t = fluid_pair_terms<Kernel, Dim, Gamma7>(P, M, i, j);
+  const FluidRates<Dim> t = fluid_pair_terms<Kernel, Dim, Gamma7, MovingWalls>(P, M, i, j);
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) out.acc[k] += t.acc[k];
   out.density_rate += t.density_rate;
 }

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,7 +25,8 @@ class ProbeSet {
   // `writer`: this slab writes the files. `append`: continue existing files (restart).
   ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, bool append);
   // Collective over all slabs. Returns the sampled row values in probe order (for tests).
-  std::vector<std::vector<double>> sample(double time, std::int64_t step, SlabWorker& w);
+  // `motions`: where probes that follow a moving body are at `time` (none: they stay put).
+  std::vector<std::vector<double>> sample(double time, std::int64_t step, SlabWorker& w, const MotionSet* motions = nullptr);
   bool empty() const { return probes_.empty(); }
 
  private:
@@ -42,8 +44,12 @@ std::string probe_header(const ProbeSpec& p, int dim);
 double sample_pressure(SlabWorker& w, const Vec3d& at);
 // Shepard-averaged fluid velocity (dim components), NaN components when not owned.
 std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at);
-// Water height above the tank floor at a gauge (the probe's position and `connected`).
-double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c);
+// Water height above the tank floor at a gauge (the probe's position and `connected`); `floor`:
+// where the floor is under a gauge that moves with the tank (default: the tank's floor).
+double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c, std::optional<double> floor = std::nullopt);
+// Where a probe that follows motion `gauge.follow` is at `time`: its point (for a height gauge, its
+// point on the floor, vertical coordinate included) carried by the body's rigid motion.
+Vec3d followed_position(const ProbeSpec& gauge, const Case& c, const MotionSet& motions, double time);
 // Furthest fluid particle along `axis` whose vertical coordinate is at least `lowest`; -infinity
 // when there is none on this slab.
 double local_front(SlabWorker& w, int axis, double lowest = -std::numeric_limits<double>::infinity());
