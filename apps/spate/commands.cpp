@@ -139,6 +139,10 @@ int run_command(const RunArgs& a) {
   if (a.devices < 1) throw BadInput(fmt::format("--devices {}: must be at least 1", a.devices));
   if (a.checkpoint_every && *a.checkpoint_every < 0)
     throw BadInput(fmt::format("--checkpoint-every {}: must be >= 0", *a.checkpoint_every));
+  if (a.checkpoint_keep_last && *a.checkpoint_keep_last < 0)
+    throw BadInput(fmt::format("--checkpoint-keep-last {}: must be >= 0 (0: keep all)", *a.checkpoint_keep_last));
+  if (a.checkpoint_keep_every && *a.checkpoint_keep_every < 0)
+    throw BadInput(fmt::format("--checkpoint-keep-every {}: must be >= 0 (0: none)", *a.checkpoint_keep_every));
 
   RunOptions o;
   o.out_dir = a.out.empty() ? std::filesystem::path("out") / c.name : std::filesystem::path(a.out);
@@ -148,6 +152,8 @@ int run_command(const RunArgs& a) {
   o.devices = a.devices;
   o.backend = a.backend;
   o.checkpoint_every = a.checkpoint_every;
+  o.checkpoint_keep_last = a.checkpoint_keep_last;
+  o.checkpoint_keep_every = a.checkpoint_keep_every;
   if (!a.restart.empty()) o.restart = a.restart;
   o.quiet = a.quiet;
   std::unique_ptr<SteeringReplay> replay;
@@ -173,8 +179,7 @@ int run_command(const RunArgs& a) {
     }
     co.every = insitu_every;
     co.working_dir = o.out_dir;
-    const PhysicsParams P = physics_params(c);
-    co.constants = {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.rho0}, {"particle_mass", P.mass}};
+    co.constants = case_constants(c);
     std::filesystem::create_directories(o.out_dir);
     // Started outside mpirun, ParaView initialises MPI itself, and OpenMPI's TCP transport would
     // then listen on every interface (ports 1024 and up) for the whole run. One process needs only
