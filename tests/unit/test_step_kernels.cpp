@@ -439,7 +439,7 @@ TEST(ResidentTopology, DeviceHealthAndDomainChecksFindTheHostsFault) {
   };
   std::vector<std::uint32_t> fluid;
   for (std::size_t i = 0; i < device.owned(); ++i)
-    if (is_fluid(device.material[i])) fluid.push_back(device.id[i]);
+    if (MaterialTable{}.is_fluid(device.material[i])) fluid.push_back(device.id[i]);
   ASSERT_GE(fluid.size(), 2u);
   std::sort(fluid.begin(), fluid.end());
   for (ParticleStore* p : {&host.particles(), &device}) {
