@@ -24,6 +24,7 @@
 #include "comm/in_process_transport.hpp"
 #include "comm/process_group.hpp"
 #include "io/checkpoint.hpp"
+#include "io/field_scale.hpp"
 #include "io/run_summary.hpp"
 #include "sim/simulation.hpp"
 #include "sim/slab_worker.hpp"
@@ -345,6 +346,8 @@ int info_command(const InfoArgs& a) {
 
 int compare_command(const CompareArgs& a) {
   if (!(a.tolerance >= 0)) throw BadInput(fmt::format("--tolerance {}: must be >= 0", a.tolerance));
+  if (a.scaled_tolerance && !(*a.scaled_tolerance >= 0))
+    throw BadInput(fmt::format("--scaled-tolerance {}: must be >= 0", *a.scaled_tolerance));
   ParticleStore pa, pb;
   CheckpointMeta ma, mb;
   try {
@@ -361,8 +364,19 @@ int compare_command(const CompareArgs& a) {
     std::printf("different particle ids\n");
     return 1;
   }
+  // With --scaled-tolerance each field allows that fraction of its scale, from the case the first
+  // checkpoint ran (its physics: dp, h, c0, rho0), or --tolerance where that is larger.
+  std::optional<PhysicsParams> P;
+  if (a.scaled_tolerance) {
+    try {
+      P = physics_params(parse_case(ma.case_yaml, a.a + " (its stored case)"));
+    } catch (const std::exception& e) {
+      throw BadInput(e.what());
+    }
+  }
   bool ok = true;
-  std::printf("%-18s %-14s %s\n", "field", "max |a - b|", "at id");
+  if (P) std::printf("%-18s %-14s %-10s %s\n", "field", "max |a - b|", "at id", "tolerance");
+  else std::printf("%-18s %-14s %s\n", "field", "max |a - b|", "at id");
   auto fa = pa.fields(), fb = pb.fields();
   for (std::size_t f = 0; f < fa.size(); ++f) {
     if (!fa[f].has(kCheckpointed) || fa[f].name == "id") continue;
@@ -379,12 +393,15 @@ int compare_command(const CompareArgs& a) {
       const double d = (std::isnan(x) != std::isnan(y)) ? INFINITY : (std::isnan(x) ? 0.0 : std::fabs(x - y));
       if (d > worst) worst = d, at = pa.id[i];
     }
-    ok = ok && worst <= a.tolerance;
-    std::printf("%-18s %-14.6g %u\n", std::string(fa[f].name).c_str(), worst, at);
+    const double tolerance = P ? std::max(a.tolerance, *a.scaled_tolerance * field_scale(fa[f].name, *P)) : a.tolerance;
+    ok = ok && worst <= tolerance;
+    if (P) std::printf("%-18s %-14.6g %-10u %.3g\n", std::string(fa[f].name).c_str(), worst, at, tolerance);
+    else std::printf("%-18s %-14.6g %u\n", std::string(fa[f].name).c_str(), worst, at);
   }
   std::printf("step %lld vs %lld, time %.17g vs %.17g\n", static_cast<long long>(ma.step), static_cast<long long>(mb.step),
               ma.time, mb.time);
-  std::printf("%s (tolerance %g)\n", ok ? "MATCH" : "DIFFERENT", a.tolerance);
+  if (P) std::printf("%s (tolerance %g of each field's scale)\n", ok ? "MATCH" : "DIFFERENT", *a.scaled_tolerance);
+  else std::printf("%s (tolerance %g)\n", ok ? "MATCH" : "DIFFERENT", a.tolerance);
   return ok ? 0 : 1;
 }
 

@@ -96,6 +96,9 @@ int main(int argc, char** argv) {
   cmp_cmd->add_option("a", cmp.a, "First checkpoint")->required();
   cmp_cmd->add_option("b", cmp.b, "Second checkpoint")->required();
   cmp_cmd->add_option("--tolerance", cmp.tolerance, "Largest allowed absolute difference (default 0: bit-identical)");
+  cmp_cmd->add_option("--scaled-tolerance", cmp.scaled_tolerance,
+                      "Largest allowed difference of each field as a fraction of its scale (dp, c0, rho0, c0^2/h, rho0 c0/h; material exact), "
+                      "from the case stored in the first checkpoint");
 
   PostArgs post;
   auto* post_cmd = app.add_subcommand("post", "After a run: evaluate probes and run Catalyst pipelines on its saved snapshots or checkpoints");

@@ -327,6 +327,13 @@ def compare_checkpoints(env):
     check(p.returncode == 0, f"within a huge tolerance: exit {p.returncode}")
     p = env.run("compare", runs["a"], runs["b"], "--tolerance", "-1")
     check(p.returncode == 2 and "--tolerance -1" in p.stderr, f"negative tolerance: exit {p.returncode}")
+    # Tolerances as fractions of each field's scale (dp, c0, rho0, ...; material exact), printed per field.
+    p = env.run("compare", runs["a"], runs["c"], "--scaled-tolerance", "1e-12")
+    check(p.returncode == 1 and "DIFFERENT" in p.stdout, f"one step apart, scaled 1e-12: exit {p.returncode}")
+    p = env.run("compare", runs["a"], runs["c"], "--scaled-tolerance", "10")
+    check(p.returncode == 0 and re.search(r"^material\s+0\s+\d+\s+0$", p.stdout, re.M), f"scaled 10: exit {p.returncode}\n{p.stdout}")
+    p = env.run("compare", runs["a"], runs["b"], "--scaled-tolerance", "-1")
+    check(p.returncode == 2 and "--scaled-tolerance -1" in p.stderr, f"negative scaled tolerance: exit {p.returncode}")
     p = env.run("compare", runs["a"], env.path("missing.h5"))
     check(p.returncode == 2 and "missing.h5" in p.stderr, f"missing checkpoint: exit {p.returncode}")
     not_h5 = env.write_case("not_a_checkpoint.yaml", "x: 1\n")

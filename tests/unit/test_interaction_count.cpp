@@ -8,6 +8,7 @@
 #include <thread>
 #include <vector>
 
+#include "../source_dir.hpp"
 #include "backend/cpu/interaction_count.hpp"
 #include "case/case.hpp"
 #include "case/generator.hpp"
@@ -19,7 +20,7 @@ namespace spate {
 namespace {
 
 Case load_case_file(const std::string& name, const std::vector<std::string>& overrides = {}) {
-  return load_case(std::string(SPATE_SOURCE_DIR) + "/cases/" + name, overrides);
+  return load_case(test::source_dir() + "/cases/" + name, overrides);
 }
 
 // Sum of the per-slab counts after prepare() on `slabs` in-process slabs.
