@@ -44,6 +44,7 @@ int plot_probes(const std::filesystem::path& dir, const std::filesystem::path& o
   std::vector<const char*> argv;
   for (auto& a : args) argv.push_back(a.c_str());
   argv.push_back(nullptr);
+  spdlog::debug("plotting with {} {}", interpreter, script);
   pid_t pid = 0;
   if (posix_spawnp(&pid, argv[0], nullptr, nullptr, const_cast<char* const*>(argv.data()), environ) != 0)
     throw BadInput(fmt::format("spate plot: cannot start {} (set SPATE_PYTHON to a Python 3 with matplotlib)", interpreter));

@@ -254,5 +254,32 @@ def plot_every_probe(env):
     check(p.returncode == 2 and "probes/" in p.stderr, "plot of a folder without probes")
 
 
+# ---- cmake --install ----------------------------------------------------------------------------
+
+@test
+def install_tree(env):
+    """cmake --install puts the program, the pipelines, the plot script, the cases and the docs under
+    a prefix, and the installed spate finds its data there (not in the source tree)."""
+    build = os.path.dirname(os.path.dirname(env.spate))
+    prefix = env.path("prefix")
+    p = subprocess.run(["cmake", "--install", build, "--prefix", prefix], capture_output=True, text=True)
+    check(p.returncode == 0, f"cmake --install: exit {p.returncode}: {p.stderr[-2000:]}")
+    for f in ["bin/spate", "share/spate/pipelines/free_surface.py", "share/spate/pipelines/live.py",
+              "share/spate/pipelines/spate_steering.xml", "share/spate/scripts/plot_probes.py",
+              "share/spate/cases/dam_break_column_3d.yaml", "share/doc/spate/README.md", "share/doc/spate/docs/cli.md"]:
+        check(os.path.isfile(os.path.join(prefix, f)), f"{f} not installed")
+    spate = os.path.join(prefix, "bin", "spate")
+    env_clean = {k: v for k, v in os.environ.items() if k not in ("SPATE_DATA_DIR", "SPATE_PIPELINES_DIR")}
+    p = subprocess.run([spate, "--version"], capture_output=True, text=True, env=env_clean)
+    check(p.returncode == 0 and p.stdout.startswith("spate "), f"installed spate --version: {p.stdout!r}")
+    out = env.path("run")
+    p = subprocess.run([spate, "run", os.path.join(prefix, "share/spate/cases/dam_break_2d.yaml"), "--steps", "3", "--out", out,
+                        "--quiet"], capture_output=True, text=True, env=env_clean)
+    check(p.returncode == 0, f"installed spate run: exit {p.returncode}")
+    p = subprocess.run([spate, "plot", out, "--log-level", "debug"], capture_output=True, text=True, env=env_clean)
+    check(p.returncode == 0 and os.path.join(prefix, "share/spate/scripts/plot_probes.py") in p.stdout,
+          f"the installed spate plot does not use the installed script: {p.stdout}{p.stderr}")
+
+
 if __name__ == "__main__":
     sys.exit(main(TESTS))
