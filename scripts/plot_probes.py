@@ -15,6 +15,7 @@ import math
 import os
 import re
 import sys
+import textwrap
 
 try:
     import matplotlib
@@ -82,7 +83,7 @@ def plot(path, out_dir, title, description=""):
     ax.set_xlabel("time [s]")
     ax.set_ylabel(f"{label} [{unit}]" if unit else label)
     heading = f"{name}, {description}" if description else name
-    ax.set_title(f"{title}: {heading}" if title else heading)
+    ax.set_title("\n".join(textwrap.wrap(f"{title}: {heading}" if title else heading, 80)), fontsize=11)
     ax.grid(True, color="0.85", lw=0.6)
     ax.set_xlim(left=min(time) if time else 0)
     if len(columns) > 1:
