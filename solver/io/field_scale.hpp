@@ -8,7 +8,7 @@
 
 namespace spate {
 
-// Positions: dp. Velocities: c0 (weakly compressible SPH keeps speeds below c0 / 10).
+// Positions: dp. Velocities: c0 of the (first) fluid (weakly compressible SPH keeps speeds below c0 / 10).
 // Density: rho0. Accelerations: c0^2 / h (the pressure gradient of a 1 % density jump over h is
 // 0.01 c0^2 / h up to the Tait factor). Density rates: rho0 c0 / h. Anything else (material, id): 0,
 // compared exactly.
@@ -18,7 +18,7 @@ inline double field_scale(std::string_view field, const PhysicsParams& P) {
       if (field == n) return true;
     return false;
   };
-  const double h = P.h, c0 = P.c0, rho0 = P.rho0;
+  const double h = P.h, c0 = P.materials.fluid[0].c0, rho0 = P.materials.fluid[0].rho0;
   if (is({"x", "y", "z"})) return P.dp;
   if (is({"vx", "vy", "vz"})) return c0;
   if (is({"density"})) return rho0;

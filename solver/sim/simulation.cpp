@@ -521,7 +521,7 @@ RunResult Simulation::run() {
   const int slabs = group.ranks * local_slabs;
   s.layout = SlabLayout::uniform(s.lattice.cells[0], slabs);
   if (s.layout.narrowest() >= kMinColumnsPerSlab && slabs > 1 && case_.balanced_start)
-    s.layout = balanced_layout(column_costs(s.initial, s.lattice), slabs, kMinColumnsPerSlab);  // start balanced
+    s.layout = balanced_layout(column_costs(s.initial, s.lattice, s.params.materials), slabs, kMinColumnsPerSlab);  // start balanced
   if (s.layout.narrowest() < kMinColumnsPerSlab) {
     const std::string split = group.ranks > 1 ? fmt::format("{} ranks x --devices {} = {} slabs", group.ranks, local_slabs, slabs)
                                               : fmt::format("--devices {}", slabs);

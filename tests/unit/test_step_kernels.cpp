@@ -150,11 +150,11 @@ class GpuOrderKernels final : public ResidentKernels {
     ParticleStore& p = store();
     const CellGridView v = arrays_.grid().view();
     const Lattice& L = arrays_.grid().lattice();
-    dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+    dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7>() {
       for (std::size_t i = range.first; i < range.end(); ++i) {
         int g[3] = {0, 0, 0};
         for (int a = 0; a < Dim; ++a) g[a] = L.cell_of(p.pos[a][i], a);
-        update_fluid_rates<Kernel, Dim>(P, v, p, static_cast<std::uint32_t>(i), g);
+        update_fluid_rates<Kernel, Dim, Gamma7>(P, v, p, static_cast<std::uint32_t>(i), g);
       }
     });
   }
@@ -439,7 +439,7 @@ TEST(ResidentTopology, DeviceHealthAndDomainChecksFindTheHostsFault) {
   };
   std::vector<std::uint32_t> fluid;
   for (std::size_t i = 0; i < device.owned(); ++i)
-    if (is_fluid(device.material[i])) fluid.push_back(device.id[i]);
+    if (MaterialTable{}.is_fluid(device.material[i])) fluid.push_back(device.id[i]);
   ASSERT_GE(fluid.size(), 2u);
   std::sort(fluid.begin(), fluid.end());
   for (ParticleStore* p : {&host.particles(), &device}) {
@@ -461,13 +461,14 @@ TEST(TimeStep, ANanParticleAllowsZeroWhereverItSits) {
   const Case c = small_dam_break();
   const PhysicsParams P = physics_params(c);
   const TimeStepControl ctl;
-  EXPECT_EQ(particle_time_step(P, ctl, NAN, 1.0f), 0.0f);
-  EXPECT_EQ(particle_time_step(P, ctl, 1.0f, NAN), particle_time_step(P, ctl, 1.0f, 0.0f));
-  EXPECT_GT(particle_time_step(P, ctl, 1.0f, 1.0f), 0.0f);
+  const FluidMaterial& M = P.materials.fluid[0];
+  EXPECT_EQ(particle_time_step(P, M, ctl, NAN, 1.0f), 0.0f);
+  EXPECT_EQ(particle_time_step(P, M, ctl, 1.0f, NAN), particle_time_step(P, M, ctl, 1.0f, 0.0f));
+  EXPECT_GT(particle_time_step(P, M, ctl, 1.0f, 1.0f), 0.0f);
   const ParticleStore p = generate_particles(c);
   EXPECT_GT(cpu::min_time_step(p, P, ctl), 0.0f);
   for (std::size_t i = 0; i < p.owned(); i += p.owned() / 7) {
-    if (!is_fluid(p.material[i])) continue;
+    if (!P.is_fluid(p.material[i])) continue;
     ParticleStore q = p;
     q.vel[0][i] = NAN;
     EXPECT_EQ(cpu::min_time_step(q, P, ctl), 0.0f) << "NaN velocity at " << i;
@@ -564,13 +565,13 @@ TEST(CudaBackend, ANanTimeStepIsZeroWhereverThatParticleSits) {
   ParticleStore p = generate_particles(c);
   auto kernels = gpu::make_cuda_kernels(0, c.dim);
   std::size_t first_fluid = 0;
-  while (!is_fluid(p.material[first_fluid])) ++first_fluid;
+  while (!P.is_fluid(p.material[first_fluid])) ++first_fluid;
   kernels->resident()->upload(p);
   const float healthy = kernels->min_time_step(p, P, TimeStepControl{});
   EXPECT_EQ(healthy, cpu::min_time_step(p, P, TimeStepControl{}));
   EXPECT_GT(healthy, 0.0f);
   for (std::size_t i : {first_fluid, p.owned() / 2, p.owned() - 1}) {
-    if (!is_fluid(p.material[i])) continue;
+    if (!P.is_fluid(p.material[i])) continue;
     ParticleStore q = p;
     q.vel[0][i] = NAN;
     kernels->resident()->upload(q);

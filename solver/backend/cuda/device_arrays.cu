@@ -176,7 +176,7 @@ __global__ void health_kernel(DeviceFields d, int dim, HealthLimits h, std::uint
   if (i >= n) return;
   float x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
   for (int a = 0; a < dim; ++a) x[a] = d.pos[a][i], v[a] = d.vel[a][i];
-  const bool ok = !is_fluid(d.material[i]) || healthy(h, state_finite(dim, x, v, d.density[i]), d.density[i]);
+  const bool ok = !h.checked(d.material[i]) || healthy(h, state_finite(dim, x, v, d.density[i]), d.density[i], d.material[i]);
   out[i] = ok ? kNone : d.id[i];
 }
 
