@@ -81,9 +81,14 @@ int post_command(const PostArgs& a) {
   }
   Case c;
   try {
-    c = run_case(run_dir, overrides);
+    c = run_case(run_dir);
   } catch (const CaseError& e) {
-    throw BadInput(a.probes.empty() ? std::string(e.what()) : fmt::format("--probe: {}", e.what()));
+    throw BadInput(e.what());
+  }
+  try {
+    if (!overrides.empty()) c = run_case(run_dir, overrides);
+  } catch (const CaseError& e) {
+    throw BadInput(fmt::format("--probe: {}", e.what()));
   }
 #ifndef SPATE_WITH_CATALYST
   if (!a.pipelines.empty()) throw BadInput("--pipeline: this spate was built without ParaView Catalyst");

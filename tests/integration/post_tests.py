@@ -225,6 +225,25 @@ def post_probes_from_the_command_line(env):
     check(p.returncode == 2 and "--from" in p.stderr, "a bad --from")
 
 
+@test
+def post_reads_run_folders_of_earlier_versions(env):
+    """A run folder of spate before 0.1 (raw snapshots without field data, a checkpoint without the
+    pressures, no case.yaml): post takes the case from the checkpoint, reads the snapshots as they
+    are, and recomputes the checkpoint's pressures with a warning (close to the snapshot's)."""
+    old = os.path.join(source_dir(env), "tests", "fixtures", "run_v0_tiny_2d")
+    probe = "{name: p, type: pressure, position: [0.01, 0.005]}"
+    p = env.run("post", old, "--probe", probe, "--out", env.path("snapshots"))
+    check(p.returncode == 0, f"post on snapshots: exit {p.returncode}")
+    from_snapshots = probe_rows(env.path("snapshots", "probes"))["p"][1]
+    check(sorted(from_snapshots, key=int) == ["0", "3"], f"steps {sorted(from_snapshots)}")
+    p = env.run("post", old, "--probe", probe, "--from", "checkpoints", "--out", env.path("checkpoints"))
+    check(p.returncode == 0 and "recomputed from the densities" in p.stderr, "no warning about the recomputed pressures")
+    from_checkpoint = probe_rows(env.path("checkpoints", "probes"))["p"][1]
+    a, b = float(from_snapshots["3"].split(",")[2]), float(from_checkpoint["3"].split(",")[2])
+    check(a > 10 and abs(a - b) < 0.05 * a, f"pressure at step 3: {a} Pa from the snapshot, {b} Pa recomputed")
+    check(from_snapshots["3"].split(",")[0] == from_checkpoint["3"].split(",")[0], "times differ")
+
+
 # ---- spate plot ---------------------------------------------------------------------------------
 
 def png_size(path):
