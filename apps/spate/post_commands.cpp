@@ -1,6 +1,7 @@
 // After the run: spate post (probes and Catalyst pipelines on saved snapshots or checkpoints) and
 // spate plot (PNG plots of the probes, by scripts/plot_probes.py).
 #include <fmt/format.h>
+#include <fcntl.h>
 #include <spawn.h>
 #include <spdlog/spdlog.h>
 #include <sys/wait.h>
@@ -23,14 +24,42 @@ namespace spate::app {
 
 namespace {
 
-// The Python that has matplotlib: $SPATE_PYTHON, else the one CMake found, else python3 on the PATH.
+// Starts argv (searched on the PATH), its output to /dev/null unless `quiet` is false; its exit
+// status, or -1 when it could not start.
+int spawn_and_wait(const std::vector<std::string>& args, bool quiet) {
+  std::vector<const char*> argv;
+  for (auto& a : args) argv.push_back(a.c_str());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  if (quiet) {
+    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  }
+  pid_t pid = 0;
+  const int started = posix_spawnp(&pid, argv[0], &actions, nullptr, const_cast<char* const*>(argv.data()), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (started != 0) return -1;
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+
+// The Python that has matplotlib: $SPATE_PYTHON as given; else the first of the one CMake found,
+// the system's /usr/bin/python3 and python3 on the PATH that imports matplotlib. A pyenv or venv
+// Python first on the PATH often lacks the Debian package python3-matplotlib, which only the
+// system's interpreter sees; if none has it, the first that exists reports the missing module.
 std::string python() {
   const char* env = std::getenv("SPATE_PYTHON");
   if (env && *env) return env;
+  std::vector<std::string> candidates;
 #ifdef SPATE_PYTHON
-  if (std::filesystem::exists(SPATE_PYTHON)) return SPATE_PYTHON;
+  candidates.push_back(SPATE_PYTHON);
 #endif
-  return "python3";
+  candidates.insert(candidates.end(), {"/usr/bin/python3", "python3"});
+  for (const auto& c : candidates)
+    if (spawn_and_wait({c, "-c", "import matplotlib"}, true) == 0) return c;
+  return candidates.front();
 }
 
 // Plots DIR/probes/*.csv into `out`, titled with the case's name and each probe's description;
@@ -41,16 +70,11 @@ int plot_probes(const std::filesystem::path& dir, const std::filesystem::path& o
   std::vector<std::string> args = {interpreter, script, probes, target, "--title", title};
   if (c)
     for (const ProbeSpec& p : c->probes) args.insert(args.end(), {"--describe", p.name + "=" + probe_description(p, c->dim)});
-  std::vector<const char*> argv;
-  for (auto& a : args) argv.push_back(a.c_str());
-  argv.push_back(nullptr);
   spdlog::debug("plotting with {} {}", interpreter, script);
-  pid_t pid = 0;
-  if (posix_spawnp(&pid, argv[0], nullptr, nullptr, const_cast<char* const*>(argv.data()), environ) != 0)
+  const int status = spawn_and_wait(args, false);
+  if (status < 0)
     throw BadInput(fmt::format("spate plot: cannot start {} (set SPATE_PYTHON to a Python 3 with matplotlib)", interpreter));
-  int status = 0;
-  waitpid(pid, &status, 0);
-  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 4;
+  const int code = status == 128 ? 4 : status;
   if (code == 0) spdlog::info("plots of {} in {}", probes, target);
   return code == 0 || code == 2 ? code : 4;
 }
