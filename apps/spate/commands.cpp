@@ -93,10 +93,10 @@ std::string live_address(const std::string& arg) {
 }
 
 #ifdef SPATE_WITH_CATALYST
-// pipelines/ (live.py, spate_steering.xml): $SPATE_PIPELINES_DIR, else the source tree's.
+// pipelines/ (live.py, spate_steering.xml): $SPATE_PIPELINES_DIR, else the data folder's.
 std::filesystem::path pipelines_dir() {
   const char* env = std::getenv("SPATE_PIPELINES_DIR");
-  return env && *env ? std::filesystem::path(env) : std::filesystem::path(SPATE_PIPELINES_DIR);
+  return env && *env ? std::filesystem::path(env) : data_dir() / "pipelines";
 }
 #endif
 
@@ -109,9 +109,41 @@ std::vector<std::string> warn_thin_features(const Case& c) {
   return messages;
 }
 
+}  // namespace
+
 int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
-}  // namespace
+std::filesystem::path data_dir() {
+  const char* env = std::getenv("SPATE_DATA_DIR");
+  if (env && *env) return env;
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  const auto installed = exe.parent_path().parent_path() / "share" / "spate";
+  if (!ec && std::filesystem::is_directory(installed / "pipelines", ec)) return installed;
+  return SPATE_SOURCE_DIR;
+}
+
+#ifdef SPATE_WITH_CATALYST
+std::unique_ptr<catalyst::CatalystSink> make_catalyst_sink(const std::vector<std::filesystem::path>& scripts, int every,
+                                                           const std::filesystem::path& working_dir, const Case& c) {
+  catalyst::CatalystOptions co;
+  co.scripts = scripts;
+  co.every = every;
+  co.working_dir = working_dir;
+  co.constants = case_constants(c);
+  std::filesystem::create_directories(working_dir);
+  // Started outside mpirun, ParaView initialises MPI itself, and OpenMPI's TCP transport would
+  // then listen on every interface (ports 1024 and up) for the whole run. One process needs only
+  // shared memory; with it the run opens no listening socket at all (docs/live.md, Security).
+  // An explicit OMPI_MCA_btl in the environment wins.
+  if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK")) ::setenv("OMPI_MCA_btl", "self,vader", 0);
+  try {
+    return std::make_unique<catalyst::CatalystSink>(co);
+  } catch (const catalyst::InSituLoadError& e) {
+    throw BadInput(e.what());
+  }
+}
+#endif
 
 int run_command(const RunArgs& a) {
   Case c = load(a.case_file, a.overrides);
@@ -140,6 +172,10 @@ int run_command(const RunArgs& a) {
   if (a.devices < 1) throw BadInput(fmt::format("--devices {}: must be at least 1", a.devices));
   if (a.checkpoint_every && *a.checkpoint_every < 0)
     throw BadInput(fmt::format("--checkpoint-every {}: must be >= 0", *a.checkpoint_every));
+  if (a.checkpoint_keep_last && *a.checkpoint_keep_last < 0)
+    throw BadInput(fmt::format("--checkpoint-keep-last {}: must be >= 0 (0: keep all)", *a.checkpoint_keep_last));
+  if (a.checkpoint_keep_every && *a.checkpoint_keep_every < 0)
+    throw BadInput(fmt::format("--checkpoint-keep-every {}: must be >= 0 (0: none)", *a.checkpoint_keep_every));
 
   RunOptions o;
   o.out_dir = a.out.empty() ? std::filesystem::path("out") / c.name : std::filesystem::path(a.out);
@@ -149,6 +185,8 @@ int run_command(const RunArgs& a) {
   o.devices = a.devices;
   o.backend = a.backend;
   o.checkpoint_every = a.checkpoint_every;
+  o.checkpoint_keep_last = a.checkpoint_keep_last;
+  o.checkpoint_keep_every = a.checkpoint_keep_every;
   if (!a.restart.empty()) o.restart = a.restart;
   o.quiet = a.quiet;
   std::unique_ptr<SteeringReplay> replay;
@@ -165,29 +203,13 @@ int run_command(const RunArgs& a) {
   std::unique_ptr<catalyst::CatalystSink> insitu;
   std::unique_ptr<catalyst::CatalystSteering> live_steering;
   if (!pipelines.empty() || live) {
-    catalyst::CatalystOptions co;
-    co.scripts.assign(pipelines.begin(), pipelines.end());
+    std::vector<std::filesystem::path> scripts(pipelines.begin(), pipelines.end());
     if (live) {
       // pipelines/live.py reads the address from the environment (ParaView scripts take no arguments).
       ::setenv("SPATE_LIVE_URL", live_url.c_str(), 1);
-      co.scripts.push_back(pipelines_dir() / "live.py");
+      scripts.push_back(pipelines_dir() / "live.py");
     }
-    co.every = insitu_every;
-    co.working_dir = o.out_dir;
-    const PhysicsParams P = physics_params(c);
-    co.constants = {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.fluids[0].density},
-                    {"particle_mass", P.materials.fluid[0].mass}};
-    std::filesystem::create_directories(o.out_dir);
-    // Started outside mpirun, ParaView initialises MPI itself, and OpenMPI's TCP transport would
-    // then listen on every interface (ports 1024 and up) for the whole run. One process needs only
-    // shared memory; with it the run opens no listening socket at all (docs/live.md, Security).
-    // An explicit OMPI_MCA_btl in the environment wins.
-    if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK")) ::setenv("OMPI_MCA_btl", "self,vader", 0);
-    try {
-      insitu = std::make_unique<catalyst::CatalystSink>(co);
-    } catch (const catalyst::InSituLoadError& e) {
-      throw BadInput(e.what());
-    }
+    insitu = make_catalyst_sink(scripts, insitu_every, o.out_dir, c);
     o.insitu = insitu.get();
     if (live) {
       catalyst::SteeringInitial init;
