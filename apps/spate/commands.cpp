@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -22,6 +23,7 @@
 #include "comm/in_process_transport.hpp"
 #include "comm/process_group.hpp"
 #include "io/checkpoint.hpp"
+#include "io/output_file.hpp"
 #include "io/run_summary.hpp"
 #include "sim/simulation.hpp"
 #include "sim/slab_worker.hpp"
@@ -69,7 +71,7 @@ void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::pa
   j["script_seconds_per_step"] = nlohmann::json::array();
   for (double s : t.script_seconds) j["script_seconds_per_step"].push_back(s / n);
   j["failures"] = sink.failures();
-  std::ofstream(out_dir / "insitu.json") << j.dump(2) << "\n";
+  write_file_atomically(out_dir / "insitu.json", j.dump(2) + "\n");
   if (!quiet)
     std::printf("spate: in situ: %lld steps, adaptor %.3g ms/step, pipelines %.3g s/step\n", static_cast<long long>(t.steps),
                 1e3 * t.adaptor_seconds / n, t.pipelines_seconds / n);
@@ -98,6 +100,13 @@ std::filesystem::path pipelines_dir() {
 #endif
 
 int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
+
+// SIGINT (Ctrl-C) and SIGTERM (a batch system's notice) stop the run at the next step boundary with
+// its final checkpoint and summary (exit 128 + signal); a second one ends it at once.
+extern "C" void on_stop_signal(int signal) {
+  spate::request_stop(signal);
+  std::signal(signal, SIG_DFL);
+}
 
 }  // namespace
 
@@ -141,7 +150,7 @@ int run_command(const RunArgs& a) {
   std::unique_ptr<SteeringReplay> replay;
   if (!a.steering_log.empty()) {
     try {
-      replay = std::make_unique<SteeringReplay>(read_log(a.steering_log));
+      replay = std::make_unique<SteeringReplay>(read_log(a.steering_log, c.dim));
     } catch (const std::exception& e) {
       throw BadInput(std::string("--steering-log: ") + e.what());
     }
@@ -188,7 +197,7 @@ int run_command(const RunArgs& a) {
         try {
           ParticleStore ignored;
           const CheckpointMeta meta = read_checkpoint(*o.restart, ignored);
-          for (const SteeringChange& ch : parse_log(meta.steering_log, o.restart->string())) {
+          for (const SteeringChange& ch : parse_log(meta.steering_log, o.restart->string(), c.dim)) {
             if (ch.name == "gravity" && ch.value.size() == 3) init.gravity = {ch.value[0], ch.value[1], ch.value[2]};
             if (ch.name == "viscosity" && !ch.value.empty()) init.viscosity = ch.value[0];
             if (ch.name == "artificial_viscosity" && !ch.value.empty()) init.artificial_viscosity = ch.value[0];
@@ -211,6 +220,8 @@ int run_command(const RunArgs& a) {
 #endif
 
   RunResult r;
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
   try {
     r = Simulation(c, o).run();
   } catch (const InputError& e) {
@@ -218,20 +229,36 @@ int run_command(const RunArgs& a) {
   } catch (const CaseError& e) {
     throw BadInput(e.what());
   }
-  // Every rank knows the outcome; rank 0 reports it.
+  // Every rank knows the outcome; rank 0 reports it. A rank that failed itself (exit 4 to 6) also
+  // writes the summary: under mpirun its failure ends the other ranks before they could.
   const ProcessGroup& group = process_group();
-  if (group.rank != 0) return r.exit_code;
+  const bool own_failure = r.exit_code >= 4 && r.exit_code <= 6;
+  if (group.rank != 0 && !own_failure) return r.exit_code;
 #ifdef SPATE_WITH_CATALYST
-  if (insitu) report_insitu(*insitu, o.out_dir, a.quiet);
+  try {
+    if (insitu && group.rank == 0) report_insitu(*insitu, o.out_dir, a.quiet);
+  } catch (const OutputError& e) {
+    std::fprintf(stderr, "spate: error: %s\n", e.what());
+    if (r.exit_code == 0) r.exit_code = 5;
+  }
 #endif
   SummaryExtras x;
   x.threads = a.threads > 0 ? a.threads : std::max(1, hardware_threads() / group.ranks_on_node);
   x.devices = a.devices;
   x.backend = a.backend;
   x.ranks = group.ranks;
-  write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
+  // The summary is written whatever happened; if even that fails (a full disk), the run failed to
+  // deliver its outputs (exit 5) unless it had failed already.
+  try {
+    write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "spate: error: %s\n", e.what());
+    if (r.exit_code == 0 || r.exit_code == 3) r.exit_code = 5;
+  }
   if (r.exit_code == 3) {
     std::fprintf(stderr, "spate: the run went unstable: %s\n", r.message.c_str());
+  } else if (r.exit_code != 0) {
+    std::fprintf(stderr, "spate: %s\n", r.message.c_str());
   } else if (!a.quiet) {
     std::printf("spate: %s done: %lld steps to t = %.6g s in %.2f s (%.3g particle-steps/s); outputs in %s\n", c.name.c_str(),
                 static_cast<long long>(r.steps), r.simulated_time, r.wall_seconds,

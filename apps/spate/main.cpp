@@ -1,8 +1,11 @@
-// The spate command-line program: parse, load the case, run, report. Exit codes (spate --help):
-// 0 done, 1 `compare` found differences, 2 bad input, 3 the run went unstable, 4 internal error.
+// The spate command-line program: parse, load the case, run, report. Exit codes (spate --help,
+// docs/cli.md): 0 done, 1 `compare` found differences, 2 bad input, 3 the run went unstable,
+// 4 internal error, 5 an output could not be written, 6 out of memory, 130/143 stopped by
+// SIGINT/SIGTERM.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <thread>
@@ -16,7 +19,7 @@ namespace {
 // only, while its peers wait in a collective: MPI_Abort ends them all (no hang). Outcomes every
 // rank agrees on (done, differences, unstable) finalise MPI normally.
 int finish(int code) {
-  if (spate::process_group().ranks > 1 && (code == 2 || code == 4)) spate::abort_process_group(code);
+  if (spate::process_group().ranks > 1 && (code == 2 || (code >= 4 && code <= 6))) spate::abort_process_group(code);
   spate::finalize_process_group();
   return code;
 }
@@ -30,6 +33,9 @@ std::string who() {
 
 int main(int argc, char** argv) {
   using namespace spate::app;
+  // A file-size limit (ulimit -f) makes a write fail with EFBIG, which spate reports, rather than
+  // kill the process with SIGXFSZ before it can say anything.
+  std::signal(SIGXFSZ, SIG_IGN);
   try {
     spate::init_process_group(argc, argv);
   } catch (const std::exception& e) {
@@ -38,8 +44,10 @@ int main(int argc, char** argv) {
   }
   CLI::App app{"spate: weakly-compressible SPH for free-surface flows, on CPUs and GPUs, watched and steered in situ.\n"};
   app.footer(
-      "Exit codes: 0 done; 1 compare found differences; 2 bad input (case file, options, restart file);\n"
-      "            3 the run went unstable (diagnostic snapshot written, last good checkpoint kept); 4 internal error.");
+      "Exit codes: 0 done; 1 compare found differences; 2 bad input (case file, options, restart file, steering log,\n"
+      "            output folder, a run too large for the memory); 3 the run went unstable (diagnostic snapshot written,\n"
+      "            last good checkpoint kept); 4 internal error; 5 an output could not be written (disk full);\n"
+      "            6 out of memory; 130, 143 stopped by SIGINT, SIGTERM (final checkpoint written). docs/cli.md has more.");
   app.require_subcommand(1);
   // Parse errors look like every other bad-input message (and exit 2, below).
   app.failure_message([](const CLI::App*, const CLI::Error& e) {

@@ -70,6 +70,9 @@ struct Case {
   bool open_top = true;
   std::array<bool, 3> periodic{false, false, false};
   double headroom = 0.5;  // domain extends this fraction of the tank height above an open top
+  // Fluid that leaves through the open top (over the walls, above the headroom) is removed; more
+  // than this fraction of the fluid removed stops the run (exit 3).
+  double max_removed_fraction = 0.05;
 
   std::vector<Box> fluid_blocks;
   double wet_bed = 0.0;  // depth of still water on the rest of the floor

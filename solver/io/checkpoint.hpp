@@ -3,11 +3,21 @@
 // plus the step, time, next time step and the case text, so a restart continues bit-identically
 // with any number of devices or ranks. Writes go to a temporary file that is renamed into place:
 // a run killed mid-write leaves the previous checkpoint intact.
+//
+// A checkpoint is input like a case file, and is read as such (docs/cli.md, checkpoints): every
+// attribute and dataset is checked (type, rank, length, storage) before anything is allocated,
+// every dataset carries HDF5's Fletcher32 checksum and the header a checksum of its own, and the
+// values are checked after reading (finite, inside the domain, known kinds, ids unique and in
+// range); the case it embeds must be a valid case, and for a restart of the same geometry as the
+// run's case. Anything wrong is a CheckpointError naming the file, the attribute or dataset and
+// the reason.
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <stdexcept>
 #include <string>
 
+#include "../case/case.hpp"
 #include "../particles/particle_store.hpp"
 
 namespace spate {
@@ -19,9 +29,16 @@ struct CheckpointMeta {
   std::string case_name;
   std::string case_yaml;    // the effective case (after --set)
   std::string steering_log; // accepted steering changes so far (may be empty)
+  std::int64_t removed = 0;  // fluid particles removed through open sides before this step
+  std::string geometry_hash;  // geometry_hash() of the case (generator.hpp); empty in old files
+  int format = 2;             // the file's format version (1: before checksums and the hash)
 };
 
-// `particles` must hold every particle, ordered by id.
+struct CheckpointError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// `particles` must hold every particle, ordered by id. Write failures throw OutputError.
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, ParticleStore& particles);
 // The same file written one field at a time, so the particles never have to sit in one store:
 // fill(k, out) writes field k of ParticleStore(dim).fields() (asked only for checkpoint fields) of
@@ -29,7 +46,8 @@ void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& m
 using CheckpointFieldFill = std::function<void(std::size_t field, char* out)>;
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, int dim, std::size_t count,
                       const CheckpointFieldFill& fill);
-// Throws std::runtime_error naming the file and what is wrong.
-CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore& particles);
+// Reads and checks a checkpoint (see above). With `run_case` (a restart), the checkpoint must hold
+// that case's geometry, and its positions must lie in that case's domain. Throws CheckpointError.
+CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore& particles, const Case* run_case = nullptr);
 
 }  // namespace spate

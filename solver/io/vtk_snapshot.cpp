@@ -1,6 +1,9 @@
 #include "vtk_snapshot.hpp"
 
+#include "output_file.hpp"
+
 #include <cstdint>
+#include <cstdlib>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -25,16 +28,6 @@ Array make_array(const std::string& name, const std::string& type, int component
   for (std::size_t i = 0; i < n; ++i)
     for (int k = 0; k < components; ++k) out[i * components + k] = sources[k] ? sources[k][i] : T{};
   return a;
-}
-
-void write_atomically(const std::filesystem::path& path, const std::string& text) {
-  const std::filesystem::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    if (!out) throw std::runtime_error(tmp.string() + ": cannot write");
-  }
-  std::filesystem::rename(tmp, path);
 }
 
 }  // namespace
@@ -74,19 +67,21 @@ void write_vtp_piece(const std::filesystem::path& path, ParticleStore& p, int sl
   header(connectivity);
   header(offsets);
   xml << "</Verts>\n</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">\n_";
-  std::string text = xml.str();
+  // Streamed into the file array by array: the piece is never held in memory a second time.
+  if (path.has_parent_path()) create_output_folder(path.parent_path());
+  AtomicFile out(path);
+  out.write(xml.str());
   auto append = [&](const Array& a) {
     const std::uint64_t size = a.bytes.size();
-    text.append(reinterpret_cast<const char*>(&size), sizeof size);
-    text.append(a.bytes.data(), a.bytes.size());
+    out.write(&size, sizeof size);
+    out.write(a.bytes.data(), a.bytes.size());
   };
   for (auto& a : point_data) append(a);
   append(points);
   append(connectivity);
   append(offsets);
-  text += "\n</AppendedData>\n</VTKFile>\n";
-  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
-  write_atomically(path, text);
+  out.write("\n</AppendedData>\n</VTKFile>\n");
+  out.commit();
 }
 
 void write_vtm(const std::filesystem::path& path, const std::vector<std::string>& piece_files) {
@@ -95,7 +90,7 @@ void write_vtm(const std::filesystem::path& path, const std::vector<std::string>
   for (std::size_t k = 0; k < piece_files.size(); ++k)
     xml << "  <DataSet index=\"" << k << "\" name=\"device" << k << "\" file=\"" << piece_files[k] << "\"/>\n";
   xml << "</vtkMultiBlockDataSet>\n</VTKFile>\n";
-  write_atomically(path, xml.str());
+  write_file_atomically(path, xml.str());
 }
 
 void PvdIndex::add(double time, const std::string& relative_file) {
@@ -105,7 +100,7 @@ void PvdIndex::add(double time, const std::string& relative_file) {
   xml << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n<Collection>\n";
   for (auto& [t, f] : entries_) xml << "  <DataSet timestep=\"" << t << "\" group=\"\" part=\"0\" file=\"" << f << "\"/>\n";
   xml << "</Collection>\n</VTKFile>\n";
-  write_atomically(path_, xml.str());
+  write_file_atomically(path_, xml.str());
 }
 
 void PvdIndex::load_existing(double up_to_time) {
@@ -116,8 +111,11 @@ void PvdIndex::load_existing(double up_to_time) {
   for (std::string line; std::getline(in, line);) {
     std::smatch m;
     if (std::regex_search(line, m, entry)) {
-      const double t = std::stod(m[1]);
-      if (t <= up_to_time) entries_.emplace_back(t, m[2]);
+      // The index is read back as found: an entry whose time does not parse is dropped.
+      const std::string text = m[1];
+      char* end = nullptr;
+      const double t = std::strtod(text.c_str(), &end);
+      if (end != text.c_str() && *end == '\0' && t <= up_to_time) entries_.emplace_back(t, m[2]);
     }
   }
 }

@@ -4,19 +4,21 @@
 // Sampling is collective; every value is independent of the split (owner-computed or exact).
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
-#include <memory>
+#include <optional>
 #include <vector>
 
 #include "../case/case.hpp"
+#include "../io/output_file.hpp"
 #include "slab_worker.hpp"
 
 namespace spate {
 
 class ProbeSet {
  public:
-  // `writer`: this slab writes the files. `append`: continue existing files (restart).
-  ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, bool append);
+  // `writer`: this slab writes the files. `resume_step`: continue existing files after a restart
+  // from that step (their rows of later steps, written by the run that went on past the
+  // checkpoint, are dropped); none: start them afresh.
+  ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, std::optional<std::int64_t> resume_step);
   // Collective over all slabs. Returns the sampled row values in probe order (for tests).
   std::vector<std::vector<double>> sample(double time, std::int64_t step, SlabWorker& w);
   bool empty() const { return probes_.empty(); }
@@ -24,7 +26,7 @@ class ProbeSet {
  private:
   const Case& case_;
   std::vector<ProbeSpec> probes_;
-  std::vector<std::unique_ptr<std::ofstream>> files_;
+  std::vector<AppendFile> files_;
 };
 
 // Single probe evaluations on one slab (exposed for tests). NaN when this slab does not own the point.
