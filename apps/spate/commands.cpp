@@ -25,6 +25,7 @@
 #include "io/checkpoint.hpp"
 #include "io/output_file.hpp"
 #include "io/run_summary.hpp"
+#include "sim/memory_estimate.hpp"
 #include "sim/simulation.hpp"
 #include "sim/slab_worker.hpp"
 #ifdef SPATE_WITH_CATALYST
@@ -172,7 +173,11 @@ int run_command(const RunArgs& a) {
     co.working_dir = o.out_dir;
     const PhysicsParams P = physics_params(c);
     co.constants = {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.rho0}, {"particle_mass", P.mass}};
-    std::filesystem::create_directories(o.out_dir);
+    try {
+      create_output_folder(o.out_dir);
+    } catch (const OutputError& e) {
+      throw BadInput(fmt::format("--out {}: the output folder is not usable: {}", o.out_dir.string(), e.what()));
+    }
     // Started outside mpirun, ParaView initialises MPI itself, and OpenMPI's TCP transport would
     // then listen on every interface (ports 1024 and up) for the whole run. One process needs only
     // shared memory; with it the run opens no listening socket at all (docs/live.md, Security).
@@ -260,9 +265,11 @@ int run_command(const RunArgs& a) {
   } else if (r.exit_code != 0) {
     std::fprintf(stderr, "spate: %s\n", r.message.c_str());
   } else if (!a.quiet) {
-    std::printf("spate: %s done: %lld steps to t = %.6g s in %.2f s (%.3g particle-steps/s); outputs in %s\n", c.name.c_str(),
+    const std::string removed =
+        r.removed > 0 ? fmt::format("; {} fluid particle{} removed through open sides", r.removed, r.removed == 1 ? "" : "s") : "";
+    std::printf("spate: %s done: %lld steps to t = %.6g s in %.2f s (%.3g particle-steps/s)%s; outputs in %s\n", c.name.c_str(),
                 static_cast<long long>(r.steps), r.simulated_time, r.wall_seconds,
-                r.wall_seconds > 0 ? r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds : 0.0,
+                r.wall_seconds > 0 ? r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds : 0.0, removed.c_str(),
                 o.out_dir.string().c_str());
   }
   return r.exit_code;
@@ -279,6 +286,8 @@ int info_command(const InfoArgs& a) {
   const double dt = c.fixed_dt ? *c.fixed_dt : c.cfl * P.h / P.c0;
   const std::size_t bpp = ParticleStore(c.dim).bytes_per_particle();
   const double memory = static_cast<double>(n.total()) * bpp;
+  const MemoryEstimate run_memory = estimate_run_memory(c, process_group().ranks, process_group().ranks_on_node);
+  const AvailableMemory available = available_memory();
   // The GPU estimate needs no device: it is arithmetic on the case (backend/cuda/device_plan.hpp).
   std::vector<gpu::SlabMemory> per_gpu;
   if (a.backend == "cuda") per_gpu = gpu::device_memory_per_slab(L, n.total(), a.devices);
@@ -298,6 +307,9 @@ int info_command(const InfoArgs& a) {
     j["cells"] = {L.cells[0], L.cells[1], L.cells[2]};
     j["bytes_per_particle"] = bpp;
     j["memory_bytes"] = memory;
+    j["run_memory_bytes"] = run_memory.bytes;
+    j["memory_available_bytes"] = available.bytes;
+    j["memory_fits"] = run_memory.bytes <= available.bytes;
     j["backend"] = a.backend;
     if (a.backend == "cuda") {
       j["device_bytes_per_particle"] = gpu::device_footprint(c.dim).per_particle();
@@ -319,6 +331,9 @@ int info_command(const InfoArgs& a) {
     std::printf("cell lattice    %d x %d x %d\n", L.cells[0], L.cells[1], L.cells[2]);
     std::printf("memory          %zu bytes/particle, %.1f MiB for the particles (%s backend)\n", bpp, memory / 1048576.0,
                 a.backend.c_str());
+    std::printf("run memory      about %s at the peak; %s available (%s)%s\n", format_bytes(static_cast<double>(run_memory.bytes)).c_str(),
+                format_bytes(static_cast<double>(available.bytes)).c_str(), available.source.c_str(),
+                run_memory.bytes <= available.bytes ? "" : ": spate run refuses it");
     if (a.backend == "cuda") {
       std::printf("device memory   %zu bytes/particle slot; per GPU with --devices %d: at most %.1f MiB (%.0f bytes per owned particle)\n",
                   gpu::device_footprint(c.dim).per_particle(), a.devices, gpu_peak / 1048576.0,

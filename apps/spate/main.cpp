@@ -7,6 +7,7 @@
 
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <thread>
 
@@ -111,6 +112,10 @@ int main(int argc, char** argv) {
     if (*cmp_cmd) return finish(compare_command(cmp));
     if (*bench_cmd) return finish(bench_command(bench));
   } catch (const BadInput& e) {
+    std::fprintf(stderr, "%s: error: %s\n", who().c_str(), e.what());
+    return finish(2);
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A file or folder spate was asked to use and cannot: not a bug in spate.
     std::fprintf(stderr, "%s: error: %s\n", who().c_str(), e.what());
     return finish(2);
   } catch (const std::exception& e) {

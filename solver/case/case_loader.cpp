@@ -361,6 +361,13 @@ Case read(Section& root, const std::string& file) {
     if (t->has("dt") && !(t->raw("dt").IsScalar() && t->raw("dt").Scalar() == "auto")) {
       c.fixed_dt = t->number("dt");
       if (!(*c.fixed_dt > 0)) t->fail(t->raw("dt"), "dt", "must be > 0 or 'auto'");
+      // A step that needs more than 1e12 steps to the end would run for ever (and below the
+      // resolution of t not even advance it).
+      if (c.end_time / *c.fixed_dt > 1e12) {
+        std::ostringstream m;
+        m << "a fixed step of " << *c.fixed_dt << " s takes more than 1e12 steps to time.end = " << c.end_time << " s";
+        t->fail(t->raw("dt"), "dt", m.str());
+      }
     }
     c.cfl = t->number("cfl", 0.2);
     if (!(c.cfl > 0 && c.cfl <= 1)) t->fail(t->raw("cfl"), "cfl", "must be in (0, 1]");

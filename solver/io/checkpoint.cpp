@@ -34,6 +34,14 @@ constexpr hsize_t kChunk = 65536;
 // one message instead (hdf5_reason()).
 void quiet_hdf5() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
 
+// A file whose close failed (a full disk while HDF5 flushes it) stays in HDF5's tables, and HDF5's
+// own clean-up at exit then crashes on it (1.10: H5F__close_cb). spate closes every file itself,
+// so that clean-up is not needed: it is switched off before the library starts (a static object
+// of this file, constructed before main).
+struct NoHdf5Atexit {
+  NoHdf5Atexit() { H5dont_atexit(); }
+} no_hdf5_atexit;
+
 // The innermost description on HDF5's error stack (what went wrong at the bottom); the stack is
 // cleared.
 std::string hdf5_reason() {
@@ -46,6 +54,14 @@ std::string hdf5_reason() {
       },
       &deepest);
   H5Eclear2(H5E_DEFAULT);
+  // A failed system call comes as "... errno = 28, error message = 'No space left on device', ...":
+  // the system's reason is the message.
+  const auto quoted = deepest.find("error message = '");
+  if (quoted != std::string::npos) {
+    const auto begin = quoted + 17, end = deepest.find('\'', begin);
+    if (end != std::string::npos) return deepest.substr(begin, end - begin);
+  }
+  deepest = deepest.substr(0, deepest.find('\n'));
   return deepest.empty() ? "HDF5 error" : deepest;
 }
 
@@ -264,6 +280,7 @@ class Reader {
       fail(fmt::format("attribute '{}' must be one string", name));
     std::string s;
     Handle mem(H5Tcopy(H5T_C_S1), H5Tclose);
+    H5Tset_cset(mem.get(), H5Tget_cset(a->type.get()));  // ASCII or UTF-8 (h5py's default): no conversion
     if (H5Tis_variable_str(a->type.get()) > 0) {
       H5Tset_size(mem.get(), H5T_VARIABLE);
       char* value = nullptr;
@@ -275,8 +292,10 @@ class Reader {
     } else {
       const std::size_t n = H5Tget_size(a->type.get());
       if (n == 0 || n > kLargestText) fail(fmt::format("attribute '{}' is {} bytes long, more than a checkpoint holds", name, n));
-      s.assign(n, '\0');
-      H5Tset_size(mem.get(), n);
+      // One byte more than stored: a null-padded string of n characters keeps all n in a
+      // null-terminated memory type (HDF5 would drop the last one for the terminator).
+      s.assign(n + 1, '\0');
+      H5Tset_size(mem.get(), n + 1);
       if (H5Aread(a->attr.get(), mem.get(), s.data()) < 0) fail_hdf5(fmt::format("attribute '{}' cannot be read", name));
       s.resize(strnlen(s.data(), n));
     }

@@ -406,6 +406,7 @@ class Worker {
       time += dt;
       ++step;
       ++taken;
+      record_progress();
       const StepReport report =
           share_report(t_, w_.health(static_cast<float>(s_.c.density_min_ratio), static_cast<float>(s_.c.density_max_ratio)),
                        w_.removed_ids(), stop_signal.load() != 0);
@@ -597,7 +598,10 @@ class Worker {
     if (written_.empty() || written_.back() != just_written) written_.push_back(just_written);
     const std::size_t keep = static_cast<std::size_t>(std::max(1, s_.opts.keep_checkpoints));
     while (written_.size() > keep) {
-      std::filesystem::remove(written_.front());
+      // An old checkpoint that cannot be removed costs space, not results: said, not fatal.
+      std::error_code ec;
+      std::filesystem::remove(written_.front(), ec);
+      if (ec) std::fprintf(stderr, "spate: warning: %s: cannot remove an old checkpoint: %s\n", written_.front().c_str(), ec.message().c_str());
       written_.erase(written_.begin());
     }
   }
@@ -718,6 +722,10 @@ RunResult Simulation::run() {
     } catch (const InputError&) {
       throw;
     } catch (const OutputError& e) {
+      r.exit_code = 5;
+      r.exit_status = "output_failed";
+      r.message = where + "an output could not be written: " + e.what();
+    } catch (const std::filesystem::filesystem_error& e) {
       r.exit_code = 5;
       r.exit_status = "output_failed";
       r.message = where + "an output could not be written: " + e.what();
