@@ -11,6 +11,7 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
 #include <thread>
 #include <unistd.h>
 
@@ -20,9 +21,11 @@
 #include "backend/cuda/device_runtime.hpp"
 #include "case/case.hpp"
 #include "case/generator.hpp"
+#include "case/thin_features.hpp"
 #include "comm/in_process_transport.hpp"
 #include "comm/process_group.hpp"
 #include "io/checkpoint.hpp"
+#include "io/field_scale.hpp"
 #include "io/output_file.hpp"
 #include "io/run_summary.hpp"
 #include "sim/memory_estimate.hpp"
@@ -60,7 +63,7 @@ void check_backend(const std::string& backend) {
 
 #ifdef SPATE_WITH_CATALYST
 // Timing of the in-situ steps: a line on stdout and insitu.json beside summary.json.
-void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::path& out_dir, bool quiet) {
+void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::path& out_dir) {
   const catalyst::InSituTiming t = sink.timing();
   const double n = static_cast<double>(std::max<std::int64_t>(1, t.steps));
   nlohmann::ordered_json j;
@@ -73,9 +76,8 @@ void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::pa
   for (double s : t.script_seconds) j["script_seconds_per_step"].push_back(s / n);
   j["failures"] = sink.failures();
   write_file_atomically(out_dir / "insitu.json", j.dump(2) + "\n");
-  if (!quiet)
-    std::printf("spate: in situ: %lld steps, adaptor %.3g ms/step, pipelines %.3g s/step\n", static_cast<long long>(t.steps),
-                1e3 * t.adaptor_seconds / n, t.pipelines_seconds / n);
+  spdlog::info("in situ: {} steps, adaptor {:.3g} ms/step, pipelines {:.3g} s/step", t.steps, 1e3 * t.adaptor_seconds / n,
+               t.pipelines_seconds / n);
 }
 #endif
 
@@ -100,6 +102,15 @@ std::filesystem::path pipelines_dir() {
 }
 #endif
 
+// Thin fluid features (case/thin_features.hpp), each a warning; returns the messages.
+std::vector<std::string> warn_thin_features(const Case& c) {
+  std::vector<std::string> messages;
+  for (const ThinFeature& f : thin_features(c)) messages.push_back(c.file + ": " + f.message(c.dp));
+  if (process_group().rank == 0)
+    for (auto& m : messages) spdlog::warn("{}", m);
+  return messages;
+}
+
 int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 // SIGINT (Ctrl-C) and SIGTERM (a batch system's notice) stop the run at the next step boundary with
@@ -114,6 +125,7 @@ extern "C" void on_stop_signal(int signal) {
 int run_command(const RunArgs& a) {
   Case c = load(a.case_file, a.overrides);
   check_backend(a.backend);
+  const std::vector<std::string> warnings = warn_thin_features(c);
   // In situ: the command line replaces the case file's `insitu:` section.
   const std::vector<std::string> pipelines = a.pipelines.empty() ? c.insitu_pipelines : a.pipelines;
   [[maybe_unused]] const int insitu_every = a.insitu_every.value_or(c.insitu_every);
@@ -218,8 +230,7 @@ int run_command(const RunArgs& a) {
         throw BadInput(e.what());
       }
       o.steering = live_steering.get();
-      if (!a.quiet)
-        std::printf("spate: live: connecting out to ParaView at %s on every in-situ step (Catalyst > Connect there)\n", live_url.c_str());
+      spdlog::info("live: connecting out to ParaView at {} on every in-situ step (Catalyst > Connect there)", live_url);
     }
   }
 #endif
@@ -241,9 +252,9 @@ int run_command(const RunArgs& a) {
   if (group.rank != 0 && !own_failure) return r.exit_code;
 #ifdef SPATE_WITH_CATALYST
   try {
-    if (insitu && group.rank == 0) report_insitu(*insitu, o.out_dir, a.quiet);
+    if (insitu && group.rank == 0) report_insitu(*insitu, o.out_dir);
   } catch (const OutputError& e) {
-    std::fprintf(stderr, "spate: error: %s\n", e.what());
+    spdlog::error("{}", e.what());
     if (r.exit_code == 0) r.exit_code = 5;
   }
 #endif
@@ -252,25 +263,26 @@ int run_command(const RunArgs& a) {
   x.devices = a.devices;
   x.backend = a.backend;
   x.ranks = group.ranks;
+  x.warnings = warnings;
   // The summary is written whatever happened; if even that fails (a full disk), the run failed to
   // deliver its outputs (exit 5) unless it had failed already.
   try {
     write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "spate: error: %s\n", e.what());
+    spdlog::error("{}", e.what());
     if (r.exit_code == 0 || r.exit_code == 3) r.exit_code = 5;
   }
   if (r.exit_code == 3) {
-    std::fprintf(stderr, "spate: the run went unstable: %s\n", r.message.c_str());
+    spdlog::error("the run went unstable: {}", r.message);
   } else if (r.exit_code != 0) {
-    std::fprintf(stderr, "spate: %s\n", r.message.c_str());
-  } else if (!a.quiet) {
+    spdlog::error("{}", r.message);
+  } else {
     const std::string removed =
         r.removed > 0 ? fmt::format("; {} fluid particle{} removed through open sides", r.removed, r.removed == 1 ? "" : "s") : "";
-    std::printf("spate: %s done: %lld steps to t = %.6g s in %.2f s (%.3g particle-steps/s)%s; outputs in %s\n", c.name.c_str(),
-                static_cast<long long>(r.steps), r.simulated_time, r.wall_seconds,
-                r.wall_seconds > 0 ? r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds : 0.0, removed.c_str(),
-                o.out_dir.string().c_str());
+    spdlog::info("{} done: {} steps to t = {:.6g} s in {:.2f} s ({:.3g} particle-steps/s){}; outputs in {}", c.name, r.steps,
+                 r.simulated_time, r.wall_seconds,
+                 r.wall_seconds > 0 ? r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds : 0.0, removed,
+                 o.out_dir.string());
   }
   return r.exit_code;
 }
@@ -279,6 +291,8 @@ int info_command(const InfoArgs& a) {
   Case c = load(a.case_file, a.overrides);
   if (a.backend != "cpu" && a.backend != "cuda") throw BadInput(fmt::format("--backend {}: expected 'cpu' or 'cuda'", a.backend));
   if (a.devices < 1) throw BadInput(fmt::format("--devices {}: must be at least 1", a.devices));
+  const std::vector<ThinFeature> thin = thin_features(c);
+  if (!a.json) warn_thin_features(c);
   const ParticleCounts n = count_particles(c);
   if (n.fluid == 0) throw BadInput(c.file + ": the case generates no fluid particles (check fluid_blocks, wet_bed and dp)");
   const PhysicsParams P = physics_params(c);
@@ -311,6 +325,10 @@ int info_command(const InfoArgs& a) {
     j["memory_available_bytes"] = available.bytes;
     j["memory_fits"] = run_memory.bytes <= available.bytes;
     j["backend"] = a.backend;
+    j["warnings"] = nlohmann::ordered_json::array();
+    for (const ThinFeature& f : thin)
+      j["warnings"].push_back({{"key", f.key}, {"what", f.what}, {"thickness", f.thickness}, {"layers", f.layers},
+                               {"resolving_dp", f.resolving_dp}, {"message", c.file + ": " + f.message(c.dp)}});
     if (a.backend == "cuda") {
       j["device_bytes_per_particle"] = gpu::device_footprint(c.dim).per_particle();
       j["devices"] = a.devices;
@@ -348,6 +366,8 @@ int info_command(const InfoArgs& a) {
 
 int compare_command(const CompareArgs& a) {
   if (!(a.tolerance >= 0)) throw BadInput(fmt::format("--tolerance {}: must be >= 0", a.tolerance));
+  if (a.scaled_tolerance && !(*a.scaled_tolerance >= 0))
+    throw BadInput(fmt::format("--scaled-tolerance {}: must be >= 0", *a.scaled_tolerance));
   ParticleStore pa, pb;
   CheckpointMeta ma, mb;
   try {
@@ -364,31 +384,44 @@ int compare_command(const CompareArgs& a) {
     std::printf("different particle ids\n");
     return 1;
   }
+  // With --scaled-tolerance each field allows that fraction of its scale, from the case the first
+  // checkpoint ran (its physics: dp, h, c0, rho0), or --tolerance where that is larger.
+  std::optional<PhysicsParams> P;
+  if (a.scaled_tolerance) {
+    try {
+      P = physics_params(parse_case(ma.case_yaml, a.a + " (its stored case)"));
+    } catch (const std::exception& e) {
+      throw BadInput(e.what());
+    }
+  }
   bool ok = true;
-  std::printf("%-18s %-14s %s\n", "field", "max |a - b|", "at id");
+  if (P) std::printf("%-18s %-14s %-10s %s\n", "field", "max |a - b|", "at id", "tolerance");
+  else std::printf("%-18s %-14s %s\n", "field", "max |a - b|", "at id");
   auto fa = pa.fields(), fb = pb.fields();
   for (std::size_t f = 0; f < fa.size(); ++f) {
-    if (!fa[f].checkpoint || fa[f].name == "id") continue;
+    if (!fa[f].has(kCheckpointed) || fa[f].name == "id") continue;
     double worst = 0.0;
     std::uint32_t at = 0;
+    const FieldType type = fa[f].spec->type;
+    auto value = [type](const FieldRef& r, std::size_t i) -> double {
+      if (type == FieldType::U8) return static_cast<unsigned char>(r.bytes()[i]);
+      if (type == FieldType::U32) return reinterpret_cast<const std::uint32_t*>(r.bytes())[i];
+      return reinterpret_cast<const float*>(r.bytes())[i];
+    };
     for (std::size_t i = 0; i < pa.size(); ++i) {
-      double x, y;
-      if (fa[f].elem_size == 1) {
-        x = static_cast<unsigned char>(fa[f].bytes()[i]);
-        y = static_cast<unsigned char>(fb[f].bytes()[i]);
-      } else {
-        x = reinterpret_cast<const float*>(fa[f].bytes())[i];
-        y = reinterpret_cast<const float*>(fb[f].bytes())[i];
-      }
+      const double x = value(fa[f], i), y = value(fb[f], i);
       const double d = (std::isnan(x) != std::isnan(y)) ? INFINITY : (std::isnan(x) ? 0.0 : std::fabs(x - y));
       if (d > worst) worst = d, at = pa.id[i];
     }
-    ok = ok && worst <= a.tolerance;
-    std::printf("%-18s %-14.6g %u\n", std::string(fa[f].name).c_str(), worst, at);
+    const double tolerance = P ? std::max(a.tolerance, *a.scaled_tolerance * field_scale(fa[f].name, *P)) : a.tolerance;
+    ok = ok && worst <= tolerance;
+    if (P) std::printf("%-18s %-14.6g %-10u %.3g\n", std::string(fa[f].name).c_str(), worst, at, tolerance);
+    else std::printf("%-18s %-14.6g %u\n", std::string(fa[f].name).c_str(), worst, at);
   }
   std::printf("step %lld vs %lld, time %.17g vs %.17g\n", static_cast<long long>(ma.step), static_cast<long long>(mb.step),
               ma.time, mb.time);
-  std::printf("%s (tolerance %g)\n", ok ? "MATCH" : "DIFFERENT", a.tolerance);
+  if (P) std::printf("%s (tolerance %g of each field's scale)\n", ok ? "MATCH" : "DIFFERENT", *a.scaled_tolerance);
+  else std::printf("%s (tolerance %g)\n", ok ? "MATCH" : "DIFFERENT", a.tolerance);
   return ok ? 0 : 1;
 }
 

@@ -30,6 +30,7 @@ struct InfoArgs {
 struct CompareArgs {
   std::string a, b;
   double tolerance = 0.0;
+  std::optional<double> scaled_tolerance;  // per field: this times field_scale (io/field_scale.hpp)
 };
 struct BenchArgs {
   std::string case_file, backend = "cpu";

@@ -354,7 +354,7 @@ ParticleStore generate_particles(const Case& c) {
       return;
     }
     for (int a = 0; a < c.dim; ++a) p.pos[a][i] = static_cast<float>(s.coord(a, idx[a]));
-    p.kind[i] = kind;
+    p.material[i] = kind;
     p.id[i] = static_cast<std::uint32_t>(i);
     p.density[i] = rho0;
     if (kind == kFluid) {

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fmt/format.h>
 #include <optional>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -20,9 +21,10 @@ namespace spate {
 
 namespace {
 
-constexpr const char* kFormat = "spate-checkpoint-2";
-// Before the checksums and the geometry hash; still read (without those two checks).
-constexpr const char* kFormatV1 = "spate-checkpoint-1";
+// "spate-checkpoint-<version>"; versions 2 and up also have an integer attribute format_version.
+constexpr const char* kFormatPrefix = "spate-checkpoint-";
+// The first version with the checksums, the geometry hash and the removed count.
+constexpr int kCheckedVersion = 3;
 // Texts in the header (the case, the steering history) are small; a header that claims more is damaged.
 constexpr std::size_t kLargestText = 16u << 20;
 // Step numbers beyond this are not from a run (at 1e6 steps a second: 30 years).
@@ -95,10 +97,16 @@ class Handle {
   herr_t (*close_)(hid_t) = nullptr;
 };
 
-hid_t h5_type(const FieldRef& f) {
-  if (f.name == "id") return H5T_NATIVE_UINT32;
-  return f.elem_size == 1 ? H5T_NATIVE_UINT8 : H5T_NATIVE_FLOAT;
+hid_t h5_type(FieldType t) {
+  switch (t) {
+    case FieldType::F32: return H5T_NATIVE_FLOAT;
+    case FieldType::U32: return H5T_NATIVE_UINT32;
+    case FieldType::U8: return H5T_NATIVE_UINT8;
+  }
+  return H5T_NATIVE_FLOAT;
 }
+
+std::string format_name(int version) { return kFormatPrefix + std::to_string(version); }
 
 // 64-bit FNV-1a over the header values, in a fixed byte order: a flipped bit in an attribute (which
 // HDF5's checksums of object headers may not see in old-style headers) shows as a mismatch.
@@ -113,7 +121,7 @@ std::string header_checksum(const CheckpointMeta& m, int dim) {
     bytes(&n, sizeof n);
     bytes(s.data(), s.size());
   };
-  text(kFormat);
+  text(format_name(m.format_version));
   bytes(&m.step, sizeof m.step);
   bytes(&m.time, sizeof m.time);
   bytes(&m.dt, sizeof m.dt);
@@ -157,6 +165,19 @@ class Writer {
 
 }  // namespace
 
+std::vector<CheckpointDataset> checkpoint_datasets(int dim, int version) {
+  std::vector<CheckpointDataset> out;
+  const auto fields = ParticleStore(dim).fields();
+  for (std::size_t k = 0; k < fields.size(); ++k) {
+    const FieldRef& f = fields[k];
+    if (!f.has(kCheckpointed)) continue;
+    std::string name(f.name);
+    if (version == 1 && f.spec->member == "material") name = "kind";
+    out.push_back(CheckpointDataset{name, f.spec->type, k});
+  }
+  return out;
+}
+
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, ParticleStore& particles) {
   auto fields = particles.fields();
   const std::size_t n = particles.owned();
@@ -187,7 +208,10 @@ void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& m
     w.check(H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_STRONG), "setting the close degree");
     Handle file = w.make(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose, "cannot create the checkpoint file");
     CheckpointMeta m = meta;
-    w.text(file.get(), "format", kFormat);
+    m.format_version = kCheckpointFormatVersion;
+    const int version = kCheckpointFormatVersion;
+    w.text(file.get(), "format", format_name(version));
+    w.attribute(file.get(), "format_version", H5T_NATIVE_INT, &version);
     w.attribute(file.get(), "step", H5T_NATIVE_INT64, &m.step);
     w.attribute(file.get(), "time", H5T_NATIVE_DOUBLE, &m.time);
     w.attribute(file.get(), "dt", H5T_NATIVE_DOUBLE, &m.dt);
@@ -201,23 +225,18 @@ void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& m
     Handle group = w.make(H5Gcreate2(file.get(), "particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "creating group particles");
     const hsize_t n = count;
     const hsize_t chunk = std::max<hsize_t>(1, std::min(n, kChunk));
-    ParticleStore layout(dim);  // empty: only the field list (names, sizes, flags)
-    const auto fields = layout.fields();
     std::vector<char> buffer;  // one field at a time
-    for (std::size_t k = 0; k < fields.size(); ++k) {
-      const FieldRef& f = fields[k];
-      if (!f.checkpoint) continue;
-      const std::string name(f.name);
-      buffer.resize(count * f.elem_size);
-      if (count > 0) fill(k, buffer.data());
+    for (const CheckpointDataset& d : checkpoint_datasets(dim)) {
+      buffer.resize(count * field_type_size(d.type));
+      if (count > 0) fill(d.field, buffer.data());
       Handle space = w.make(H5Screate_simple(1, &n, nullptr), H5Sclose, "creating a dataspace");
       Handle dcpl = w.make(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "creating dataset properties");
-      w.check(H5Pset_chunk(dcpl.get(), 1, &chunk), "chunking dataset " + name);
-      w.check(H5Pset_fletcher32(dcpl.get()), "adding the Fletcher32 checksum to dataset " + name);
-      Handle dset = w.make(H5Dcreate2(group.get(), name.c_str(), h5_type(f), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
-                           H5Dclose, "creating dataset " + name);
-      if (n > 0) w.check(H5Dwrite(dset.get(), h5_type(f), H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data()), "writing dataset " + name);
-      w.check(dset.close(), "writing dataset " + name);
+      w.check(H5Pset_chunk(dcpl.get(), 1, &chunk), "chunking dataset " + d.name);
+      w.check(H5Pset_fletcher32(dcpl.get()), "adding the Fletcher32 checksum to dataset " + d.name);
+      Handle dset = w.make(H5Dcreate2(group.get(), d.name.c_str(), h5_type(d.type), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+                           H5Dclose, "creating dataset " + d.name);
+      if (n > 0) w.check(H5Dwrite(dset.get(), h5_type(d.type), H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data()), "writing dataset " + d.name);
+      w.check(dset.close(), "writing dataset " + d.name);
     }
     w.check(group.close(), "closing group particles");
     // The data reach the file here (a full disk shows now, if not before).
@@ -310,16 +329,16 @@ class Reader {
 };
 
 // The dataset of a field, checked before anything is read: a one-dimensional array of `n` values of
-// the field's type, with the Fletcher32 checksum (format 2) and no other filter, its data all
+// the field's type, with the Fletcher32 checksum (from version 3) and no other filter, its data all
 // stored in the file. Returns the open dataset and adds its storage to `stored`.
-Handle open_field(const Reader& r, hid_t group, const FieldRef& f, hsize_t n, int format, hsize_t& stored) {
-  const std::string name = "particles/" + std::string(f.name);
-  const htri_t exists = H5Lexists(group, std::string(f.name).c_str(), H5P_DEFAULT);
+Handle open_field(const Reader& r, hid_t group, const CheckpointDataset& d, hsize_t n, int version, hsize_t& stored) {
+  const std::string name = "particles/" + d.name;
+  const htri_t exists = H5Lexists(group, d.name.c_str(), H5P_DEFAULT);
   if (exists <= 0) r.fail(fmt::format("dataset '{}' is missing", name));
   H5O_info_t info{};
-  if (H5Oget_info_by_name(group, std::string(f.name).c_str(), &info, H5P_DEFAULT) < 0 || info.type != H5O_TYPE_DATASET)
+  if (H5Oget_info_by_name(group, d.name.c_str(), &info, H5P_DEFAULT) < 0 || info.type != H5O_TYPE_DATASET)
     r.fail(fmt::format("'{}' is not a dataset", name));
-  Handle dset(H5Dopen2(group, std::string(f.name).c_str(), H5P_DEFAULT), H5Dclose);
+  Handle dset(H5Dopen2(group, d.name.c_str(), H5P_DEFAULT), H5Dclose);
   if (!dset.ok()) r.fail_hdf5(fmt::format("dataset '{}' cannot be opened", name));
   Handle space(H5Dget_space(dset.get()), H5Sclose);
   if (!space.ok()) r.fail_hdf5(fmt::format("dataset '{}' cannot be read", name));
@@ -332,12 +351,13 @@ Handle open_field(const Reader& r, hid_t group, const FieldRef& f, hsize_t n, in
   if (!type.ok()) r.fail_hdf5(fmt::format("dataset '{}' cannot be read", name));
   const H5T_class_t cls = H5Tget_class(type.get());
   const std::size_t size = H5Tget_size(type.get());
-  const bool is_float = f.elem_size == 4 && f.name != "id";
+  const std::size_t elem_size = field_type_size(d.type);
+  const bool is_float = d.type == FieldType::F32;
   const bool type_ok = is_float ? (cls == H5T_FLOAT && size == 4)
-                                : (cls == H5T_INTEGER && size == f.elem_size && H5Tget_sign(type.get()) == H5T_SGN_NONE);
+                                : (cls == H5T_INTEGER && size == elem_size && H5Tget_sign(type.get()) == H5T_SGN_NONE);
   if (!type_ok)
     r.fail(fmt::format("dataset '{}' must hold {}", name,
-                       is_float ? "32-bit floats" : f.elem_size == 4 ? "unsigned 32-bit integers" : "unsigned 8-bit integers"));
+                       is_float ? "32-bit floats" : elem_size == 4 ? "unsigned 32-bit integers" : "unsigned 8-bit integers"));
   Handle dcpl(H5Dget_create_plist(dset.get()), H5Pclose);
   if (!dcpl.ok()) r.fail_hdf5(fmt::format("dataset '{}' cannot be read", name));
   const int filters = H5Pget_nfilters(dcpl.get());
@@ -349,12 +369,12 @@ Handle open_field(const Reader& r, hid_t group, const FieldRef& f, hsize_t n, in
     if (id == H5Z_FILTER_FLETCHER32) fletcher = true;
     else r.fail(fmt::format("dataset '{}' has a filter spate does not write (HDF5 filter {})", name, static_cast<int>(id)));
   }
-  if (format >= 2 && !fletcher) r.fail(fmt::format("dataset '{}' has no Fletcher32 checksum", name));
+  if (version >= kCheckedVersion && !fletcher) r.fail(fmt::format("dataset '{}' has no Fletcher32 checksum", name));
   // Every value must be in the file: a dataset whose storage was never written reads as zeros.
   const hsize_t storage = H5Dget_storage_size(dset.get());
-  if (storage < n * f.elem_size)
+  if (storage < n * elem_size)
     r.fail(fmt::format("dataset '{}' stores {} bytes, {} values of {} bytes need {} (a short or unwritten dataset)", name, storage, n,
-                       f.elem_size, n * f.elem_size));
+                       elem_size, n * elem_size));
   stored += storage;
   return dset;
 }
@@ -380,15 +400,19 @@ std::string first_difference(const std::string& a, const std::string& b) {
   return "the particle sets differ";
 }
 
-// The values after reading: finite, kinds the case knows, ids unique and below the case's count,
+// The values after reading: finite, materials the case has, ids unique and below the case's count,
 // positions inside the domain (a position outside would index past the cell arrays).
-void check_values(const Reader& r, ParticleStore& p, const Case& c, const Lattice& L, std::int64_t generated) {
+void check_values(const Reader& r, ParticleStore& p, const std::vector<CheckpointDataset>& datasets, const Case& c, const Lattice& L,
+                  std::int64_t generated) {
   const std::size_t n = p.size();
-  for (auto& f : p.fields()) {
-    if (!f.checkpoint || f.elem_size != 4 || f.name == "id") continue;
-    const float* v = reinterpret_cast<const float*>(f.bytes());
+  auto fields = p.fields();
+  std::string material = "material";
+  for (const CheckpointDataset& d : datasets) {
+    if (fields[d.field].spec->member == "material") material = d.name;
+    if (d.type != FieldType::F32) continue;
+    const float* v = reinterpret_cast<const float*>(fields[d.field].bytes());
     for (std::size_t i = 0; i < n; ++i)
-      if (!std::isfinite(v[i])) r.fail(fmt::format("dataset 'particles/{}': value {} of particle {} is not finite", f.name, v[i], p.id[i]));
+      if (!std::isfinite(v[i])) r.fail(fmt::format("dataset 'particles/{}': value {} of particle {} is not finite", d.name, v[i], p.id[i]));
   }
   std::vector<std::uint32_t> ids(p.id.begin(), p.id.end());
   std::sort(ids.begin(), ids.end());
@@ -399,11 +423,11 @@ void check_values(const Reader& r, ParticleStore& p, const Case& c, const Lattic
   const std::size_t solids = c.solids.size();
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t id = p.id[i];
-    const std::uint8_t k = p.kind[i];
+    const std::uint8_t k = p.material[i];
     if (k != kFluid && k != kTankWall && !(k >= kSolidBase && static_cast<std::size_t>(k - kSolidBase) < solids))
-      r.fail(fmt::format("dataset 'particles/kind': particle {} has kind {}, which the case does not have (0 fluid, 1 tank wall, 2 to {} its "
-                         "{} solids)",
-                         id, static_cast<int>(k), 1 + solids, solids));
+      r.fail(fmt::format("dataset 'particles/{}': particle {} has material {}, which the case does not have (0 fluid, 1 tank wall, "
+                         "2 to {} its {} solids)",
+                         material, id, static_cast<int>(k), 1 + solids, solids));
     if (!(p.density[i] > 0)) r.fail(fmt::format("dataset 'particles/density': particle {} has density {}", id, p.density[i]));
     for (int a = 0; a < c.dim; ++a)
       if (position_fault(L, p.pos[a][i], a) != PositionFault::None)
@@ -425,10 +449,20 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
 
   // The header.
   const std::string format = H5Aexists(file.get(), "format") > 0 ? r.text(file.get(), "format") : std::string();
-  if (format != kFormat && format != kFormatV1)
-    r.fail(fmt::format("not a spate checkpoint (attribute 'format' is not '{}' or '{}')", kFormat, kFormatV1));
+  if (!format.starts_with(kFormatPrefix))
+    r.fail(fmt::format("not a spate checkpoint (attribute 'format' is not '{}<version>')", kFormatPrefix));
   CheckpointMeta meta;
-  meta.format = format == kFormat ? 2 : 1;
+  // The version: the integer attribute (from version 2), else the format string's number.
+  int version = 0;
+  if (H5Aexists(file.get(), "format_version") > 0) {
+    version = r.scalar<int>(file.get(), "format_version", H5T_INTEGER, H5T_NATIVE_INT);
+  } else {
+    const std::string number = format.substr(std::string_view(kFormatPrefix).size());
+    version = number == "1" ? 1 : 0;
+  }
+  if (format != format_name(version) || version < 1 || version > kCheckpointFormatVersion)
+    r.fail(fmt::format("checkpoint format '{}' (version {}); this spate reads versions 1 to {}", format, version, kCheckpointFormatVersion));
+  meta.format_version = version;
   meta.step = r.scalar<std::int64_t>(file.get(), "step", H5T_INTEGER, H5T_NATIVE_INT64);
   meta.time = r.scalar<double>(file.get(), "time", H5T_FLOAT, H5T_NATIVE_DOUBLE);
   meta.dt = r.scalar<double>(file.get(), "dt", H5T_FLOAT, H5T_NATIVE_DOUBLE);
@@ -436,7 +470,7 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
   meta.case_name = r.text(file.get(), "case_name");
   meta.case_yaml = r.text(file.get(), "case_yaml");
   meta.steering_log = r.text(file.get(), "steering_log", false);
-  if (meta.format >= 2) {
+  if (version >= kCheckedVersion) {
     meta.removed = r.scalar<std::int64_t>(file.get(), "removed_particles", H5T_INTEGER, H5T_NATIVE_INT64);
     meta.geometry_hash = r.text(file.get(), "geometry_hash");
   }
@@ -445,7 +479,7 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
   if (!std::isfinite(meta.time) || meta.time < 0) r.fail(fmt::format("attribute 'time' is {}, must be finite and >= 0", meta.time));
   if (!std::isfinite(meta.dt) || !(meta.dt > 0)) r.fail(fmt::format("attribute 'dt' is {}, must be finite and > 0", meta.dt));
   if (meta.removed < 0) r.fail(fmt::format("attribute 'removed_particles' is {}, must be >= 0", meta.removed));
-  if (meta.format >= 2 && r.text(file.get(), "header_checksum") != header_checksum(meta, dim))
+  if (version >= kCheckedVersion && r.text(file.get(), "header_checksum") != header_checksum(meta, dim))
     r.fail("attribute 'header_checksum' does not match the header: the file is damaged");
 
   // The case it ran, as every case is checked, and the particle set it generates.
@@ -456,11 +490,11 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
     r.fail(std::string("attribute 'case_yaml' is not a valid case: ") + e.what());
   }
   if (own.dim != dim) r.fail(fmt::format("attribute 'dimensions' is {}, its case is {}D", dim, own.dim));
-  if (meta.format >= 2 && meta.geometry_hash != geometry_hash(own))
+  if (version >= kCheckedVersion && meta.geometry_hash != geometry_hash(own))
     r.fail("attribute 'geometry_hash' does not belong to attribute 'case_yaml': the file is damaged");
   if (run_case) {
     if (run_case->dim != dim) r.fail(fmt::format("the checkpoint holds a {}D case ('{}'), {} is {}D", dim, own.name, run_case->file, run_case->dim));
-    if (meta.format >= 2 && meta.geometry_hash != geometry_hash(*run_case))
+    if (version >= kCheckedVersion && meta.geometry_hash != geometry_hash(*run_case))
       r.fail(fmt::format("the checkpoint holds case '{}' with another particle set than {} ({}); restart with the case that wrote it",
                          own.name, run_case->file, first_difference(geometry_signature(own), geometry_signature(*run_case))));
   }
@@ -495,16 +529,12 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
   if (static_cast<std::int64_t>(n) + meta.removed != generated.total() || meta.removed > generated.fluid)
     r.fail(fmt::format("the checkpoint holds {} particles and records {} removed, but {} generates {} ({} fluid)", n, meta.removed,
                        run_case ? run_case->file : "its case", generated.total(), generated.fluid));
-  ParticleStore layout(dim);
+  // The datasets the field registry declares for this version (a dataset the registry does not
+  // know is ignored).
+  const std::vector<CheckpointDataset> expected = checkpoint_datasets(dim, version);
   std::vector<Handle> datasets;
-  std::vector<std::size_t> which;
   hsize_t stored = 0;
-  const auto expected = layout.fields();
-  for (std::size_t k = 0; k < expected.size(); ++k) {
-    if (!expected[k].checkpoint) continue;
-    datasets.push_back(open_field(r, group.get(), expected[k], n, meta.format, stored));
-    which.push_back(k);
-  }
+  for (const CheckpointDataset& d : expected) datasets.push_back(open_field(r, group.get(), d, n, version, stored));
   hsize_t file_size = 0;
   if (H5Fget_filesize(file.get(), &file_size) < 0 || stored > file_size)
     r.fail(fmt::format("the datasets claim {} bytes of a file of {} bytes (a truncated file)", stored, file_size));
@@ -517,13 +547,13 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
   particles = ParticleStore(dim);
   particles.resize(n);
   auto fields = particles.fields();
-  for (std::size_t d = 0; d < datasets.size(); ++d) {
-    const FieldRef& f = fields[which[d]];
-    if (n > 0 && H5Dread(datasets[d].get(), h5_type(f), H5S_ALL, H5S_ALL, H5P_DEFAULT, f.bytes()) < 0)
-      r.fail_hdf5(fmt::format("dataset 'particles/{}' cannot be read (damaged data)", f.name));
+  for (std::size_t k = 0; k < expected.size(); ++k) {
+    const CheckpointDataset& d = expected[k];
+    if (n > 0 && H5Dread(datasets[k].get(), h5_type(d.type), H5S_ALL, H5S_ALL, H5P_DEFAULT, fields[d.field].bytes()) < 0)
+      r.fail_hdf5(fmt::format("dataset 'particles/{}' cannot be read (damaged data)", d.name));
   }
   particles.set_owned(n);
-  check_values(r, particles, domain_case, make_lattice(domain_case), generated.total());
+  check_values(r, particles, expected, domain_case, make_lattice(domain_case), generated.total());
   return meta;
 }
 

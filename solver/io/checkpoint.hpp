@@ -7,7 +7,7 @@
 // A checkpoint is input like a case file, and is read as such (docs/cli.md, checkpoints): every
 // attribute and dataset is checked (type, rank, length, storage) before anything is allocated,
 // every dataset carries HDF5's Fletcher32 checksum and the header a checksum of its own, and the
-// values are checked after reading (finite, inside the domain, known kinds, ids unique and in
+// values are checked after reading (finite, inside the domain, known materials, ids unique and in
 // range); the case it embeds must be a valid case, and for a restart of the same geometry as the
 // run's case. Anything wrong is a CheckpointError naming the file, the attribute or dataset and
 // the reason.
@@ -16,11 +16,28 @@
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "../case/case.hpp"
 #include "../particles/particle_store.hpp"
 
 namespace spate {
+
+// Version 3: every dataset with HDF5's Fletcher32 checksum, a header checksum, the geometry hash of
+// the case and the count of particles removed through open sides. Version 2 (still read, without
+// those checks): the material index dataset is "material"; version 1 (also read), before the field
+// registry, called it "kind". The datasets themselves follow the field registry (every
+// kCheckpointed field, one dataset per component).
+constexpr int kCheckpointFormatVersion = 3;
+
+// One dataset under /particles: its name, element type and the field it fills (an index into
+// ParticleStore(dim).fields()). The reader checks a file against this list.
+struct CheckpointDataset {
+  std::string name;
+  FieldType type;
+  std::size_t field;
+};
+std::vector<CheckpointDataset> checkpoint_datasets(int dim, int version = kCheckpointFormatVersion);
 
 struct CheckpointMeta {
   std::int64_t step = 0;
@@ -30,8 +47,8 @@ struct CheckpointMeta {
   std::string case_yaml;    // the effective case (after --set)
   std::string steering_log; // accepted steering changes so far (may be empty)
   std::int64_t removed = 0;  // fluid particles removed through open sides before this step
-  std::string geometry_hash;  // geometry_hash() of the case (generator.hpp); empty in old files
-  int format = 2;             // the file's format version (1: before checksums and the hash)
+  std::string geometry_hash;  // geometry_hash() of the case (generator.hpp); empty before version 3
+  int format_version = kCheckpointFormatVersion;  // of the file read (writes use the current one)
 };
 
 struct CheckpointError : std::runtime_error {
@@ -41,8 +58,8 @@ struct CheckpointError : std::runtime_error {
 // `particles` must hold every particle, ordered by id. Write failures throw OutputError.
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, ParticleStore& particles);
 // The same file written one field at a time, so the particles never have to sit in one store:
-// fill(k, out) writes field k of ParticleStore(dim).fields() (asked only for checkpoint fields) of
-// all `count` particles, ordered by id, into out (count * elem_size bytes).
+// fill(k, out) writes field k of ParticleStore(dim).fields() (asked only for the datasets of
+// checkpoint_datasets) of all `count` particles, ordered by id, into out (count * elem_size bytes).
 using CheckpointFieldFill = std::function<void(std::size_t field, char* out)>;
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, int dim, std::size_t count,
                       const CheckpointFieldFill& fill);

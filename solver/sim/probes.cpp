@@ -37,7 +37,7 @@ ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const std::vector<float
   ShepardSums<Dim> s;
   w.grid().view().for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t j = b; j < e; ++j)
-      if (is_fluid(p.kind[j]))
+      if (is_fluid(p.material[j]))
         accumulate_shepard<Kernel, Dim>(w.params(), x, load_vec<Dim>(p.pos, j), p.density[j], field ? (*field)[j] : 0.0f, s);
   });
   return s;
@@ -68,31 +68,72 @@ std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at) {
   return v;
 }
 
-// The highest point of the gauge's vertical line where the fluid fill fraction reaches 0.5,
-// sampled every dp/4 from the tank floor; 0 when dry.
-double sample_height(SlabWorker& w, const Vec3d& gauge, const Case& c) {
+// Fill fraction (the Shepard weight sum) sampled every dp/4 up the gauge's vertical line, from the
+// tank floor to the top of the domain; the surface is where it crosses 0.5, placed by linear
+// interpolation between the two samples around the crossing, so that the height follows the
+// particles continuously (no dp/4 steps). `connected`: the top of the water standing on the floor
+// (the first crossing above the lowest wet sample, which must lie within the kernel support 2h of
+// the floor), so that spray, an overtopping jet or drops above it are ignored; otherwise the
+// highest crossing. 0 when dry.
+double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c) {
   const int v = c.dim - 1;
-  Vec3d at = gauge;
+  Vec3d at = gauge.position;
   at[v] = 0;
   if (!owns_point(w, at)) return kNaN;
   const double floor = c.tank_origin[v];
   const double top = w.lattice().upper(v) - 1e-6;
   const double step = c.dp / 4;
+  const int last = static_cast<int>(std::ceil((top - floor) / step));  // samples 0..last
+  auto z = [&](int k) { return std::min(floor + k * step, top); };
   double height = 0.0;
   dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
-    for (double z = floor; z < top; z += step) {
-      at[v] = z;
-      if (shepard<Kernel, Dim>(w, at, nullptr).weight >= 0.5) height = z - floor;
+    auto fill = [&](int k) {
+      at[v] = z(k);
+      return shepard<Kernel, Dim>(w, at, nullptr).weight;
+    };
+    // Sample k is wet, k + 1 dry: where the straight line between them crosses 0.5.
+    auto crossing = [&](int k, double wet, double dry) { return z(k) + (wet - 0.5) / (wet - dry) * (z(k + 1) - z(k)) - floor; };
+    if (gauge.connected) {
+      const int reach = std::min(last, static_cast<int>(std::ceil(2.0 * w.params().h / step)));
+      int k = 0;
+      double wk = fill(0);
+      while (wk < 0.5 && k < reach) wk = fill(++k);
+      if (wk < 0.5) return;  // dry at the floor
+      for (; k < last; ++k) {
+        const double next = fill(k + 1);
+        if (next < 0.5) {
+          height = crossing(k, wk, next);
+          return;
+        }
+        wk = next;
+      }
+      height = z(last) - floor;
+      return;
+    }
+    double above = 0.0;
+    for (int k = last; k >= 0; --k) {
+      const double wk = fill(k);
+      if (wk >= 0.5) {
+        height = k == last ? z(last) - floor : crossing(k, wk, above);
+        return;
+      }
+      above = wk;
     }
   });
   return height;
 }
 
-double local_front(SlabWorker& w, int axis) {
+double front_level(const ProbeSpec& front, const Case& c) {
+  if (!(front.min_depth > 0)) return -std::numeric_limits<double>::infinity();
+  return c.tank_origin[c.dim - 1] + front.min_depth - 0.5 * c.dp;
+}
+
+double local_front(SlabWorker& w, int axis, double lowest) {
   const ParticleStore& p = w.particles();
+  const int v = p.dim() - 1;
   double front = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < p.owned(); ++i)
-    if (is_fluid(p.kind[i])) front = std::max(front, static_cast<double>(p.pos[axis][i]));
+    if (is_fluid(p.material[i]) && p.pos[v][i] >= lowest) front = std::max(front, static_cast<double>(p.pos[axis][i]));
   return front;
 }
 
@@ -109,12 +150,12 @@ Bytes solid_force_records(SlabWorker& w, std::uint8_t kind) {
       int g[3];
       grid.global_coords(c, g);
       for (std::uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
-        if (p.kind[i] != kind) continue;
+        if (p.material[i] != kind) continue;
         const auto wi = load_state<Dim>(p, i);
         Vec<Dim> f = zero_vec<Dim>();
         view.for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
           for (std::uint32_t j = b; j < e; ++j)
-            if (is_fluid(p.kind[j])) f += wall_pressure_force<Kernel, Dim>(w.params(), wi, load_state<Dim>(p, j));
+            if (is_fluid(p.material[j])) f += wall_pressure_force<Kernel, Dim>(w.params(), wi, load_state<Dim>(p, j));
         });
         float rec[4] = {0, 0, 0, 0};
         std::memcpy(&rec[0], &p.id[i], sizeof(float));
@@ -149,19 +190,29 @@ std::vector<double> sum_by_id(const std::vector<Bytes>& parts) {
 
 }  // namespace
 
-namespace {
-
-std::string csv_header(const ProbeSpec& p, int dim) {
-  std::string h = "time,step,";
+std::vector<std::string> probe_columns(const ProbeSpec& p, int dim) {
+  const char* axes[3] = {"x", "y", "z"};
+  std::vector<std::string> columns;
+  auto components = [&](const char* prefix, const char* unit) {
+    for (int k = 0; k < dim; ++k) columns.push_back(std::string(prefix) + axes[k] + "[" + unit + "]");
+  };
   switch (p.type) {
-    case ProbeType::Pressure: return h + "pressure\n";
-    case ProbeType::Velocity: return h + (dim == 2 ? "vx,vy\n" : "vx,vy,vz\n");
-    case ProbeType::Height: return h + "height\n";
-    case ProbeType::Force: return h + (dim == 2 ? "fx,fy\n" : "fx,fy,fz\n");
-    case ProbeType::Front: return h + "front\n";
+    case ProbeType::Pressure: columns.push_back("pressure[Pa]"); break;
+    case ProbeType::Velocity: components("v", "m/s"); break;
+    case ProbeType::Height: columns.push_back("height[m]"); break;
+    case ProbeType::Force: components("f", dim == 2 ? "N/m" : "N"); break;  // 2D: per metre of depth
+    case ProbeType::Front: columns.push_back("front[m]"); break;
   }
-  return h + "\n";
+  return columns;
 }
+
+std::string probe_header(const ProbeSpec& p, int dim) {
+  std::string header = "time[s],step";
+  for (auto& c : probe_columns(p, dim)) header += "," + c;
+  return header;
+}
+
+namespace {
 
 // The rows of an existing probe file up to `step` (whole lines only; a torn last line is dropped),
 // or just the header when the file is missing or is not one of ours.
@@ -192,7 +243,7 @@ ProbeSet::ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool wri
   for (auto& p : probes_) {
     // Probe names are plain file names (checked by the case loader).
     const auto path = dir / (p.name + ".csv");
-    const std::string header = csv_header(p, c.dim);
+    const std::string header = probe_header(p, c.dim) + "\n";
     write_file_atomically(path, resume_step ? rows_up_to(path, header, *resume_step) : header);
     files_.emplace_back(path, false);
   }
@@ -210,7 +261,7 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
         // Exactly one slab owns the point and has numbers; the others send NaN.
         std::vector<double> mine;
         if (p.type == ProbeType::Velocity) mine = sample_velocity(w, p.position);
-        else mine.push_back(p.type == ProbeType::Pressure ? sample_pressure(w, p.position) : sample_height(w, p.position, case_));
+        else mine.push_back(p.type == ProbeType::Pressure ? sample_pressure(w, p.position) : sample_height(w, p, case_));
         Bytes b(mine.size() * sizeof(double));
         std::memcpy(b.data(), mine.data(), b.size());
         row.assign(mine.size(), 0.0);
@@ -229,7 +280,7 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
         row.resize(case_.dim);
         break;
       }
-      case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis))); break;
+      case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis, front_level(p, case_)))); break;
     }
     rows.push_back(row);
   }

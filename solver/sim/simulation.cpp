@@ -13,6 +13,7 @@
 #include <cstring>
 #include <exception>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <mutex>
 #include <numeric>
 #include <fstream>
@@ -197,27 +198,12 @@ GatheredParticles gather_to_writer(SlabWorker& w, const std::vector<SlabWorker*>
   return g;
 }
 
-SlabView slab_view(SlabWorker& w, int slab, int slab_count) {
-  ParticleStore& p = w.particles();
-  SlabView v;
-  v.slab = slab;
-  v.slab_count = slab_count;
-  v.dim = p.dim();
-  v.owned = p.owned();
-  for (int k = 0; k < p.dim(); ++k) {
-    v.pos[k] = p.pos[k].data();
-    v.vel[k] = p.vel[k].data();
-  }
-  v.pressure = p.pressure.data();
-  v.density = p.density.data();
-  v.id = p.id.data();
-  v.kind = p.kind.data();
-  return v;
-}
-
+// The progress line: on a terminal one line rewritten in place every second; otherwise (a log
+// file) an info message every 5 s, timestamped by the log.
 class Progress {
  public:
-  Progress(bool enabled, std::int64_t particles) : enabled_(enabled), particles_(particles), tty_(isatty(STDOUT_FILENO)) {}
+  Progress(bool enabled, std::int64_t particles)
+      : enabled_(enabled && spdlog::should_log(spdlog::level::info)), particles_(particles), tty_(isatty(STDOUT_FILENO)) {}
   void update(std::int64_t steps, double time, double end_time, double start_time, std::int64_t removed = 0, bool force = false) {
     if (!enabled_) return;
     const auto now = Clock::now();
@@ -231,10 +217,13 @@ class Progress {
     std::string line = fmt::format("t = {:.5f} s  step {}  {:.2f} steps/s  {:.3g} particle-steps/s  ETA {:.0f} s", time, steps,
                                    sps, sps * particles_, eta);
     if (removed > 0) line += fmt::format("  removed {}", removed);
-    if (tty_) std::printf("\r%s   ", line.c_str());
-    else std::printf("%s\n", line.c_str());
-    std::fflush(stdout);
-    wrote_tty_ = tty_;
+    if (tty_) {
+      std::printf("\r%s   ", line.c_str());
+      std::fflush(stdout);
+      wrote_tty_ = true;
+    } else {
+      spdlog::info("{}", line);
+    }
   }
   void finish() {
     if (enabled_ && wrote_tty_) std::printf("\n");
@@ -356,8 +345,7 @@ class Worker {
         change.step = step;
         change.time = time;
         if (auto why = validate(change, s_.c.dim)) {
-          if (writer) std::fprintf(stderr, "spate: steering: rejected %s at step %lld: %s\n", change.name.c_str(),
-                                   static_cast<long long>(step), why->c_str());
+          if (writer) spdlog::warn("steering: rejected {} at step {}: {}", change.name, step, *why);
           if (writer) ++s_.result.steering_rejected;
           continue;
         }
@@ -367,7 +355,7 @@ class Worker {
           s_.steering_history.push_back(change);
           ++s_.result.steering_accepted;
           steering_log.append(to_log_line(change) + "\n");
-          if (!s_.opts.quiet) std::printf("\nspate: steering: %s applied from step %lld\n", to_log_line(change).c_str(), static_cast<long long>(step + 1));
+          spdlog::info("steering: {} applied from step {}", to_log_line(change), step + 1);
         }
       }
       w_.set_params(params);
@@ -516,10 +504,10 @@ class Worker {
     std::string list;
     for (std::size_t k = 0; k < ids.size() && k < 5; ++k) list += (k ? ", " : "") + std::to_string(ids[k]);
     if (ids.size() > 5) list += ", ...";
-    std::fprintf(stderr, "%sspate: warning: step %lld, t = %.6g s: %zu fluid particle%s left the domain through its open sides "
-                         "and %s removed (id%s %s); %lld removed so far (%.3g %% of the fluid, tank.max_removed_fraction %g)\n",
-                 s_.opts.quiet ? "" : "\n", static_cast<long long>(step), time, ids.size(), ids.size() == 1 ? "" : "s",
-                 ids.size() == 1 ? "was" : "were", ids.size() == 1 ? "" : "s", list.c_str(), static_cast<long long>(total),
+    const bool one = ids.size() == 1;
+    spdlog::warn("step {}, t = {:.6g} s: {} fluid particle{} left the domain through its open sides and {} removed (id{} {}); {} "
+                 "removed so far ({:.3g} % of the fluid, tank.max_removed_fraction {})",
+                 step, time, ids.size(), one ? "" : "s", one ? "was" : "were", one ? "" : "s", list, total,
                  100.0 * static_cast<double>(total) / static_cast<double>(std::max<std::int64_t>(1, s_.result.particles.fluid)),
                  s_.c.max_removed_fraction);
   }
@@ -535,7 +523,7 @@ class Worker {
     if (first != s_.workers.end() && *first == &w_) {
       std::vector<SlabView> views;
       for (std::size_t k = 0; k < s_.workers.size(); ++k)
-        if (s_.workers[k]) views.push_back(slab_view(*s_.workers[k], s_.workers_first_slab + static_cast<int>(k), t_.slab_count()));
+        if (s_.workers[k]) views.push_back(slab_view(s_.workers[k]->particles(), s_.workers_first_slab + static_cast<int>(k), t_.slab_count()));
       sink->execute(step, time, views);
     }
     t_.barrier();
@@ -562,6 +550,7 @@ class Worker {
     for (int s = 0; s < t_.slab_count(); ++s) pieces.push_back(step_name(step) + "/slab_" + std::to_string(s) + ".vtp");
     write_vtm(dir / (step_name(step) + ".vtm"), pieces);
     if (index) pvd.add(time, folder + "/" + step_name(step) + ".vtm");
+    spdlog::debug("snapshot of step {} (t = {:.6g} s): {}", step, time, (dir / (step_name(step) + ".vtm")).string());
   }
 
   std::filesystem::path write_checkpoint_now(double time, std::int64_t step, double dt, std::int64_t removed) {
@@ -585,6 +574,7 @@ class Worker {
         const std::size_t size = fields[0][k].elem_size;
         for (const auto& e : all.by_id) std::memcpy(out, fields[e.slab][k].bytes() + e.index * size, size), out += size;
       });
+      spdlog::debug("checkpoint of step {} (t = {:.6g} s): {}", step, time, path.string());
       prune_checkpoints(path);
     }
     t_.barrier();
@@ -601,7 +591,7 @@ class Worker {
       // An old checkpoint that cannot be removed costs space, not results: said, not fatal.
       std::error_code ec;
       std::filesystem::remove(written_.front(), ec);
-      if (ec) std::fprintf(stderr, "spate: warning: %s: cannot remove an old checkpoint: %s\n", written_.front().c_str(), ec.message().c_str());
+      if (ec) spdlog::warn("{}: cannot remove an old checkpoint: {}", written_.front().string(), ec.message());
       written_.erase(written_.begin());
     }
   }

@@ -327,6 +327,13 @@ def compare_checkpoints(env):
     check(p.returncode == 0, f"within a huge tolerance: exit {p.returncode}")
     p = env.run("compare", runs["a"], runs["b"], "--tolerance", "-1")
     check(p.returncode == 2 and "--tolerance -1" in p.stderr, f"negative tolerance: exit {p.returncode}")
+    # Tolerances as fractions of each field's scale (dp, c0, rho0, ...; material exact), printed per field.
+    p = env.run("compare", runs["a"], runs["c"], "--scaled-tolerance", "1e-12")
+    check(p.returncode == 1 and "DIFFERENT" in p.stdout, f"one step apart, scaled 1e-12: exit {p.returncode}")
+    p = env.run("compare", runs["a"], runs["c"], "--scaled-tolerance", "10")
+    check(p.returncode == 0 and re.search(r"^material\s+0\s+\d+\s+0$", p.stdout, re.M), f"scaled 10: exit {p.returncode}\n{p.stdout}")
+    p = env.run("compare", runs["a"], runs["b"], "--scaled-tolerance", "-1")
+    check(p.returncode == 2 and "--scaled-tolerance -1" in p.stderr, f"negative scaled tolerance: exit {p.returncode}")
     p = env.run("compare", runs["a"], env.path("missing.h5"))
     check(p.returncode == 2 and "missing.h5" in p.stderr, f"missing checkpoint: exit {p.returncode}")
     not_h5 = env.write_case("not_a_checkpoint.yaml", "x: 1\n")
@@ -420,7 +427,8 @@ def unstable_kinds(env):
         check(any(n.endswith(".vtm") for n in os.listdir(os.path.join(out, "diagnostic"))), "no diagnostic snapshot")
 
 
-def main():
+def main(tests=TESTS):
+    """The command line of a test driver: this file's tests, or another driver's (post_tests.py)."""
     ap = argparse.ArgumentParser()
     ap.add_argument("--spate", required=True)
     ap.add_argument("--cases", required=True, help="tests/cases")
@@ -430,15 +438,15 @@ def main():
     ap.add_argument("names", nargs="*")
     args = ap.parse_args()
     if args.list:
-        print("\n".join(TESTS))
+        print("\n".join(tests))
         return 0
     failed = []
-    for name in args.names or list(TESTS):
-        if name not in TESTS:
+    for name in args.names or list(tests):
+        if name not in tests:
             print(f"unknown test {name}")
             return 2
         try:
-            TESTS[name](Env(args, name))
+            tests[name](Env(args, name))
             print(f"PASS {name}")
         except (Failure, subprocess.TimeoutExpired, json.JSONDecodeError) as e:
             print(f"FAIL {name}: {e}")

@@ -12,7 +12,7 @@ import struct
 import h5py
 import numpy as np
 
-FORMAT = "spate-checkpoint-2"
+FORMAT = "spate-checkpoint-3"
 
 
 def fnv1a64(data):
@@ -88,9 +88,11 @@ def flip_byte(path, offset, mask=0x10):
 
 
 def to_legacy_format(f):
-    """Format 1 as spate wrote it before the checksums: no removed count, hash or checksum, plain
-    contiguous datasets."""
-    set_text(f, "format", "spate-checkpoint-1")
+    """Format 2 as spate wrote it before the checksums (after the field registry): no removed count,
+    hash or checksum, plain contiguous datasets."""
+    set_text(f, "format", "spate-checkpoint-2")
+    del f.attrs["format_version"]
+    f.attrs["format_version"] = np.int32(2)
     for name in ("removed_particles", "geometry_hash", "header_checksum"):
         del f.attrs[name]
     for name in list(f["particles"].keys()):

@@ -12,6 +12,7 @@ import argparse
 import concurrent.futures
 import os
 import random
+import re
 import resource
 import shutil
 import subprocess
@@ -154,7 +155,7 @@ def verdict(code, stderr):
         return f"exit {code}"
     if "HDF5-DIAG" in stderr:
         return "HDF5 printed its own diagnostics"
-    if code == 2 and not stderr.strip().startswith("spate: error:"):
+    if code == 2 and not re.match(r"^(\d{4}-\d\d-\d\dT[\d:.]+Z )?spate: error: ", stderr.strip()):
         return "exit 2 without a 'spate: error:' message"
     return None
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "../source_dir.hpp"
 #include "case/case.hpp"
 
 namespace spate {
@@ -192,7 +193,7 @@ TEST(CaseLoader, SetAutoRestoresAdaptiveValues) {
 
 TEST(CaseLoader, LoadCaseReadsShippedCases) {
   for (const char* name : {"dam_break_2d.yaml", "dam_break_column_3d.yaml"}) {
-    const Case c = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/" + name);
+    const Case c = load_case(test::source_dir() + "/cases/" + name);
     EXPECT_FALSE(c.name.empty()) << name;
     EXPECT_FALSE(c.fluid_blocks.empty()) << name;
   }
