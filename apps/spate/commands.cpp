@@ -451,8 +451,19 @@ int bench_command(const BenchArgs& a) {
   o.devices = a.devices;
   o.backend = a.backend;
   o.quiet = true;
-  const RunResult r = Simulation(c, o).run();
-  std::filesystem::remove_all(o.out_dir);
+  RunResult r;
+  try {
+    r = Simulation(c, o).run();
+  } catch (const InputError& e) {
+    throw BadInput(e.what());
+  }
+  std::error_code ec;
+  std::filesystem::remove_all(o.out_dir, ec);
+  // A run that did not get through its steps has no rates to report.
+  if (r.exit_code != 0) {
+    if (process_group().rank == 0) spdlog::error("{}", r.message);
+    return r.exit_code;
+  }
   if (process_group().rank != 0) return 0;
   // Rates from the time loop alone: the final checkpoint every run writes is not stepping.
   const double seconds = r.stepping_seconds > 0 ? r.stepping_seconds : r.wall_seconds;

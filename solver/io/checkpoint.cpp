@@ -328,6 +328,14 @@ class Reader {
   std::string file_;
 };
 
+// A checkpoint's objects are its own: a link to another file (external) or to another path (soft)
+// is refused, so that reading it reads nothing else.
+void require_hard_link(const Reader& r, hid_t loc, const char* link, const std::string& what) {
+  H5L_info_t info{};
+  if (H5Lget_info(loc, link, &info, H5P_DEFAULT) < 0 || info.type != H5L_TYPE_HARD)
+    r.fail(fmt::format("'{}' is a link to elsewhere, not part of the file", what));
+}
+
 // The dataset of a field, checked before anything is read: a one-dimensional array of `n` values of
 // the field's type, with the Fletcher32 checksum (from version 3) and no other filter, its data all
 // stored in the file. Returns the open dataset and adds its storage to `stored`.
@@ -335,6 +343,7 @@ Handle open_field(const Reader& r, hid_t group, const CheckpointDataset& d, hsiz
   const std::string name = "particles/" + d.name;
   const htri_t exists = H5Lexists(group, d.name.c_str(), H5P_DEFAULT);
   if (exists <= 0) r.fail(fmt::format("dataset '{}' is missing", name));
+  require_hard_link(r, group, d.name.c_str(), name);
   H5O_info_t info{};
   if (H5Oget_info_by_name(group, d.name.c_str(), &info, H5P_DEFAULT) < 0 || info.type != H5O_TYPE_DATASET)
     r.fail(fmt::format("'{}' is not a dataset", name));
@@ -360,6 +369,10 @@ Handle open_field(const Reader& r, hid_t group, const CheckpointDataset& d, hsiz
                        is_float ? "32-bit floats" : elem_size == 4 ? "unsigned 32-bit integers" : "unsigned 8-bit integers"));
   Handle dcpl(H5Dget_create_plist(dset.get()), H5Pclose);
   if (!dcpl.ok()) r.fail_hdf5(fmt::format("dataset '{}' cannot be read", name));
+  // Its data in this file: no external raw files, no virtual dataset mapping other files.
+  const H5D_layout_t layout = H5Pget_layout(dcpl.get());
+  if ((layout != H5D_CONTIGUOUS && layout != H5D_CHUNKED && layout != H5D_COMPACT) || H5Pget_external_count(dcpl.get()) != 0)
+    r.fail(fmt::format("dataset '{}' keeps its data outside the file (external or virtual storage)", name));
   const int filters = H5Pget_nfilters(dcpl.get());
   bool fletcher = false;
   for (int k = 0; k < filters; ++k) {
@@ -512,14 +525,16 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
 
   // The datasets, before anything is allocated.
   H5O_info_t info{};
-  if (H5Lexists(file.get(), "particles", H5P_DEFAULT) <= 0 || H5Oget_info_by_name(file.get(), "particles", &info, H5P_DEFAULT) < 0 ||
-      info.type != H5O_TYPE_GROUP)
-    r.fail("group 'particles' is missing");
+  if (H5Lexists(file.get(), "particles", H5P_DEFAULT) <= 0) r.fail("group 'particles' is missing");
+  require_hard_link(r, file.get(), "particles", "particles");
+  if (H5Oget_info_by_name(file.get(), "particles", &info, H5P_DEFAULT) < 0 || info.type != H5O_TYPE_GROUP)
+    r.fail("'particles' is not a group");
   Handle group(H5Gopen2(file.get(), "particles", H5P_DEFAULT), H5Gclose);
   if (!group.ok()) r.fail_hdf5("group 'particles' cannot be opened");
   hsize_t n = 0;
   {
     if (H5Lexists(group.get(), "id", H5P_DEFAULT) <= 0) r.fail("dataset 'particles/id' is missing");
+    require_hard_link(r, group.get(), "id", "particles/id");
     Handle ids(H5Dopen2(group.get(), "id", H5P_DEFAULT), H5Dclose);
     if (!ids.ok()) r.fail_hdf5("dataset 'particles/id' cannot be opened");
     Handle space(H5Dget_space(ids.get()), H5Sclose);

@@ -68,15 +68,16 @@ std::atomic<int> stop_signal{0};
 constexpr std::size_t kRemovedIdsKept = 10;  // removed ids named in summary.json
 
 // What every slab learns at the end of a step (one collective): the faulty particle with the
-// lowest id, the fluid removed through open sides (ids, increasing) and whether a stop was asked.
+// lowest id, the fluid removed through open sides (ids, increasing) and the signal that asked for
+// a stop (0: none; the largest number if several, so that every rank agrees).
 struct StepReport {
   std::optional<ParticleFault> fault;
   std::vector<std::uint32_t> removed;
-  bool stop = false;
+  int stop_signal = 0;
 };
 
 StepReport share_report(SlabTransport& t, const std::optional<ParticleFault>& fault, const std::vector<std::uint32_t>& removed,
-                        bool stop) {
+                        int stop) {
   Bytes mine;
   auto put = [&](const void* data, std::size_t size) {
     const char* c = static_cast<const char*>(data);
@@ -85,8 +86,10 @@ StepReport share_report(SlabTransport& t, const std::optional<ParticleFault>& fa
   const std::uint32_t id = fault ? fault->id : 0xffffffffu;
   const std::uint32_t text = fault ? static_cast<std::uint32_t>(fault->what.size()) : 0;
   const std::uint32_t count = static_cast<std::uint32_t>(removed.size());
-  const std::uint8_t flags = (fault ? 1 : 0) | (stop ? 2 : 0);
+  const std::uint8_t flags = fault ? 1 : 0;
+  const std::int32_t signal = stop;
   put(&flags, 1);
+  put(&signal, 4);
   put(&id, 4);
   put(&text, 4);
   if (fault) put(fault->what.data(), text);
@@ -101,8 +104,10 @@ StepReport share_report(SlabTransport& t, const std::optional<ParticleFault>& fa
       at += size;
     };
     std::uint8_t f = 0;
+    std::int32_t their_signal = 0;
     std::uint32_t their_id = 0, their_text = 0, their_count = 0;
     get(&f, 1);
+    get(&their_signal, 4);
     get(&their_id, 4);
     get(&their_text, 4);
     std::string what(their_text, '\0');
@@ -111,7 +116,7 @@ StepReport share_report(SlabTransport& t, const std::optional<ParticleFault>& fa
     const std::size_t first = r.removed.size();
     r.removed.resize(first + their_count);
     get(r.removed.data() + first, their_count * 4ul);
-    r.stop = r.stop || (f & 2);
+    r.stop_signal = std::max(r.stop_signal, static_cast<int>(their_signal));
     if ((f & 1) && (!r.fault || their_id < r.fault->id)) r.fault = ParticleFault{their_id, what};
   }
   std::sort(r.removed.begin(), r.removed.end());
@@ -397,7 +402,7 @@ class Worker {
       record_progress();
       const StepReport report =
           share_report(t_, w_.health(static_cast<float>(s_.c.density_min_ratio), static_cast<float>(s_.c.density_max_ratio)),
-                       w_.removed_ids(), stop_signal.load() != 0);
+                       w_.removed_ids(), stop_signal.load());
       if (!report.removed.empty()) {
         removed += static_cast<std::int64_t>(report.removed.size());
         if (reporter && s_.result.removed_first_ids.size() < kRemovedIdsKept)
@@ -429,7 +434,7 @@ class Worker {
         unstable = fmt::format("step {}, t = {:.6g} s: the time step collapsed to {}", step, time, dt);
         break;
       }
-      if (report.stop) interrupted = stop_signal.load();
+      interrupted = report.stop_signal;
       const bool last = interrupted || (s_.opts.steps ? taken >= *s_.opts.steps : time >= end_time - 1e-12);
       output(last);
       in_situ(step, time);  // before steering: the design applies steering after each in-situ step
