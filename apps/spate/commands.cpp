@@ -149,6 +149,10 @@ int run_command(const RunArgs& a) {
   if (a.devices < 1) throw BadInput(fmt::format("--devices {}: must be at least 1", a.devices));
   if (a.checkpoint_every && *a.checkpoint_every < 0)
     throw BadInput(fmt::format("--checkpoint-every {}: must be >= 0", *a.checkpoint_every));
+  if (a.checkpoint_keep_last && *a.checkpoint_keep_last < 0)
+    throw BadInput(fmt::format("--checkpoint-keep-last {}: must be >= 0 (0: keep all)", *a.checkpoint_keep_last));
+  if (a.checkpoint_keep_every && *a.checkpoint_keep_every < 0)
+    throw BadInput(fmt::format("--checkpoint-keep-every {}: must be >= 0 (0: none)", *a.checkpoint_keep_every));
 
   RunOptions o;
   o.out_dir = a.out.empty() ? std::filesystem::path("out") / c.name : std::filesystem::path(a.out);
@@ -158,6 +162,8 @@ int run_command(const RunArgs& a) {
   o.devices = a.devices;
   o.backend = a.backend;
   o.checkpoint_every = a.checkpoint_every;
+  o.checkpoint_keep_last = a.checkpoint_keep_last;
+  o.checkpoint_keep_every = a.checkpoint_keep_every;
   if (!a.restart.empty()) o.restart = a.restart;
   o.quiet = a.quiet;
   std::unique_ptr<SteeringReplay> replay;
@@ -183,8 +189,7 @@ int run_command(const RunArgs& a) {
     }
     co.every = insitu_every;
     co.working_dir = o.out_dir;
-    const PhysicsParams P = physics_params(c);
-    co.constants = {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.rho0}, {"particle_mass", P.mass}};
+    co.constants = case_constants(c);
     try {
       create_output_folder(o.out_dir);
     } catch (const OutputError& e) {
@@ -206,7 +211,7 @@ int run_command(const RunArgs& a) {
       // The case's own (double) values: they survive ParaView's state round trips unchanged, so an
       // untouched parameter never shows up as a change.
       for (int k = 0; k < 3; ++k) init.gravity[k] = k < c.dim ? c.gravity[k] : 0.0;
-      init.viscosity = c.viscosity;
+      init.viscosity = c.fluids[0].viscosity;
       init.artificial_viscosity = c.artificial_viscosity;
       init.insitu_every = insitu_every;
       // A restart continues steered (the checkpoint holds the accepted changes): show those values.
@@ -297,7 +302,9 @@ int info_command(const InfoArgs& a) {
   if (n.fluid == 0) throw BadInput(c.file + ": the case generates no fluid particles (check fluid_blocks, wet_bed and dp)");
   const PhysicsParams P = physics_params(c);
   const Lattice L = make_lattice(c);
-  const double dt = c.fixed_dt ? *c.fixed_dt : c.cfl * P.h / P.c0;
+  const FluidMaterial& fluid = P.materials.fluid[0];
+  const double dt = c.fixed_dt ? *c.fixed_dt : c.cfl * P.h / fluid.c0;
+  const std::vector<std::string> names = material_names(c);
   const std::size_t bpp = ParticleStore(c.dim).bytes_per_particle();
   const double memory = static_cast<double>(n.total()) * bpp;
   const MemoryEstimate run_memory = estimate_run_memory(c, process_group().ranks, process_group().ranks_on_node);
@@ -314,8 +321,23 @@ int info_command(const InfoArgs& a) {
     j["particles"] = {{"fluid", n.fluid}, {"wall", n.wall}, {"total", n.total()}};
     j["dp"] = c.dp;
     j["smoothing_length"] = P.h;
-    j["sound_speed"] = P.c0;
-    j["sound_speed_automatic"] = !c.sound_speed.has_value();
+    j["sound_speed"] = fluid.c0;
+    j["sound_speed_automatic"] = !c.fluids[0].sound_speed.has_value();
+    nlohmann::ordered_json materials = nlohmann::ordered_json::array();
+    for (int m = 0; m < P.materials.count; ++m) {
+      nlohmann::ordered_json e{{"index", m}, {"name", names[m]}, {"kind", P.is_fluid(m) ? "fluid" : m == P.materials.tank() ? "tank" : "solid"}};
+      if (P.is_fluid(m)) {
+        const FluidMaterial& f = P.materials.of(m);
+        e["rest_density"] = f.rho0;
+        e["particle_mass"] = f.mass;
+        e["viscosity"] = f.viscosity;
+        e["sound_speed"] = f.c0;
+        e["tait_exponent"] = f.gamma;
+        e["background_pressure"] = f.background_pressure;
+      }
+      materials.push_back(e);
+    }
+    j["materials"] = materials;
     j["dt"] = dt;
     j["dt_adaptive"] = !c.fixed_dt.has_value();
     j["cells"] = {L.cells[0], L.cells[1], L.cells[2]};
@@ -344,7 +366,17 @@ int info_command(const InfoArgs& a) {
     std::printf("particles       %lld fluid, %lld wall, %lld total\n", static_cast<long long>(n.fluid),
                 static_cast<long long>(n.wall), static_cast<long long>(n.total()));
     std::printf("resolution      dp = %g m, h = %g m (%.2f dp), support 2h\n", c.dp, P.h, c.smoothing_ratio);
-    std::printf("sound speed     c0 = %g m/s (%s)\n", P.c0, c.sound_speed ? "from the case" : "automatic: 10 sqrt(g H)");
+    std::printf("sound speed     c0 = %g m/s (%s)\n", fluid.c0, c.fluids[0].sound_speed ? "from the case" : "automatic: 10 sqrt(g H)");
+    std::printf("materials       %d (index: name, kind, properties)\n", static_cast<int>(P.materials.count));
+    for (int m = 0; m < P.materials.count; ++m) {
+      if (P.is_fluid(m)) {
+        const FluidMaterial& f = P.materials.of(m);
+        std::printf("  %-3d %-12s fluid: rho0 = %g kg/m3, mass = %g kg, mu = %g Pa s, c0 = %g m/s, gamma = %g, p_b = %g Pa\n", m,
+                    names[m].c_str(), f.rho0, f.mass, f.viscosity, f.c0, f.gamma, f.background_pressure);
+      } else {
+        std::printf("  %-3d %-12s %s\n", m, names[m].c_str(), m == P.materials.tank() ? "tank walls" : "solid");
+      }
+    }
     std::printf("time step       %g s (%s)\n", dt, c.fixed_dt ? "fixed" : "adaptive, initial CFL estimate");
     std::printf("cell lattice    %d x %d x %d\n", L.cells[0], L.cells[1], L.cells[2]);
     std::printf("memory          %zu bytes/particle, %.1f MiB for the particles (%s backend)\n", bpp, memory / 1048576.0,

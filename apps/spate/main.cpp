@@ -80,6 +80,9 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--devices", run.devices, "Device workers (x-slabs) in this process");
   run_cmd->add_option("--backend", run.backend, "cpu or cuda");
   run_cmd->add_option("--checkpoint-every", run.checkpoint_every, "Write a checkpoint every N steps");
+  run_cmd->add_option("--checkpoint-keep-last", run.checkpoint_keep_last, "Keep the newest K checkpoints (default 2; 0: all)");
+  run_cmd->add_option("--checkpoint-keep-every", run.checkpoint_keep_every,
+                      "Also keep for good every checkpoint at a multiple of N x --checkpoint-every steps");
   run_cmd->add_option("--restart", run.restart, "Continue from a checkpoint (HDF5)");
   run_cmd->add_flag("--quiet", run.quiet, "No progress output");
   run_cmd->add_option("--pipeline", run.pipelines, "ParaView Catalyst script (repeatable)");

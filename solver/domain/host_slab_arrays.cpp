@@ -1,6 +1,5 @@
 #include "host_slab_arrays.hpp"
 
-#include "../physics/params.hpp"
 
 #include <algorithm>
 #include <cstring>
@@ -169,7 +168,7 @@ std::vector<std::uint32_t> HostSlabArrays::remove_escaped(const OpenSides& open)
   for (std::size_t i = 0; i < store_.owned(); ++i) {
     float x[3] = {0, 0, 0};
     for (int a = 0; a < store_.dim(); ++a) x[a] = store_.pos[a][i];
-    if (is_fluid(store_.material[i]) && escaped(open, store_.dim(), x)) gone[i] = 1, ids.push_back(store_.id[i]);
+    if (escaped(open, store_.dim(), store_.material[i], x)) gone[i] = 1, ids.push_back(store_.id[i]);
   }
   if (ids.empty()) return ids;
   store_.remove_owned_if(gone);
@@ -193,10 +192,10 @@ std::uint32_t HostSlabArrays::find_unhealthy(const HealthLimits& h) {
   std::uint32_t lowest = kNoFault;
   const int d = store_.dim();
   for (std::size_t i = 0; i < store_.owned(); ++i) {
-    if (!is_fluid(store_.material[i])) continue;
+    if (!h.checked(store_.material[i])) continue;
     float x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
     for (int a = 0; a < d; ++a) x[a] = store_.pos[a][i], v[a] = store_.vel[a][i];
-    if (!healthy(h, state_finite(d, x, v, store_.density[i]), store_.density[i])) lowest = std::min(lowest, store_.id[i]);
+    if (!healthy(h, state_finite(d, x, v, store_.density[i]), store_.density[i], store_.material[i])) lowest = std::min(lowest, store_.id[i]);
   }
   return lowest;
 }

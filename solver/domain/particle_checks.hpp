@@ -7,6 +7,7 @@
 
 #include "../grid/lattice.hpp"
 #include "../physics/host_device.hpp"
+#include "../physics/params.hpp"
 
 namespace spate {
 
@@ -46,12 +47,13 @@ struct OpenSides {
   float top = 0.0f;      // the top of the tank walls
   float ceiling = 0.0f;  // top + headroom: the top of the domain
   float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};  // outer faces of the wall layers (periodic axes: +-infinity)
+  std::uint8_t fluids = 1;  // materials [0, fluids) are fluids (MaterialTable): only they leave
 };
 
-// A fluid particle above the walls that is past their outer faces, or above the ceiling: gone.
-// NaN coordinates compare false everywhere: they stay a fault.
-SPATE_HD bool escaped(const OpenSides& o, int dim, const float pos[3]) {
-  if (!o.open) return false;
+// A fluid particle (material) above the walls that is past their outer faces, or above the
+// ceiling: gone. NaN coordinates compare false everywhere: they stay a fault.
+SPATE_HD bool escaped(const OpenSides& o, int dim, std::uint8_t material, const float pos[3]) {
+  if (!o.open || material >= o.fluids) return false;
   const float z = pos[o.vertical];
   if (!(z > o.top)) return false;
   if (z > o.ceiling) return true;
@@ -60,19 +62,26 @@ SPATE_HD bool escaped(const OpenSides& o, int dim, const float pos[3]) {
   return false;
 }
 
-// The health check of a fluid particle: finite state and density within [min, max] x rho0.
+// The health check of a fluid particle: finite state and density within [min, max] x rho0 of its
+// material.
 struct HealthLimits {
-  float rho0 = 1000.0f;
   float min_ratio = 0.0f;
   float max_ratio = 1e30f;
+  std::uint8_t fluids = 1;         // materials [0, fluids) are fluids (the others are not checked)
+  float rho0[kMaxFluids] = {1000.0f};
+  HealthLimits() = default;
+  HealthLimits(const MaterialTable& m, float min, float max) : min_ratio(min), max_ratio(max), fluids(m.fluids) {
+    for (int k = 0; k < m.fluids; ++k) rho0[k] = m.fluid[k].rho0;
+  }
+  SPATE_HD bool checked(std::uint8_t material) const { return material < fluids; }
 };
 SPATE_HD bool state_finite(int dim, const float pos[3], const float vel[3], float density) {
   bool finite = finite_value(density);
   for (int a = 0; a < dim; ++a) finite = finite && finite_value(pos[a]) && finite_value(vel[a]);
   return finite;
 }
-SPATE_HD bool healthy(const HealthLimits& h, bool finite, float density) {
-  const float ratio = density / h.rho0;
+SPATE_HD bool healthy(const HealthLimits& h, bool finite, float density, std::uint8_t material) {
+  const float ratio = density / h.rho0[material];
   return finite && ratio >= h.min_ratio && ratio <= h.max_ratio;
 }
 

@@ -178,6 +178,58 @@ std::vector<CheckpointDataset> checkpoint_datasets(int dim, int version) {
   return out;
 }
 
+std::vector<CheckpointDataset> derived_datasets(int dim) {
+  std::vector<CheckpointDataset> out;
+  const auto fields = ParticleStore(dim).fields();
+  for (std::size_t k = 0; k < fields.size(); ++k)
+    if (fields[k].has(kExported) && !fields[k].has(kCheckpointed)) out.push_back(CheckpointDataset{std::string(fields[k].name), fields[k].spec->type, k});
+  return out;
+}
+
+std::filesystem::path xdmf_sidecar(const std::filesystem::path& checkpoint) {
+  std::filesystem::path p = checkpoint;
+  return p.replace_extension(".xmf2");
+}
+
+namespace {
+
+// The sidecar: one uniform grid of `count` vertices; geometry from the separate coordinate
+// datasets (X_Y_Z, X_Y), each exported vector joined from its component datasets. Extension .xmf2:
+// ParaView 5.11 then picks its XDMF (version 2) reader, which reads these files; for .xmf it
+// prefers the Xdmf3 reader, which does not.
+void write_xdmf(const std::filesystem::path& h5, const CheckpointMeta& meta, int dim, std::size_t count) {
+  const std::string file = h5.filename().string();
+  auto item = [&](const FieldRef& f) {
+    const char* type = f.spec->type == FieldType::F32 ? "Float" : f.spec->type == FieldType::U32 ? "UInt" : "UChar";
+    return fmt::format("<DataItem Dimensions=\"{}\" NumberType=\"{}\" Precision=\"{}\" Format=\"HDF\">{}:/particles/{}</DataItem>", count,
+                       type, f.elem_size, file, f.name);
+  };
+  std::string geometry, attributes;
+  ParticleStore layout(dim);
+  for (const ExportedField& e : exported_fields(layout)) {
+    std::string items;
+    for (const FieldRef& f : layout.fields())
+      if (f.spec == e.spec) items += "\n      " + item(f);
+    if (e.spec->member == "pos") {
+      geometry = fmt::format("    <Geometry GeometryType=\"{}\">{}\n    </Geometry>\n", dim == 3 ? "X_Y_Z" : "X_Y", items);
+      continue;
+    }
+    if (e.spec->shape == FieldShape::Vector)
+      items = fmt::format("\n      <DataItem ItemType=\"Function\" Function=\"JOIN({})\" Dimensions=\"{} {}\">{}\n      </DataItem>",
+                          dim == 3 ? "$0, $1, $2" : "$0, $1", count, dim, items);
+    attributes += fmt::format("    <Attribute Name=\"{}\" AttributeType=\"{}\" Center=\"Node\">{}\n    </Attribute>\n", e.spec->exported,
+                              e.spec->shape == FieldShape::Vector ? "Vector" : "Scalar", items);
+  }
+  const std::string text = fmt::format(
+      "<?xml version=\"1.0\" ?>\n<!-- The particles of {} (spate checkpoint, step {}) for ParaView's XDMF reader. -->\n"
+      "<Xdmf Version=\"2.0\">\n <Domain>\n  <Grid Name=\"particles\" GridType=\"Uniform\">\n    <Time Value=\"{:.17g}\"/>\n"
+      "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"{}\" NodesPerElement=\"1\"/>\n{}{}  </Grid>\n </Domain>\n</Xdmf>\n",
+      file, meta.step, meta.time, count, geometry, attributes);
+  write_file_atomically(xdmf_sidecar(h5), text);
+}
+
+}  // namespace
+
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, ParticleStore& particles) {
   auto fields = particles.fields();
   const std::size_t n = particles.owned();
@@ -226,7 +278,9 @@ void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& m
     const hsize_t n = count;
     const hsize_t chunk = std::max<hsize_t>(1, std::min(n, kChunk));
     std::vector<char> buffer;  // one field at a time
-    for (const CheckpointDataset& d : checkpoint_datasets(dim)) {
+    std::vector<CheckpointDataset> datasets = checkpoint_datasets(dim);
+    for (auto& d : derived_datasets(dim)) datasets.push_back(d);
+    for (const CheckpointDataset& d : datasets) {
       buffer.resize(count * field_type_size(d.type));
       if (count > 0) fill(d.field, buffer.data());
       Handle space = w.make(H5Screate_simple(1, &n, nullptr), H5Sclose, "creating a dataspace");
@@ -245,6 +299,7 @@ void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& m
   }
   publish_file(tmp, path);
   cleanup.published = true;
+  write_xdmf(path, meta, dim, count);
 }
 
 // ---- reading ------------------------------------------------------------------------------------
@@ -433,14 +488,14 @@ void check_values(const Reader& r, ParticleStore& p, const std::vector<Checkpoin
     r.fail(fmt::format("dataset 'particles/id': id {} appears twice", *twice));
   if (!ids.empty() && ids.back() >= generated)
     r.fail(fmt::format("dataset 'particles/id': id {} is out of range (the case generates {} particles)", ids.back(), generated));
-  const std::size_t solids = c.solids.size();
+  const MaterialTable M = physics_params(c).materials;
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t id = p.id[i];
     const std::uint8_t k = p.material[i];
-    if (k != kFluid && k != kTankWall && !(k >= kSolidBase && static_cast<std::size_t>(k - kSolidBase) < solids))
-      r.fail(fmt::format("dataset 'particles/{}': particle {} has material {}, which the case does not have (0 fluid, 1 tank wall, "
-                         "2 to {} its {} solids)",
-                         material, id, static_cast<int>(k), 1 + solids, solids));
+    if (k >= M.count)
+      r.fail(fmt::format("dataset 'particles/{}': particle {} has material {}, which the case does not have (0 to {} fluids, {} the "
+                         "tank, then its {} solids)",
+                         material, id, static_cast<int>(k), M.fluids - 1, M.tank(), c.solids.size()));
     if (!(p.density[i] > 0)) r.fail(fmt::format("dataset 'particles/density': particle {} has density {}", id, p.density[i]));
     for (int a = 0; a < c.dim; ++a)
       if (position_fault(L, p.pos[a][i], a) != PositionFault::None)
@@ -546,10 +601,20 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
                        run_case ? run_case->file : "its case", generated.total(), generated.fluid));
   // The datasets the field registry declares for this version (a dataset the registry does not
   // know is ignored).
-  const std::vector<CheckpointDataset> expected = checkpoint_datasets(dim, version);
+  std::vector<CheckpointDataset> expected = checkpoint_datasets(dim, version);
   std::vector<Handle> datasets;
   hsize_t stored = 0;
   for (const CheckpointDataset& d : expected) datasets.push_back(open_field(r, group.get(), d, n, version, stored));
+  // The derived fields as they were, checked the same way when there (older files: left zero).
+  meta.derived_saved = true;
+  for (const CheckpointDataset& d : derived_datasets(dim)) {
+    if (H5Lexists(group.get(), d.name.c_str(), H5P_DEFAULT) <= 0) {
+      meta.derived_saved = false;
+      continue;
+    }
+    datasets.push_back(open_field(r, group.get(), d, n, version, stored));
+    expected.push_back(d);
+  }
   hsize_t file_size = 0;
   if (H5Fget_filesize(file.get(), &file_size) < 0 || stored > file_size)
     r.fail(fmt::format("the datasets claim {} bytes of a file of {} bytes (a truncated file)", stored, file_size));

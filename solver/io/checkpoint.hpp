@@ -11,6 +11,11 @@
 // range); the case it embeds must be a valid case, and for a restart of the same geometry as the
 // run's case. Anything wrong is a CheckpointError naming the file, the attribute or dataset and
 // the reason.
+//
+// Beside the restart state a checkpoint holds the exported fields a restart recomputes (pressure),
+// as they were at that step, so that it shows exactly what a snapshot of the step would
+// (spate post evaluates probes on it), and an XDMF sidecar (<name>.xmf2, next to <name>.h5) that
+// ParaView's XDMF reader opens: the particles as vertices with every exported field.
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -38,6 +43,11 @@ struct CheckpointDataset {
   std::size_t field;
 };
 std::vector<CheckpointDataset> checkpoint_datasets(int dim, int version = kCheckpointFormatVersion);
+// The exported, not checkpointed fields (derived: a restart recomputes them), one dataset per
+// component. Written since format version 2; a file without them still restarts.
+std::vector<CheckpointDataset> derived_datasets(int dim);
+// The XDMF sidecar of a checkpoint file: checkpoint_step_N.h5 -> checkpoint_step_N.xmf2.
+std::filesystem::path xdmf_sidecar(const std::filesystem::path& checkpoint);
 
 struct CheckpointMeta {
   std::int64_t step = 0;
@@ -49,6 +59,7 @@ struct CheckpointMeta {
   std::int64_t removed = 0;  // fluid particles removed through open sides before this step
   std::string geometry_hash;  // geometry_hash() of the case (generator.hpp); empty before version 3
   int format_version = kCheckpointFormatVersion;  // of the file read (writes use the current one)
+  bool derived_saved = false;  // read: the file held the derived datasets (else they are zero)
 };
 
 struct CheckpointError : std::runtime_error {
@@ -59,7 +70,8 @@ struct CheckpointError : std::runtime_error {
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, ParticleStore& particles);
 // The same file written one field at a time, so the particles never have to sit in one store:
 // fill(k, out) writes field k of ParticleStore(dim).fields() (asked only for the datasets of
-// checkpoint_datasets) of all `count` particles, ordered by id, into out (count * elem_size bytes).
+// checkpoint_datasets and derived_datasets) of all `count` particles, ordered by id, into out
+// (count * elem_size bytes).
 using CheckpointFieldFill = std::function<void(std::size_t field, char* out)>;
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, int dim, std::size_t count,
                       const CheckpointFieldFill& fill);

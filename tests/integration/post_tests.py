@@ -119,5 +119,33 @@ def thin_feature_warning(env):
     check(p.returncode == 0 and "warning" not in p.stderr, "a case without thin features warns")
 
 
+# ---- checkpoints --------------------------------------------------------------------------------
+
+@test
+def checkpoint_retention(env):
+    """--checkpoint-keep-last K keeps the newest K, --checkpoint-keep-every N every Nth for good;
+    each checkpoint has its XDMF sidecar and loses it with it. The case keys do the same."""
+    out = env.path("out")
+    p = env.run("run", env.tiny, "--steps", "23", "--checkpoint-every", "2", "--checkpoint-keep-last", "3",
+                "--checkpoint-keep-every", "4", "--out", out, "--quiet")
+    check(p.returncode == 0, f"exit {p.returncode}")
+    kept = sorted(os.listdir(os.path.join(out, "checkpoints")))
+    steps = [8, 16, 20, 22, 23]  # every 4th of the checkpoints at 2, 4, ..., 22, the newest 3, the final one
+    expected = sorted([f"checkpoint_step_{s:08d}.h5" for s in steps] + [f"checkpoint_step_{s:08d}.xmf2" for s in steps])
+    check(kept == expected, f"kept {kept}, expected {expected}")
+    out = env.path("out_case")
+    p = env.run("run", env.tiny, "--steps", "7", "--set", "output.checkpoint_every=1", "--set", "output.checkpoint_keep_last=0",
+                "--out", out, "--quiet")
+    check(p.returncode == 0 and len([f for f in os.listdir(os.path.join(out, "checkpoints")) if f.endswith(".h5")]) == 7,
+          "output.checkpoint_keep_last=0 does not keep every checkpoint")
+    out = env.path("out_default")
+    p = env.run("run", env.tiny, "--steps", "7", "--checkpoint-every", "1", "--out", out, "--quiet")
+    check(sorted(os.listdir(os.path.join(out, "checkpoints"))) ==
+          ["checkpoint_step_00000006.h5", "checkpoint_step_00000006.xmf2", "checkpoint_step_00000007.h5", "checkpoint_step_00000007.xmf2"],
+          "by default the two newest are kept")
+    p = env.run("run", env.tiny, "--steps", "1", "--checkpoint-keep-last", "-1", "--out", env.path("bad"), "--quiet")
+    check(p.returncode == 2 and "--checkpoint-keep-last" in p.stderr, "a negative --checkpoint-keep-last is not bad input")
+
+
 if __name__ == "__main__":
     sys.exit(main(TESTS))

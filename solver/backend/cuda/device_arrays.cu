@@ -172,7 +172,7 @@ __global__ void escaped_flag_kernel(DeviceFields d, int dim, OpenSides o, std::u
   if (i >= n) return;
   float x[3] = {0, 0, 0};
   for (int a = 0; a < dim; ++a) x[a] = d.pos[a][i];
-  flags[i] = is_fluid(d.material[i]) && escaped(o, dim, x) ? 1u : 0u;
+  flags[i] = escaped(o, dim, d.material[i], x) ? 1u : 0u;
 }
 
 // Per particle: its id if it is not below `bound`, else kNoFault.
@@ -186,7 +186,7 @@ __global__ void health_kernel(DeviceFields d, int dim, HealthLimits h, std::uint
   if (i >= n) return;
   float x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
   for (int a = 0; a < dim; ++a) x[a] = d.pos[a][i], v[a] = d.vel[a][i];
-  const bool ok = !is_fluid(d.material[i]) || healthy(h, state_finite(dim, x, v, d.density[i]), d.density[i]);
+  const bool ok = !h.checked(d.material[i]) || healthy(h, state_finite(dim, x, v, d.density[i]), d.density[i], d.material[i]);
   out[i] = ok ? kNone : d.id[i];
 }
 
