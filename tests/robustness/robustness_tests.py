@@ -575,6 +575,26 @@ def zero_and_tiny_intervals(env):
     r = env.run("run", env.tiny, "--set", "time.dt=1e-300", "--set", "time.end=1", "--out", env.path("stuck"), "--quiet",
                 timeout=60)
     check(r.returncode in (2, 3), f"a time step that cannot advance t: exit {r.returncode}")
+    # The step-count intervals at 0 mean what docs/cases.md says: no snapshots (output.interval),
+    # only the final checkpoint (checkpoint_every), no balancing pass (balance_every).
+    out = env.path("zeros")
+    r = env.run("run", env.tiny, "--set", "output.interval=0", "--set", "output.checkpoint_every=0",
+                "--set", "decomposition.balance_every=0", "--devices", "2", "--steps", "5", "--out", out, "--quiet", timeout=60)
+    check(r.returncode == 0, f"zero intervals: exit {r.returncode}")
+    snapshots = os.path.join(out, "snapshots")
+    check(not os.path.isdir(snapshots) or not any(f.endswith(".vtm") for f in os.listdir(snapshots)), "output.interval 0 wrote snapshots")
+    kept = sorted(os.listdir(os.path.join(out, "checkpoints")))
+    check([k for k in kept if k.endswith(".h5")] == ["checkpoint_step_00000005.h5"], f"checkpoint_every 0: {kept}")
+    check(summary(out)["imbalance_history"] == [], "balance_every 0 balanced")
+    # Intervals that cannot mean anything are bad input, never a loop: in-situ every 0 steps, a
+    # negative time interval, a steering change to a fractional in-situ interval.
+    expect_bad(env, [env.tiny, "--set", "output.interval=-1"], "'output.interval'", ">= 0")
+    expect_bad(env, [env.tiny, "--set", "output.probe_interval=-1e-300"], "'output.probe_interval'")
+    expect_bad(env, [env.tiny, "--set", "output.checkpoint_every=-1"], "'output.checkpoint_every'")
+    expect_bad(env, [env.tiny, "--set", "insitu.every=0"], "'insitu.every'", ">= 1")
+    expect_bad(env, [env.tiny, "--checkpoint-every", "-1"], "--checkpoint-every")
+    log = env.write("fraction.log", "1 0.0002 insitu_every 0.5\n")
+    expect_bad(env, [env.tiny, "--steering-log", log], "insitu_every")
 
 
 # ---- open sides -----------------------------------------------------------------------------------
