@@ -164,11 +164,15 @@ int run_command(const RunArgs& a) {
     const PhysicsParams P = physics_params(c);
     co.constants = {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.rho0}, {"particle_mass", P.mass}};
     std::filesystem::create_directories(o.out_dir);
-    // Started outside mpirun, ParaView initialises MPI itself, and OpenMPI's TCP transport would
-    // then listen on every interface (ports 1024 and up) for the whole run. One process needs only
-    // shared memory; with it the run opens no listening socket at all (docs/live.md, Security).
-    // An explicit OMPI_MCA_btl in the environment wins.
-    if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK")) ::setenv("OMPI_MCA_btl", "self,vader", 0);
+    // Started outside mpirun, ParaView initialises MPI itself: OpenMPI then starts a singleton
+    // `orted` daemon that listens on every interface, and its TCP transport would listen too (ports
+    // 1024 and up), for the whole run. One process needs neither: no daemon (it would only serve
+    // MPI_Comm_spawn) and shared memory only; with both the run opens no listening socket at all
+    // (docs/live.md, Security). Explicit settings in the environment win.
+    if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK")) {
+      ::setenv("OMPI_MCA_btl", "self,vader", 0);
+      ::setenv("OMPI_MCA_ess_singleton_isolated", "1", 0);
+    }
     try {
       insitu = std::make_unique<catalyst::CatalystSink>(co);
     } catch (const catalyst::InSituLoadError& e) {

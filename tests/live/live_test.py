@@ -15,7 +15,8 @@ out to it. The test checks, from the simulation's outputs:
      holding only ParaView's known disconnect messages;
   4. replaying steering.log (--steering-log) gives a bit-identical final checkpoint;
   5. with nobody listening, --live runs on normally (exit 0, same result as without --live);
-  6. the simulation never listens on a TCP port (sampled from /proc while it runs);
+  6. neither the simulation nor any child of it listens on a TCP or UDP port (sampled from /proc
+     while it runs);
   7. a bad --live address, or --live with --steering-log, is bad input (exit 2).
 
 Usage: live_test.py SPATE PVPYTHON SOURCE_DIR WORK_DIR
@@ -30,6 +31,9 @@ import socket
 import subprocess
 import sys
 import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "insitu"))
+from proc_sockets import listening  # noqa: E402
 
 spate, pvpython, src, work = sys.argv[1:5]
 case = os.path.join(src, "cases", "dam_break_2d.yaml")
@@ -90,43 +94,17 @@ def wait(p, seconds, what):
         fail(f"{what} still running after {seconds} s")
 
 
-def listening_ports(pid):
-    """TCP ports process `pid` listens on (from /proc: no tools needed)."""
-    inodes = set()
-    try:
-        for fd in os.listdir(f"/proc/{pid}/fd"):
-            try:
-                link = os.readlink(f"/proc/{pid}/fd/{fd}")
-            except OSError:
-                continue
-            if link.startswith("socket:["):
-                inodes.add(link[8:-1])
-    except OSError:
-        return set()
-    ports = set()
-    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
-        try:
-            rows = open(table).read().splitlines()[1:]
-        except OSError:
-            continue
-        for row in rows:
-            f = row.split()
-            if f[3] == "0A" and f[9] in inodes:  # 0A: LISTEN
-                ports.add(int(f[1].rsplit(":", 1)[1], 16))
-    return ports
-
-
 listened = {}
 
 
 def run(args, name, seconds=120):
     out = os.path.join(work, name)
     p = start([spate, "run", case, "--out", out] + common + args, out)
-    # Security: the simulation must never listen; sample its sockets while it runs.
+    # Security: neither the simulation nor any process it starts may listen; sample while it runs.
     deadline = time.time() + seconds
     ports = set()
     while p.poll() is None and time.time() < deadline:
-        ports |= listening_ports(p.pid)
+        ports |= listening(p.pid)
         time.sleep(0.05)
     listened[name] = ports
     code = wait(p, max(1, deadline - time.time()), f"spate run ({name})")
