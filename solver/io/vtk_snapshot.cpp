@@ -42,7 +42,7 @@ void write_atomically(const std::filesystem::path& path, const std::string& text
 void write_vtp_piece(const std::filesystem::path& path, ParticleStore& p, int slab) {
   const std::size_t n = p.owned();
   const int d = p.dim();
-  auto component = [&](std::vector<float>(&f)[3], int k) -> const float* { return k < d ? f[k].data() : nullptr; };
+  auto component = [&](ParticleArray<float>(&f)[3], int k) -> const float* { return k < d ? f[k].data() : nullptr; };
   std::vector<Array> point_data;
   point_data.push_back(make_array<float>("velocity", "Float32", 3, n, {component(p.vel, 0), component(p.vel, 1), component(p.vel, 2)}));
   point_data.push_back(make_array<float>("pressure", "Float32", 1, n, {p.pressure.data()}));

@@ -12,14 +12,14 @@ namespace spate {
 namespace {
 template <class T>
 void resize_vector(void* v, std::size_t n) {
-  static_cast<std::vector<T>*>(v)->resize(n);
+  static_cast<ParticleArray<T>*>(v)->resize(n);
 }
 template <class T>
 char* vector_storage(void* v) {
-  return reinterpret_cast<char*>(static_cast<std::vector<T>*>(v)->data());
+  return reinterpret_cast<char*>(static_cast<ParticleArray<T>*>(v)->data());
 }
 template <class T>
-FieldRef ref(std::string_view name, std::vector<T>& v, bool ghost, bool checkpoint) {
+FieldRef ref(std::string_view name, ParticleArray<T>& v, bool ghost, bool checkpoint) {
   return FieldRef{name, &v, sizeof(T), ghost, checkpoint, &resize_vector<T>, &vector_storage<T>};
 }
 // Reorders only the runs of slots whose particle changes (perm[k] != k): between two steps walls
@@ -28,7 +28,7 @@ FieldRef ref(std::string_view name, std::vector<T>& v, bool ghost, bool checkpoi
 // runs before writing any back is a complete permutation. One 32-bit scratch word per particle
 // serves every field type (bit copies), so the scratch costs 4 bytes per particle.
 template <class T>
-void permute_runs(std::vector<T>& v, std::size_t first, std::span<const std::uint32_t> perm,
+void permute_runs(ParticleArray<T>& v, std::size_t first, std::span<const std::uint32_t> perm,
                   const std::vector<std::pair<std::uint32_t, std::uint32_t>>& runs, std::vector<std::uint32_t>& scratch) {
   static_assert(sizeof(T) <= sizeof(std::uint32_t) && std::is_trivially_copyable_v<T>);
   if (v.empty()) return;

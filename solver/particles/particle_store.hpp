@@ -11,11 +11,13 @@
 #include <utility>
 #include <vector>
 
+#include "particle_memory.hpp"
+
 namespace spate {
 
 struct FieldRef {
   std::string_view name;
-  void* data;            // points at a std::vector<T>
+  void* data;            // points at a ParticleArray<T>
   std::size_t elem_size; // sizeof(T)
   bool ghost;            // copied into halo ghosts
   bool checkpoint;       // part of the restartable state
@@ -50,16 +52,17 @@ class ParticleStore {
   void swap_rates();
 
   // Fields (public: the drivers in backend/ read them directly; names as SPH users say them).
-  std::vector<float> pos[3];
-  std::vector<float> vel[3];
-  std::vector<float> acc[3];
-  std::vector<float> acc_prev[3];
-  std::vector<float> density;
-  std::vector<float> pressure;
-  std::vector<float> density_rate;
-  std::vector<float> density_rate_prev;
-  std::vector<std::uint32_t> id;
-  std::vector<std::uint8_t> kind;
+  // Their memory comes from particle_memory.hpp (the heap, or the arena an in-situ helper maps).
+  ParticleArray<float> pos[3];
+  ParticleArray<float> vel[3];
+  ParticleArray<float> acc[3];
+  ParticleArray<float> acc_prev[3];
+  ParticleArray<float> density;
+  ParticleArray<float> pressure;
+  ParticleArray<float> density_rate;
+  ParticleArray<float> density_rate_prev;
+  ParticleArray<std::uint32_t> id;
+  ParticleArray<std::uint8_t> kind;
 
  private:
   int dim_;

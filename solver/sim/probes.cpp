@@ -22,7 +22,7 @@ bool owns_point(SlabWorker& w, const Vec3d& at) {
 
 // Shepard sums of `field` (nullptr: weights only) around a point this slab owns.
 template <class Kernel, int Dim>
-ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const std::vector<float>* field) {
+ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const ParticleArray<float>* field) {
   ParticleStore& p = w.particles();
   const Lattice& L = w.lattice();
   Vec<Dim> x;
