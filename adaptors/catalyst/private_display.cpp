@@ -4,6 +4,10 @@
 
 #include <fmt/format.h>
 
+#if defined(VTK_USE_X)
+#include <X11/Xlib.h>
+#endif
+
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -117,6 +121,16 @@ bool local_display_answers(const std::string& display) {
 }
 
 }  // namespace
+
+void exit_when_display_is_lost() {
+#if defined(VTK_USE_X)
+  XSetIOErrorHandler([](Display*) -> int {
+    static const char text[] = "spate: in situ: the X display was lost\n";
+    [[maybe_unused]] const ssize_t n = write(STDERR_FILENO, text, sizeof text - 1);
+    _exit(kDisplayLostExit);
+  });
+#endif
+}
 
 PrivateDisplay::PrivateDisplay(bool export_display) : export_(export_display) {
   if (!kRendersThroughX) return;

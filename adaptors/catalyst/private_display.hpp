@@ -18,6 +18,13 @@
 
 namespace spate::catalyst {
 
+// In the process that renders (the in-situ helper): when the X connection breaks (the display
+// went away), end the process at once with kDisplayLostExit. Xlib's default would call exit(),
+// whose destructors then touch the dead connection again (a double free, and a crash handler that
+// deadlocks); the solver process restarts the display and the helper instead.
+inline constexpr int kDisplayLostExit = 87;
+void exit_when_display_is_lost();
+
 class PrivateDisplay {
  public:
   // Uses DISPLAY when set; else starts Xvfb if rendering needs X. Never throws: without Xvfb it

@@ -69,6 +69,8 @@ void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::pa
   j["script_seconds_per_step"] = nlohmann::json::array();
   for (double s : t.script_seconds) j["script_seconds_per_step"].push_back(s / n);
   j["failures"] = sink.failures();
+  j["incidents"] = sink.incidents();
+  j["isolated"] = sink.isolated();
   std::ofstream(out_dir / "insitu.json") << j.dump(2) << "\n";
   if (!quiet)
     std::printf("spate: in situ: %lld steps, adaptor %.3g ms/step, pipelines %.3g s/step\n", static_cast<long long>(t.steps),
@@ -150,37 +152,23 @@ int run_command(const RunArgs& a) {
 
 #ifdef SPATE_WITH_CATALYST
   std::unique_ptr<catalyst::CatalystSink> insitu;
-  std::unique_ptr<catalyst::CatalystSteering> live_steering;
   if (!pipelines.empty() || live) {
     catalyst::CatalystOptions co;
     co.scripts.assign(pipelines.begin(), pipelines.end());
-    if (live) {
-      // pipelines/live.py reads the address from the environment (ParaView scripts take no arguments).
-      ::setenv("SPATE_LIVE_URL", live_url.c_str(), 1);
-      co.scripts.push_back(pipelines_dir() / "live.py");
-    }
     co.every = insitu_every;
     co.working_dir = o.out_dir;
+    co.timeout = c.insitu_timeout;
     const PhysicsParams P = physics_params(c);
     co.constants = {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.rho0}, {"particle_mass", P.mass}};
-    std::filesystem::create_directories(o.out_dir);
-    // Started outside mpirun, ParaView initialises MPI itself: OpenMPI then starts a singleton
-    // `orted` daemon that listens on every interface, and its TCP transport would listen too (ports
-    // 1024 and up), for the whole run. One process needs neither: no daemon (it would only serve
-    // MPI_Comm_spawn) and shared memory only; with both the run opens no listening socket at all
-    // (docs/live.md, Security). Explicit settings in the environment win.
-    if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK")) {
-      ::setenv("OMPI_MCA_btl", "self,vader", 0);
-      ::setenv("OMPI_MCA_ess_singleton_isolated", "1", 0);
-    }
-    try {
-      insitu = std::make_unique<catalyst::CatalystSink>(co);
-    } catch (const catalyst::InSituLoadError& e) {
-      throw BadInput(e.what());
-    }
-    o.insitu = insitu.get();
     if (live) {
-      catalyst::SteeringInitial init;
+      catalyst::LiveOptions lo;
+      lo.url = live_url;
+      lo.script = pipelines_dir() / "live.py";
+      lo.xml = pipelines_dir() / "spate_steering.xml";
+      lo.handshake_timeout = c.insitu_live_timeout;
+      // pipelines/live.py reads the address from the environment (ParaView scripts take no arguments).
+      ::setenv("SPATE_LIVE_URL", live_url.c_str(), 1);
+      catalyst::SteeringInitial& init = lo.initial;
       // The case's own (double) values: they survive ParaView's state round trips unchanged, so an
       // untouched parameter never shows up as a change.
       for (int k = 0; k < 3; ++k) init.gravity[k] = k < c.dim ? c.gravity[k] : 0.0;
@@ -202,12 +190,17 @@ int run_command(const RunArgs& a) {
           // an unreadable checkpoint is reported by the run itself (exit 2)
         }
       }
-      try {
-        live_steering = std::make_unique<catalyst::CatalystSteering>(pipelines_dir() / "spate_steering.xml", init);
-      } catch (const catalyst::InSituLoadError& e) {
-        throw BadInput(e.what());
-      }
-      o.steering = live_steering.get();
+      co.live = lo;
+    }
+    std::filesystem::create_directories(o.out_dir);
+    try {
+      insitu = std::make_unique<catalyst::CatalystSink>(co);
+    } catch (const catalyst::InSituLoadError& e) {
+      throw BadInput(e.what());
+    }
+    o.insitu = insitu.get();
+    if (live) {
+      o.steering = insitu->steering();
       if (!a.quiet)
         std::printf("spate: live: connecting out to ParaView at %s on every in-situ step (Catalyst > Connect there)\n", live_url.c_str());
     }

@@ -9,6 +9,9 @@
 
 #include "commands.hpp"
 #include "comm/process_group.hpp"
+#ifdef SPATE_WITH_CATALYST
+#include "insitu_helper.hpp"
+#endif
 
 namespace {
 
@@ -30,6 +33,10 @@ std::string who() {
 
 int main(int argc, char** argv) {
   using namespace spate::app;
+#ifdef SPATE_WITH_CATALYST
+  // The in-situ helper process spate starts for its Catalyst pipelines (adaptors/catalyst).
+  if (argc > 1 && std::string_view(argv[1]) == spate::catalyst::kHelperCommand) return spate::catalyst::run_insitu_helper(argc, argv);
+#endif
   try {
     spate::init_process_group(argc, argv);
   } catch (const std::exception& e) {

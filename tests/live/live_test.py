@@ -33,7 +33,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "insitu"))
-from proc_sockets import listening  # noqa: E402
+from process_tree import kill_groups, listening  # noqa: E402
 
 spate, pvpython, src, work = sys.argv[1:5]
 case = os.path.join(src, "cases", "dam_break_2d.yaml")
@@ -46,12 +46,7 @@ children = []
 
 
 def cleanup(*_):
-    for p in children:
-        if p.poll() is None:
-            try:
-                os.killpg(p.pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
+    kill_groups(children)
 
 
 def fail(msg):

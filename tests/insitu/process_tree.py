@@ -1,11 +1,23 @@
-"""Listening sockets of a process and all its descendants, read from /proc (no tools needed).
+"""Process trees for the robustness and live tests, read from /proc (no tools needed).
 
 listening(pid) -> set of (pid, command, protocol, port) for every TCP socket in LISTEN state and
-every bound, unconnected UDP socket that the process tree of `pid` holds. Used by the robustness
-and live tests: spate and every child it starts (the in-situ helper, OpenMPI's daemons) must open
-no listening socket (docs/live.md, Security).
+every bound, unconnected UDP socket that the process tree of `pid` holds: spate and every child it
+starts (the in-situ helper, OpenMPI's daemons) must open no listening socket (docs/live.md,
+Security).
+kill_groups(processes) kills the process groups of the tests' children that still run (each is
+started with start_new_session=True, so that its own children go too).
 """
 import os
+import signal
+
+
+def kill_groups(processes):
+    for p in processes:
+        if p.poll() is None:
+            try:
+                os.killpg(p.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
 
 
 def descendants(pid):
