@@ -6,6 +6,7 @@
 #include <vtkCPProcessor.h>
 #include <vtkCPPythonScriptV2Pipeline.h>
 #include <vtkDataObject.h>
+#include <vtkLogger.h>
 #include <vtkMultiBlockDataSet.h>
 #include <vtkObjectFactory.h>
 #include <vtkOutputWindow.h>
@@ -18,6 +19,7 @@
 #endif
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <chrono>
 
@@ -56,15 +58,26 @@ for _name in ("import_and_validate", "do_request_data_description", "do_catalyst
     setattr(_spate_v2, _name, _spate_guard(getattr(_spate_v2, _name)))
 )";
 
-// Prints what VTK and Python report as usual, and keeps a copy while armed: that is how a
-// pipeline's Python traceback reaches the failure reports and summary.json.
+// What VTK and Python report goes to spate's log (plain text, timestamped in files, at the
+// message's level), and a copy is kept while armed: that is how a pipeline's Python traceback
+// reaches the failure reports and summary.json. Messages of VTK's error/warning macros reach the
+// log through vtkLogger instead (see forward_vtk_log); the base class would not print those either.
 class CapturingOutputWindow : public vtkOutputWindow {
  public:
   static CapturingOutputWindow* New();
   vtkTypeMacro(CapturingOutputWindow, vtkOutputWindow)
   void DisplayText(const char* text) override {
-    if (armed_ && text) captured_ += text;
-    vtkOutputWindow::DisplayText(text);
+    if (!text) return;
+    if (armed_) captured_ += text;
+    const MessageTypes type = GetCurrentMessageType();
+    if (GetDisplayStream(type) == StreamType::Null) return;
+    switch (type) {
+      case MESSAGE_TYPE_ERROR: spdlog::error("{}", text); break;
+      case MESSAGE_TYPE_WARNING:
+      case MESSAGE_TYPE_GENERIC_WARNING: spdlog::warn("{}", text); break;
+      case MESSAGE_TYPE_DEBUG: spdlog::debug("{}", text); break;
+      default: spdlog::info("{}", text); break;
+    }
   }
   void arm() {
     captured_.clear();
@@ -169,6 +182,25 @@ class GuardedPipeline : public vtkCPPipeline {
 };
 vtkStandardNewMacro(GuardedPipeline);
 
+// vtkLogger (loguru) writes VTK's and ParaView's messages to stderr itself, coloured whenever TERM
+// names a colour terminal, even into a file. Its stderr output is switched off and its messages
+// (warnings and errors; info at debug level) go to spate's log, one line each, naming the source
+// file as loguru did.
+void forward_vtk_log() {
+  vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
+  vtkLogger::AddCallback(
+      "spate",
+      [](void*, const vtkLogger::Message& m) {
+        std::string text = m.message ? m.message : "";
+        while (!text.empty() && text.back() == '\n') text.pop_back();
+        const std::string where = m.filename ? fmt::format(" ({}:{})", std::filesystem::path(m.filename).filename().string(), m.line) : "";
+        if (m.verbosity <= vtkLogger::VERBOSITY_ERROR) spdlog::error("{}{}", text, where);
+        else if (m.verbosity == vtkLogger::VERBOSITY_WARNING) spdlog::warn("{}{}", text, where);
+        else spdlog::debug("{}{}", text, where);
+      },
+      nullptr, vtkLogger::VERBOSITY_INFO);
+}
+
 }  // namespace
 
 struct CatalystEngine::Impl {
@@ -180,6 +212,7 @@ struct CatalystEngine::Impl {
   Phase phase = Phase::kAsking;
 
   void start() {
+    forward_vtk_log();
     processor = vtkSmartPointer<vtkCPProcessor>::New();
     const std::string dir = options.working_dir.string();
     const char* working = dir.empty() ? nullptr : dir.c_str();
@@ -219,6 +252,7 @@ struct CatalystEngine::Impl {
     dataset.reset();
     vtkOutputWindow::SetInstance(nullptr);
     log = nullptr;
+    vtkLogger::RemoveCallback("spate");
   }
 };
 

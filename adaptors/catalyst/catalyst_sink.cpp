@@ -7,18 +7,17 @@
 #include <unistd.h>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
 #include <set>
-#include <type_traits>
 
 #include "extract_index.hpp"
 #include "helper_process.hpp"
 #include "insitu_wire.hpp"
-#include "particles/particle_memory.hpp"
+#include "particles/particle_store.hpp"
 #include "private_display.hpp"
 
 namespace spate::catalyst {
@@ -85,7 +84,7 @@ struct CatalystSink::Impl : ScriptObserver {
   std::unique_ptr<HelperProcess> helper;
   std::vector<SteeringChange> requested;  // from the helper, until polled
   int display_restarts = 0, stray_deaths = 0;
-  std::vector<ParticleArray<char>> staging;
+  std::vector<FieldVector<char>> staging;  // particle memory, so in the arena
   bool warned_staging = false;
   // The step being run.
   std::int64_t step = 0;
@@ -128,9 +127,9 @@ struct CatalystSink::Impl : ScriptObserver {
     if (index) index->record(step, time, scripts[id].label);
   }
 
-  // Records an event; stderr gets its first line (a traceback is on stderr already).
+  // Records an event; the log gets its first line (a traceback is in the log already).
   void note(std::vector<std::string>& list, std::string text) {
-    std::fprintf(stderr, "spate: in situ: %s\n", text.substr(0, text.find('\n')).c_str());
+    spdlog::warn("in situ: {}", text.substr(0, text.find('\n')));
     std::lock_guard lock(mutex);
     list.push_back(std::move(text));
   }
@@ -199,7 +198,7 @@ struct CatalystSink::Impl : ScriptObserver {
 
   // ---- isolated ----
   nlohmann::json init_message() const {
-    nlohmann::json j = {{"type", "init"}, {"working_dir", options.working_dir.string()}};
+    nlohmann::json j = {{"type", "init"}, {"working_dir", options.working_dir.string()}, {"log_level", static_cast<int>(spdlog::get_level())}};
     j["scripts"] = nlohmann::json::array();
     j["ids"] = nlohmann::json::array();
     for (std::size_t k = 0; k < scripts.size(); ++k) {
@@ -257,28 +256,26 @@ struct CatalystSink::Impl : ScriptObserver {
   std::vector<SlabView> staged(const std::vector<SlabView>& slabs) {
     std::vector<SlabView> out = slabs;
     std::size_t used = 0;
-    auto stage = [&](auto*& p, std::size_t n) {
-      using T = std::remove_const_t<std::remove_pointer_t<std::remove_reference_t<decltype(p)>>>;
-      if (!p || n == 0 || arena->contains(p)) return;
+    auto stage = [&](const void*& p, std::size_t bytes) {
+      if (!p || bytes == 0 || arena->contains(p)) return;
       if (!warned_staging) {
-        std::fprintf(stderr, "spate: in situ: particle arrays outside the shared arena are copied for the pipelines\n");
+        spdlog::warn("in situ: particle arrays outside the shared arena are copied for the pipelines");
         warned_staging = true;
       }
       if (staging.size() <= used) staging.emplace_back();
       auto& buffer = staging[used++];
-      buffer.resize(n * sizeof(T));
-      std::memcpy(buffer.data(), p, n * sizeof(T));
-      p = reinterpret_cast<const T*>(buffer.data());
+      buffer.resize(bytes);
+      std::memcpy(buffer.data(), p, bytes);
+      p = buffer.data();
     };
     for (SlabView& v : out) {
-      for (int k = 0; k < 3; ++k) {
-        stage(v.pos[k], v.owned);
-        stage(v.vel[k], v.owned);
+      for (auto& p : v.pos) {
+        const void* q = p;
+        stage(q, v.owned * sizeof(float));
+        p = static_cast<const float*>(q);
       }
-      stage(v.pressure, v.owned);
-      stage(v.density, v.owned);
-      stage(v.id, v.owned);
-      stage(v.kind, v.owned);
+      for (SlabArray& a : v.arrays)
+        for (auto& d : a.data) stage(d, v.owned * field_type_size(a.type));
     }
     return out;
   }
@@ -422,7 +419,7 @@ CatalystSink::~CatalystSink() {
   Impl& m = *impl_;
   if (m.index) {
     const std::string error = m.index->write(true);
-    if (!error.empty()) std::fprintf(stderr, "spate: error: %s\n", error.c_str());
+    if (!error.empty()) spdlog::error("{}", error);
   }
   if (m.helper) {
     const std::string how = m.helper->finish(60.0);

@@ -28,6 +28,7 @@
 #include "catalyst_engine.hpp"
 #include "catalyst_steering.hpp"
 #include "insitu_wire.hpp"
+#include "io/log.hpp"
 #include "private_display.hpp"
 
 namespace spate::catalyst {
@@ -178,6 +179,7 @@ SteeringInitial initial_from(const nlohmann::json& j) {
 int serve(int socket, int arena_fd) {
   nlohmann::json init;
   if (wire::receive(socket, init, -1) != wire::Received::kMessage || init.value("type", "") != "init") return 1;
+  configure_logging(static_cast<spdlog::level::level_enum>(init.value("log_level", static_cast<int>(spdlog::level::info))));
   try {
     const auto& arena = init.at("arena");
     const std::intptr_t shift = map_arena(arena_fd, arena.at("base").get<std::uintptr_t>(), arena.at("size").get<std::size_t>());
@@ -253,6 +255,7 @@ int run_insitu_helper(int argc, char** argv) {
   prctl(PR_SET_PDEATHSIG, SIGKILL);
   if (getppid() != parent) return 1;
   signal(SIGINT, SIG_IGN);
+  configure_logging(spdlog::level::info);
   const int status = serve(socket, arena);
   // VTK's and Python's static destructors at exit can hang or crash; everything is finalised.
   std::fflush(nullptr);

@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <set>
 #include <string>
 
 namespace spate::catalyst::wire {
@@ -72,17 +73,20 @@ nlohmann::json slabs_to_json(const std::vector<SlabView>& slabs) {
     s["dim"] = v.dim;
     s["owned"] = v.owned;
     s["pos"] = {address(v.pos[0]), address(v.pos[1]), address(v.pos[2])};
-    s["vel"] = {address(v.vel[0]), address(v.vel[1]), address(v.vel[2])};
-    s["pressure"] = address(v.pressure);
-    s["density"] = address(v.density);
-    s["id"] = address(v.id);
-    s["kind"] = address(v.kind);
+    s["arrays"] = nlohmann::json::array();
+    for (const SlabArray& a : v.arrays)
+      s["arrays"].push_back({{"name", a.name},
+                             {"type", static_cast<int>(a.type)},
+                             {"components", a.components},
+                             {"data", {address(a.data[0]), address(a.data[1]), address(a.data[2])}}});
     out.push_back(std::move(s));
   }
   return out;
 }
 
 std::vector<SlabView> slabs_from_json(const nlohmann::json& slabs, std::intptr_t shift) {
+  // SlabArray names are views: the helper keeps every name it was sent for its whole life.
+  static std::set<std::string, std::less<>> names;
   std::vector<SlabView> out;
   for (const auto& s : slabs) {
     SlabView v;
@@ -90,15 +94,16 @@ std::vector<SlabView> slabs_from_json(const nlohmann::json& slabs, std::intptr_t
     v.slab_count = s.at("slab_count").get<int>();
     v.dim = s.at("dim").get<int>();
     v.owned = s.at("owned").get<std::size_t>();
-    for (int k = 0; k < 3; ++k) {
-      v.pos[k] = pointer<float>(s.at("pos").at(k), shift);
-      v.vel[k] = pointer<float>(s.at("vel").at(k), shift);
+    for (int k = 0; k < 3; ++k) v.pos[k] = pointer<float>(s.at("pos").at(k), shift);
+    for (const auto& a : s.at("arrays")) {
+      SlabArray array;
+      array.name = *names.insert(a.at("name").get<std::string>()).first;
+      array.type = static_cast<FieldType>(a.at("type").get<int>());
+      array.components = a.at("components").get<int>();
+      for (int k = 0; k < 3; ++k) array.data[k] = pointer<char>(a.at("data").at(k), shift);
+      v.arrays.push_back(array);
     }
-    v.pressure = pointer<float>(s.at("pressure"), shift);
-    v.density = pointer<float>(s.at("density"), shift);
-    v.id = pointer<std::uint32_t>(s.at("id"), shift);
-    v.kind = pointer<std::uint8_t>(s.at("kind"), shift);
-    out.push_back(v);
+    out.push_back(std::move(v));
   }
   return out;
 }

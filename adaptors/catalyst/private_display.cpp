@@ -3,6 +3,7 @@
 #include <vtkRenderingOpenGLConfigure.h>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #if defined(VTK_USE_X)
 #include <X11/Xlib.h>
@@ -140,9 +141,8 @@ PrivateDisplay::PrivateDisplay(bool export_display) : export_(export_display) {
     return;
   }
   if (!start_private())
-    std::fprintf(stderr,
-                 "spate: warning: no DISPLAY and no Xvfb could be started; rendering pipelines will fail "
-                 "(install xvfb, or run under xvfb-run; see docs/insitu.md)\n");
+    spdlog::warn("no DISPLAY and no Xvfb could be started; rendering pipelines will fail (install xvfb, or run under "
+                 "xvfb-run; see docs/insitu.md)");
 }
 
 bool PrivateDisplay::start_private() {

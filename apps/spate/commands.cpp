@@ -10,6 +10,7 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
 #include <thread>
 #include <unistd.h>
 
@@ -57,7 +58,7 @@ void check_backend(const std::string& backend) {
 
 #ifdef SPATE_WITH_CATALYST
 // Timing of the in-situ steps: a line on stdout and insitu.json beside summary.json.
-void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::path& out_dir, bool quiet) {
+void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::path& out_dir) {
   const catalyst::InSituTiming t = sink.timing();
   const double n = static_cast<double>(std::max<std::int64_t>(1, t.steps));
   nlohmann::ordered_json j;
@@ -72,9 +73,8 @@ void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::pa
   j["incidents"] = sink.incidents();
   j["isolated"] = sink.isolated();
   std::ofstream(out_dir / "insitu.json") << j.dump(2) << "\n";
-  if (!quiet)
-    std::printf("spate: in situ: %lld steps, adaptor %.3g ms/step, pipelines %.3g s/step\n", static_cast<long long>(t.steps),
-                1e3 * t.adaptor_seconds / n, t.pipelines_seconds / n);
+  spdlog::info("in situ: {} steps, adaptor {:.3g} ms/step, pipelines {:.3g} s/step", t.steps, 1e3 * t.adaptor_seconds / n,
+               t.pipelines_seconds / n);
 }
 #endif
 
@@ -201,8 +201,7 @@ int run_command(const RunArgs& a) {
     o.insitu = insitu.get();
     if (live) {
       o.steering = insitu->steering();
-      if (!a.quiet)
-        std::printf("spate: live: connecting out to ParaView at %s on every in-situ step (Catalyst > Connect there)\n", live_url.c_str());
+      spdlog::info("live: connecting out to ParaView at {} on every in-situ step (Catalyst > Connect there)", live_url);
     }
   }
 #endif
@@ -219,7 +218,7 @@ int run_command(const RunArgs& a) {
   const ProcessGroup& group = process_group();
   if (group.rank != 0) return r.exit_code;
 #ifdef SPATE_WITH_CATALYST
-  if (insitu) report_insitu(*insitu, o.out_dir, a.quiet);
+  if (insitu) report_insitu(*insitu, o.out_dir);
 #endif
   SummaryExtras x;
   x.threads = a.threads > 0 ? a.threads : std::max(1, hardware_threads() / group.ranks_on_node);
@@ -228,12 +227,11 @@ int run_command(const RunArgs& a) {
   x.ranks = group.ranks;
   write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
   if (r.exit_code == 3) {
-    std::fprintf(stderr, "spate: the run went unstable: %s\n", r.message.c_str());
-  } else if (!a.quiet) {
-    std::printf("spate: %s done: %lld steps to t = %.6g s in %.2f s (%.3g particle-steps/s); outputs in %s\n", c.name.c_str(),
-                static_cast<long long>(r.steps), r.simulated_time, r.wall_seconds,
-                r.wall_seconds > 0 ? r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds : 0.0,
-                o.out_dir.string().c_str());
+    spdlog::error("the run went unstable: {}", r.message);
+  } else {
+    spdlog::info("{} done: {} steps to t = {:.6g} s in {:.2f} s ({:.3g} particle-steps/s); outputs in {}", c.name, r.steps,
+                 r.simulated_time, r.wall_seconds,
+                 r.wall_seconds > 0 ? r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds : 0.0, o.out_dir.string());
   }
   return r.exit_code;
 }
@@ -323,18 +321,17 @@ int compare_command(const CompareArgs& a) {
   std::printf("%-18s %-14s %s\n", "field", "max |a - b|", "at id");
   auto fa = pa.fields(), fb = pb.fields();
   for (std::size_t f = 0; f < fa.size(); ++f) {
-    if (!fa[f].checkpoint || fa[f].name == "id") continue;
+    if (!fa[f].has(kCheckpointed) || fa[f].name == "id") continue;
     double worst = 0.0;
     std::uint32_t at = 0;
+    const FieldType type = fa[f].spec->type;
+    auto value = [type](const FieldRef& r, std::size_t i) -> double {
+      if (type == FieldType::U8) return static_cast<unsigned char>(r.bytes()[i]);
+      if (type == FieldType::U32) return reinterpret_cast<const std::uint32_t*>(r.bytes())[i];
+      return reinterpret_cast<const float*>(r.bytes())[i];
+    };
     for (std::size_t i = 0; i < pa.size(); ++i) {
-      double x, y;
-      if (fa[f].elem_size == 1) {
-        x = static_cast<unsigned char>(fa[f].bytes()[i]);
-        y = static_cast<unsigned char>(fb[f].bytes()[i]);
-      } else {
-        x = reinterpret_cast<const float*>(fa[f].bytes())[i];
-        y = reinterpret_cast<const float*>(fb[f].bytes())[i];
-      }
+      const double x = value(fa[f], i), y = value(fb[f], i);
       const double d = (std::isnan(x) != std::isnan(y)) ? INFINITY : (std::isnan(x) ? 0.0 : std::fabs(x - y));
       if (d > worst) worst = d, at = pa.id[i];
     }

@@ -9,6 +9,9 @@
 
 #include "commands.hpp"
 #include "comm/process_group.hpp"
+#include "io/log.hpp"
+#include "io/provenance.hpp"
+#include "io/version.hpp"
 #ifdef SPATE_WITH_CATALYST
 #include "insitu_helper.hpp"
 #endif
@@ -37,13 +40,24 @@ int main(int argc, char** argv) {
   // The in-situ helper process spate starts for its Catalyst pipelines (adaptors/catalyst).
   if (argc > 1 && std::string_view(argv[1]) == spate::catalyst::kHelperCommand) return spate::catalyst::run_insitu_helper(argc, argv);
 #endif
+  spate::record_invocation(argc, argv);
+  spate::configure_logging(spdlog::level::info);
   try {
     spate::init_process_group(argc, argv);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "spate: error: %s\n", e.what());
+    spdlog::error("{}", e.what());
     return 2;
   }
+  spate::configure_logging(spdlog::level::info, who());
   CLI::App app{"spate: weakly-compressible SPH for free-surface flows, on CPUs and GPUs, watched and steered in situ.\n"};
+  app.set_version_flag("--version", fmt::format("spate {} (commit {})", spate::version(), spate::git_commit()),
+                       "Print the version and the git commit it was built from, then exit");
+  // Options of the program itself may also follow the command (spate run case.yaml --log-level debug).
+  app.fallthrough();
+  std::string log_level = "info";
+  app.add_option("--log-level", log_level,
+                 "trace, debug, info (default), warning, error or off. Without a terminal lines carry a UTC timestamp")
+      ->check([](const std::string& v) { return spate::parse_log_level(v) ? std::string() : "expected trace, debug, info, warning, error or off"; });
   app.footer(
       "Exit codes: 0 done; 1 compare found differences; 2 bad input (case file, options, restart file);\n"
       "            3 the run went unstable (diagnostic snapshot written, last good checkpoint kept); 4 internal error.");
@@ -103,6 +117,10 @@ int main(int argc, char** argv) {
     const int code = app.exit(e);
     return finish(code == 0 ? 0 : 2);
   }
+  // --quiet (run) means warnings and errors only, unless a level was asked for.
+  spdlog::level::level_enum level = *spate::parse_log_level(log_level);
+  if (run.quiet && app.get_option("--log-level")->count() == 0) level = spdlog::level::warn;
+  spate::configure_logging(level, who());
   try {
     run.live_requested = live_opt->count() > 0;
     if (*run_cmd) return finish(run_command(run));
@@ -110,10 +128,10 @@ int main(int argc, char** argv) {
     if (*cmp_cmd) return finish(compare_command(cmp));
     if (*bench_cmd) return finish(bench_command(bench));
   } catch (const BadInput& e) {
-    std::fprintf(stderr, "%s: error: %s\n", who().c_str(), e.what());
+    spdlog::error("{}", e.what());
     return finish(2);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: internal error: %s\n", who().c_str(), e.what());
+    spdlog::error("internal error: {}", e.what());
     return finish(4);
   }
   return finish(0);

@@ -15,7 +15,7 @@ namespace spate {
 // Acceleration and density rate of fluid particle i (zero rates for walls).
 template <class Kernel, int Dim, class Fields>
 SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
-  if (!is_fluid(f.kind[i])) {
+  if (!is_fluid(f.material[i])) {
     SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = 0.0f;
     f.density_rate[i] = 0.0f;
     return;
@@ -37,12 +37,12 @@ SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, 
 // Adami pressure, density and no-slip velocity of wall particle w (fluid particles are skipped).
 template <class Kernel, int Dim, class Fields>
 SPATE_HD void update_wall_state(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t w, const int g[3]) {
-  if (is_fluid(f.kind[w])) return;
+  if (is_fluid(f.material[w])) return;
   const Vec<Dim> xw = load_vec<Dim>(f.pos, w);
   WallSums<Dim> sums;
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
     for (std::uint32_t j = jb; j < je; ++j)
-      if (is_fluid(f.kind[j])) accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(f, j), sums);
+      if (is_fluid(f.material[j])) accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(f, j), sums);
   });
   const WallState<Dim> s = finish_wall(P, sums);
   f.pressure[w] = s.p;
@@ -54,7 +54,7 @@ SPATE_HD void update_wall_state(const PhysicsParams& P, const CellGridView& v, F
 template <class Kernel, int Dim, class Fields>
 SPATE_HD void update_summation_density(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i,
                                        const int g[3]) {
-  if (!is_fluid(f.kind[i])) return;
+  if (!is_fluid(f.material[i])) return;
   const Vec<Dim> xi = load_vec<Dim>(f.pos, i);
   float rho = 0.0f;
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {

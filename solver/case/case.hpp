@@ -37,6 +37,8 @@ struct ProbeSpec {
   Vec3d position{0, 0, 0};  // pressure/velocity: the point; height: the gauge (x, y) in 3D, (x) in 2D
   std::string solid;        // force: the solid's name
   int axis = 0;             // front: the axis along which the front advances
+  bool connected = false;   // height: the top of the water column standing on the floor (spray above ignored)
+  double min_depth = 0.0;   // front: only water at least this deep counts (a bore over a wet bed)
 };
 
 struct Case {
@@ -79,6 +81,8 @@ struct Case {
   double output_interval = 0.0;   // simulated seconds between snapshots; 0: none
   double probe_interval = 0.0;    // 0: every step
   int checkpoint_every = 0;       // steps; 0: only at the end
+  int checkpoint_keep_last = 2;   // periodic checkpoints kept (the newest); 0: all
+  int checkpoint_keep_every = 0;  // also keep every Nth periodic checkpoint (step a multiple of N x checkpoint_every); 0: none
   int balance_every = 100;        // steps between load-balancing passes
   bool balanced_start = true;     // first faces from the balancer (else equal column counts, as the paper)
 

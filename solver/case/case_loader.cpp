@@ -406,7 +406,10 @@ Case read(Section& root, const std::string& file) {
     switch (probe.type) {
       case ProbeType::Pressure:
       case ProbeType::Velocity: probe.position = p.vector("position", d); break;
-      case ProbeType::Height: probe.position = p.vector("position", d - 1); break;
+      case ProbeType::Height:
+        probe.position = p.vector("position", d - 1);
+        probe.connected = p.boolean("connected", false);
+        break;
       case ProbeType::Force:
         probe.solid = p.text("solid");
         if (!solid_names.count(probe.solid)) p.fail(p.raw("solid"), "solid", "no solid named '" + probe.solid + "'");
@@ -415,6 +418,9 @@ Case read(Section& root, const std::string& file) {
         const std::string axis = p.text("axis", std::string("x"));
         probe.axis = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;
         if (probe.axis < 0 || probe.axis >= d) p.fail(p.raw("axis"), "axis", "must be an axis of the case");
+        probe.min_depth = p.number("min_depth", 0.0);
+        if (!(probe.min_depth >= 0) || probe.min_depth >= c.tank_size[d - 1])
+          p.fail(p.raw("min_depth"), "min_depth", "must be >= 0 and below the tank top");
         break;
       }
     }
@@ -426,9 +432,13 @@ Case read(Section& root, const std::string& file) {
     c.output_interval = o.number("interval", 0.0);
     c.probe_interval = o.number("probe_interval", 0.0);
     c.checkpoint_every = o.integer("checkpoint_every", 0);
+    c.checkpoint_keep_last = o.integer("checkpoint_keep_last", 2);
+    c.checkpoint_keep_every = o.integer("checkpoint_keep_every", 0);
     if (c.output_interval < 0) o.fail(o.raw("interval"), "interval", "must be >= 0");
     if (c.probe_interval < 0) o.fail(o.raw("probe_interval"), "probe_interval", "must be >= 0");
     if (c.checkpoint_every < 0) o.fail(o.raw("checkpoint_every"), "checkpoint_every", "must be >= 0");
+    if (c.checkpoint_keep_last < 0) o.fail(o.raw("checkpoint_keep_last"), "checkpoint_keep_last", "must be >= 0 (0: keep all)");
+    if (c.checkpoint_keep_every < 0) o.fail(o.raw("checkpoint_keep_every"), "checkpoint_keep_every", "must be >= 0 (0: none)");
     o.finish();
   }
   {

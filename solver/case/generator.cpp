@@ -161,7 +161,7 @@ ParticleStore generate_particles(const Case& c) {
   std::size_t i = 0;
   for_each_site(c, [&](const Sites& s, const int* idx, std::uint8_t kind) {
     for (int a = 0; a < c.dim; ++a) p.pos[a][i] = static_cast<float>(s.coord(a, idx[a]));
-    p.kind[i] = kind;
+    p.material[i] = kind;
     p.id[i] = static_cast<std::uint32_t>(i);
     p.density[i] = rho0;
     if (kind == kFluid) {

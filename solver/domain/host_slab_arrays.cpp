@@ -171,7 +171,7 @@ std::uint32_t HostSlabArrays::find_unhealthy(const HealthLimits& h) {
   std::uint32_t lowest = kNoFault;
   const int d = store_.dim();
   for (std::size_t i = 0; i < store_.owned(); ++i) {
-    if (!is_fluid(store_.kind[i])) continue;
+    if (!is_fluid(store_.material[i])) continue;
     float x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
     for (int a = 0; a < d; ++a) x[a] = store_.pos[a][i], v[a] = store_.vel[a][i];
     if (!healthy(h, state_finite(d, x, v, store_.density[i]), store_.density[i])) lowest = std::min(lowest, store_.id[i]);

@@ -4,16 +4,24 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string_view>
 #include <vector>
 
 namespace spate {
 
 namespace {
 
-constexpr const char* kFormat = "spate-checkpoint-1";
+// "spate-checkpoint-<version>"; version 2 also has an integer attribute format_version.
+constexpr const char* kFormatPrefix = "spate-checkpoint-";
 
-hid_t h5_type(std::size_t elem_size) { return elem_size == 1 ? H5T_NATIVE_UINT8 : H5T_NATIVE_FLOAT; }
-hid_t h5_type(const FieldRef& f) { return f.name == "id" ? H5T_NATIVE_UINT32 : h5_type(f.elem_size); }
+hid_t h5_type(FieldType t) {
+  switch (t) {
+    case FieldType::F32: return H5T_NATIVE_FLOAT;
+    case FieldType::U32: return H5T_NATIVE_UINT32;
+    case FieldType::U8: return H5T_NATIVE_UINT8;
+  }
+  return H5T_NATIVE_FLOAT;
+}
 
 void check(herr_t status, const std::filesystem::path& path, const std::string& what) {
   if (status < 0) throw std::runtime_error(path.string() + ": HDF5 error while " + what);
@@ -64,6 +72,19 @@ std::string read_string_attr(hid_t loc, const char* name) {
 
 }  // namespace
 
+std::vector<CheckpointDataset> checkpoint_datasets(int dim, int version) {
+  std::vector<CheckpointDataset> out;
+  const auto fields = ParticleStore(dim).fields();
+  for (std::size_t k = 0; k < fields.size(); ++k) {
+    const FieldRef& f = fields[k];
+    if (!f.has(kCheckpointed)) continue;
+    std::string name(f.name);
+    if (version == 1 && f.spec->member == "material") name = "kind";
+    out.push_back(CheckpointDataset{name, f.spec->type, k});
+  }
+  return out;
+}
+
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, ParticleStore& particles) {
   auto fields = particles.fields();
   const std::size_t n = particles.owned();
@@ -78,7 +99,9 @@ void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& m
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
   hid_t file = H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   if (file < 0) throw std::runtime_error(tmp.string() + ": cannot create checkpoint file");
-  write_string_attr(file, "format", kFormat);
+  const std::string format = kFormatPrefix + std::to_string(kCheckpointFormatVersion);
+  write_string_attr(file, "format", format);
+  write_attr(file, "format_version", H5T_NATIVE_INT, &kCheckpointFormatVersion);
   write_attr(file, "step", H5T_NATIVE_INT64, &meta.step);
   write_attr(file, "time", H5T_NATIVE_DOUBLE, &meta.time);
   write_attr(file, "dt", H5T_NATIVE_DOUBLE, &meta.dt);
@@ -88,17 +111,13 @@ void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& m
   write_string_attr(file, "steering_log", meta.steering_log);
   hid_t group = H5Gcreate2(file, "particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   const hsize_t n = count;
-  ParticleStore layout(dim);  // empty: only the field list (names, sizes, flags)
-  const auto fields = layout.fields();
   std::vector<char> buffer;  // one field at a time
-  for (std::size_t k = 0; k < fields.size(); ++k) {
-    const FieldRef& f = fields[k];
-    if (!f.checkpoint) continue;
-    buffer.resize(count * f.elem_size);
-    if (count > 0) fill(k, buffer.data());
+  for (const CheckpointDataset& d : checkpoint_datasets(dim)) {
+    buffer.resize(count * field_type_size(d.type));
+    if (count > 0) fill(d.field, buffer.data());
     hid_t space = H5Screate_simple(1, &n, nullptr);
-    hid_t dset = H5Dcreate2(group, std::string(f.name).c_str(), h5_type(f), space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-    if (n > 0) check(H5Dwrite(dset, h5_type(f), H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data()), tmp, "writing " + std::string(f.name));
+    hid_t dset = H5Dcreate2(group, d.name.c_str(), h5_type(d.type), space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (n > 0) check(H5Dwrite(dset, h5_type(d.type), H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer.data()), tmp, "writing " + d.name);
     H5Dclose(dset);
     H5Sclose(space);
   }
@@ -116,9 +135,22 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
     hid_t f;
     ~Closer() { H5Fclose(f); }
   } closer{file};
-  if (read_string_attr(file, "format") != kFormat)
-    throw std::runtime_error(path.string() + ": not a spate checkpoint (attribute 'format' is not '" + kFormat + "')");
+  const std::string format = read_string_attr(file, "format");
+  if (!format.starts_with(kFormatPrefix))
+    throw std::runtime_error(path.string() + ": not a spate checkpoint (attribute 'format' is not '" + kFormatPrefix + "<version>')");
+  int version = 0;
+  if (!read_attr(file, "format_version", H5T_NATIVE_INT, &version)) {
+    try {
+      version = std::stoi(format.substr(std::string_view(kFormatPrefix).size()));
+    } catch (const std::exception&) {
+      version = 0;
+    }
+  }
+  if (version < 1 || version > kCheckpointFormatVersion)
+    throw std::runtime_error(path.string() + ": checkpoint format version " + std::to_string(version) + " ('" + format +
+                             "'); this spate reads versions 1 to " + std::to_string(kCheckpointFormatVersion));
   CheckpointMeta meta;
+  meta.format_version = version;
   int dim = 0;
   if (!read_attr(file, "step", H5T_NATIVE_INT64, &meta.step) || !read_attr(file, "time", H5T_NATIVE_DOUBLE, &meta.time) ||
       !read_attr(file, "dt", H5T_NATIVE_DOUBLE, &meta.dt) || !read_attr(file, "dimensions", H5T_NATIVE_INT, &dim))
@@ -137,12 +169,12 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
   H5Sclose(space);
   H5Dclose(id_set);
   particles.resize(n);
-  for (auto& f : particles.fields()) {
-    if (!f.checkpoint) continue;
-    hid_t dset = H5Dopen2(group, std::string(f.name).c_str(), H5P_DEFAULT);
-    if (dset < 0) throw std::runtime_error(path.string() + ": checkpoint lacks field '" + std::string(f.name) + "'");
-    if (n > 0 && H5Dread(dset, h5_type(f), H5S_ALL, H5S_ALL, H5P_DEFAULT, f.bytes()) < 0)
-      throw std::runtime_error(path.string() + ": cannot read field '" + std::string(f.name) + "'");
+  auto fields = particles.fields();
+  for (const CheckpointDataset& d : checkpoint_datasets(dim, version)) {
+    hid_t dset = H5Dopen2(group, d.name.c_str(), H5P_DEFAULT);
+    if (dset < 0) throw std::runtime_error(path.string() + ": checkpoint lacks field '" + d.name + "'");
+    if (n > 0 && H5Dread(dset, h5_type(d.type), H5S_ALL, H5S_ALL, H5P_DEFAULT, fields[d.field].bytes()) < 0)
+      throw std::runtime_error(path.string() + ": cannot read field '" + d.name + "'");
     H5Dclose(dset);
   }
   H5Gclose(group);

@@ -7,10 +7,25 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "../particles/particle_store.hpp"
 
 namespace spate {
+
+// Version 2: the material index dataset is "material" (version 1, before the field registry,
+// called it "kind"; version 1 files are still read). The datasets themselves follow the field
+// registry (every kCheckpointed field, one dataset per component).
+constexpr int kCheckpointFormatVersion = 2;
+
+// One dataset under /particles: its name, element type and the field it fills (an index into
+// ParticleStore(dim).fields()). The reader checks a file against this list.
+struct CheckpointDataset {
+  std::string name;
+  FieldType type;
+  std::size_t field;
+};
+std::vector<CheckpointDataset> checkpoint_datasets(int dim, int version = kCheckpointFormatVersion);
 
 struct CheckpointMeta {
   std::int64_t step = 0;
@@ -19,13 +34,14 @@ struct CheckpointMeta {
   std::string case_name;
   std::string case_yaml;    // the effective case (after --set)
   std::string steering_log; // accepted steering changes so far (may be empty)
+  int format_version = kCheckpointFormatVersion;  // of the file read (writes use the current one)
 };
 
 // `particles` must hold every particle, ordered by id.
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, ParticleStore& particles);
 // The same file written one field at a time, so the particles never have to sit in one store:
-// fill(k, out) writes field k of ParticleStore(dim).fields() (asked only for checkpoint fields) of
-// all `count` particles, ordered by id, into out (count * elem_size bytes).
+// fill(k, out) writes field k of ParticleStore(dim).fields() (asked only for the datasets of
+// checkpoint_datasets) of all `count` particles, ordered by id, into out (count * elem_size bytes).
 using CheckpointFieldFill = std::function<void(std::size_t field, char* out)>;
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, int dim, std::size_t count,
                       const CheckpointFieldFill& fill);

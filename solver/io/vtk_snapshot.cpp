@@ -5,6 +5,7 @@
 #include <regex>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 
 namespace spate {
 
@@ -37,21 +38,46 @@ void write_atomically(const std::filesystem::path& path, const std::string& text
   std::filesystem::rename(tmp, path);
 }
 
+const char* vtk_type(FieldType t) {
+  switch (t) {
+    case FieldType::F32: return "Float32";
+    case FieldType::U32: return "UInt32";
+    case FieldType::U8: return "UInt8";
+  }
+  return "Float32";
+}
+
+// Vectors get 3 components (zero beyond dim), as ParaView expects.
+Array field_array(const ExportedField& f, std::size_t n) {
+  const int components = f.spec->shape == FieldShape::Vector ? 3 : 1;
+  const std::string name(f.spec->exported);
+  auto sources = [&](auto* type_tag) {
+    using T = std::remove_pointer_t<decltype(type_tag)>;
+    std::vector<const T*> s(components, nullptr);
+    for (int k = 0; k < components; ++k) s[k] = reinterpret_cast<const T*>(f.data[k]);
+    return make_array<T>(name, vtk_type(f.spec->type), components, n, s);
+  };
+  switch (f.spec->type) {
+    case FieldType::U32: return sources(static_cast<std::uint32_t*>(nullptr));
+    case FieldType::U8: return sources(static_cast<std::uint8_t*>(nullptr));
+    default: return sources(static_cast<float*>(nullptr));
+  }
+}
+
 }  // namespace
 
+// Every exported field of the registry (field_registry.hpp): positions as the points, the others
+// as point data under their exported names, then the owning slab ("device").
 void write_vtp_piece(const std::filesystem::path& path, ParticleStore& p, int slab) {
   const std::size_t n = p.owned();
-  const int d = p.dim();
-  auto component = [&](ParticleArray<float>(&f)[3], int k) -> const float* { return k < d ? f[k].data() : nullptr; };
   std::vector<Array> point_data;
-  point_data.push_back(make_array<float>("velocity", "Float32", 3, n, {component(p.vel, 0), component(p.vel, 1), component(p.vel, 2)}));
-  point_data.push_back(make_array<float>("pressure", "Float32", 1, n, {p.pressure.data()}));
-  point_data.push_back(make_array<float>("density", "Float32", 1, n, {p.density.data()}));
-  point_data.push_back(make_array<std::uint32_t>("id", "UInt32", 1, n, {p.id.data()}));
-  point_data.push_back(make_array<std::uint8_t>("kind", "UInt8", 1, n, {p.kind.data()}));
+  Array points;
+  for (const ExportedField& f : exported_fields(p)) {
+    if (f.spec->member == "pos") points = field_array(f, n), points.name = "Points";
+    else point_data.push_back(field_array(f, n));
+  }
   std::vector<std::int32_t> owner(n, slab);
   point_data.push_back(make_array<std::int32_t>("device", "Int32", 1, n, {owner.data()}));
-  Array points = make_array<float>("Points", "Float32", 3, n, {component(p.pos, 0), component(p.pos, 1), component(p.pos, 2)});
   std::vector<std::int64_t> conn(n), offs(n);
   for (std::size_t i = 0; i < n; ++i) conn[i] = static_cast<std::int64_t>(i), offs[i] = static_cast<std::int64_t>(i + 1);
   Array connectivity = make_array<std::int64_t>("connectivity", "Int64", 1, n, {conn.data()});

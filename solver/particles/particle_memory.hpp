@@ -1,6 +1,6 @@
 #pragma once
 // Where the particle field arrays live: the one place that decides it (ParticleStore's arrays
-// are ParticleArray<T>, nothing else allocates particle storage).
+// are FieldVector<T> = std::vector<T, ParticleAllocator<T>>, particle_store.hpp).
 //
 // By default they live on the heap. A process that hands its particles to an in-situ helper
 // process (ParaView Catalyst runs there, adaptors/catalyst/insitu_helper.hpp) first calls
@@ -12,7 +12,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <new>
-#include <vector>
 
 namespace spate {
 
@@ -41,7 +40,7 @@ void* allocate_particle_bytes(std::size_t bytes);
 void free_particle_bytes(void* p, std::size_t bytes) noexcept;
 }  // namespace detail
 
-// Stateless, so every ParticleArray of a type is interchangeable (swap and move as std::vector).
+// Stateless, so every array of a type is interchangeable (swap and move as std::vector).
 template <class T>
 struct ParticleAllocator {
   using value_type = T;
@@ -55,8 +54,5 @@ struct ParticleAllocator {
     return true;
   }
 };
-
-template <class T>
-using ParticleArray = std::vector<T, ParticleAllocator<T>>;
 
 }  // namespace spate

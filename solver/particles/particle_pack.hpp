@@ -11,10 +11,11 @@ namespace spate {
 
 using Bytes = std::vector<char>;
 
+// Which fields travel, by their registry flags (field_registry.hpp).
 enum class FieldSet {
-  All,       // everything: migration, checkpoints
-  Ghost,     // what a ghost needs to act as a neighbour
-  Refresh,   // ghost fields that change after the halo is built (not position, id, kind)
+  All,       // kMigrated: migration, the checkpoint gather
+  Ghost,     // kGhost: what a ghost needs to act as a neighbour
+  Refresh,   // kRefreshed: ghost fields that change after the halo is built (not position, id, material)
 };
 
 bool in_set(const FieldRef& f, FieldSet set);

@@ -15,7 +15,7 @@ struct ParticleState {
   Vec<Dim> v;    // velocity (for walls: the no-slip velocity extrapolated by the wall pass)
   float rho;     // density
   float p;       // pressure
-  std::uint8_t kind;
+  std::uint8_t material;  // 0 fluid, 1 tank wall, 2 + k solid k (params.hpp)
 };
 
 template <int Dim>
@@ -33,7 +33,7 @@ SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const Particle
   const Vec<Dim> r = i.x - j.x;  // r_ij
   const float r2 = dot(r, r);
   const float F = Kernel::gradient_factor(sqrtf(r2) * P.inv_h, P.gradient_norm, P.inv_h2);  // grad_i W_ij = F r_ij
-  const float j_fluid = is_fluid(j.kind) ? 1.0f : 0.0f;
+  const float j_fluid = is_fluid(j.material) ? 1.0f : 0.0f;
   const float inv_rho_i = 1.0f / i.rho;
   const float inv_rho_j = 1.0f / j.rho;
   const float volume_i = P.mass * inv_rho_i;

@@ -22,7 +22,7 @@ bool owns_point(SlabWorker& w, const Vec3d& at) {
 
 // Shepard sums of `field` (nullptr: weights only) around a point this slab owns.
 template <class Kernel, int Dim>
-ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const ParticleArray<float>* field) {
+ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const FieldVector<float>* field) {
   ParticleStore& p = w.particles();
   const Lattice& L = w.lattice();
   Vec<Dim> x;
@@ -34,7 +34,7 @@ ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const ParticleArray<flo
   ShepardSums<Dim> s;
   w.grid().view().for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t j = b; j < e; ++j)
-      if (is_fluid(p.kind[j]))
+      if (is_fluid(p.material[j]))
         accumulate_shepard<Kernel, Dim>(w.params(), x, load_vec<Dim>(p.pos, j), p.density[j], field ? (*field)[j] : 0.0f, s);
   });
   return s;
@@ -65,31 +65,72 @@ std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at) {
   return v;
 }
 
-// The highest point of the gauge's vertical line where the fluid fill fraction reaches 0.5,
-// sampled every dp/4 from the tank floor; 0 when dry.
-double sample_height(SlabWorker& w, const Vec3d& gauge, const Case& c) {
+// Fill fraction (the Shepard weight sum) sampled every dp/4 up the gauge's vertical line, from the
+// tank floor to the top of the domain; the surface is where it crosses 0.5, placed by linear
+// interpolation between the two samples around the crossing, so that the height follows the
+// particles continuously (no dp/4 steps). `connected`: the top of the water standing on the floor
+// (the first crossing above the lowest wet sample, which must lie within the kernel support 2h of
+// the floor), so that spray, an overtopping jet or drops above it are ignored; otherwise the
+// highest crossing. 0 when dry.
+double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c) {
   const int v = c.dim - 1;
-  Vec3d at = gauge;
+  Vec3d at = gauge.position;
   at[v] = 0;
   if (!owns_point(w, at)) return kNaN;
   const double floor = c.tank_origin[v];
   const double top = w.lattice().upper(v) - 1e-6;
   const double step = c.dp / 4;
+  const int last = static_cast<int>(std::ceil((top - floor) / step));  // samples 0..last
+  auto z = [&](int k) { return std::min(floor + k * step, top); };
   double height = 0.0;
   dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
-    for (double z = floor; z < top; z += step) {
-      at[v] = z;
-      if (shepard<Kernel, Dim>(w, at, nullptr).weight >= 0.5) height = z - floor;
+    auto fill = [&](int k) {
+      at[v] = z(k);
+      return shepard<Kernel, Dim>(w, at, nullptr).weight;
+    };
+    // Sample k is wet, k + 1 dry: where the straight line between them crosses 0.5.
+    auto crossing = [&](int k, double wet, double dry) { return z(k) + (wet - 0.5) / (wet - dry) * (z(k + 1) - z(k)) - floor; };
+    if (gauge.connected) {
+      const int reach = std::min(last, static_cast<int>(std::ceil(2.0 * w.params().h / step)));
+      int k = 0;
+      double wk = fill(0);
+      while (wk < 0.5 && k < reach) wk = fill(++k);
+      if (wk < 0.5) return;  // dry at the floor
+      for (; k < last; ++k) {
+        const double next = fill(k + 1);
+        if (next < 0.5) {
+          height = crossing(k, wk, next);
+          return;
+        }
+        wk = next;
+      }
+      height = z(last) - floor;
+      return;
+    }
+    double above = 0.0;
+    for (int k = last; k >= 0; --k) {
+      const double wk = fill(k);
+      if (wk >= 0.5) {
+        height = k == last ? z(last) - floor : crossing(k, wk, above);
+        return;
+      }
+      above = wk;
     }
   });
   return height;
 }
 
-double local_front(SlabWorker& w, int axis) {
+double front_level(const ProbeSpec& front, const Case& c) {
+  if (!(front.min_depth > 0)) return -std::numeric_limits<double>::infinity();
+  return c.tank_origin[c.dim - 1] + front.min_depth - 0.5 * c.dp;
+}
+
+double local_front(SlabWorker& w, int axis, double lowest) {
   const ParticleStore& p = w.particles();
+  const int v = p.dim() - 1;
   double front = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < p.owned(); ++i)
-    if (is_fluid(p.kind[i])) front = std::max(front, static_cast<double>(p.pos[axis][i]));
+    if (is_fluid(p.material[i]) && p.pos[v][i] >= lowest) front = std::max(front, static_cast<double>(p.pos[axis][i]));
   return front;
 }
 
@@ -106,12 +147,12 @@ Bytes solid_force_records(SlabWorker& w, std::uint8_t kind) {
       int g[3];
       grid.global_coords(c, g);
       for (std::uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
-        if (p.kind[i] != kind) continue;
+        if (p.material[i] != kind) continue;
         const auto wi = load_state<Dim>(p, i);
         Vec<Dim> f = zero_vec<Dim>();
         view.for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
           for (std::uint32_t j = b; j < e; ++j)
-            if (is_fluid(p.kind[j])) f += wall_pressure_force<Kernel, Dim>(w.params(), wi, load_state<Dim>(p, j));
+            if (is_fluid(p.material[j])) f += wall_pressure_force<Kernel, Dim>(w.params(), wi, load_state<Dim>(p, j));
         });
         float rec[4] = {0, 0, 0, 0};
         std::memcpy(&rec[0], &p.id[i], sizeof(float));
@@ -146,6 +187,28 @@ std::vector<double> sum_by_id(const std::vector<Bytes>& parts) {
 
 }  // namespace
 
+std::vector<std::string> probe_columns(const ProbeSpec& p, int dim) {
+  const char* axes[3] = {"x", "y", "z"};
+  std::vector<std::string> columns;
+  auto components = [&](const char* prefix, const char* unit) {
+    for (int k = 0; k < dim; ++k) columns.push_back(std::string(prefix) + axes[k] + "[" + unit + "]");
+  };
+  switch (p.type) {
+    case ProbeType::Pressure: columns.push_back("pressure[Pa]"); break;
+    case ProbeType::Velocity: components("v", "m/s"); break;
+    case ProbeType::Height: columns.push_back("height[m]"); break;
+    case ProbeType::Force: components("f", dim == 2 ? "N/m" : "N"); break;  // 2D: per metre of depth
+    case ProbeType::Front: columns.push_back("front[m]"); break;
+  }
+  return columns;
+}
+
+std::string probe_header(const ProbeSpec& p, int dim) {
+  std::string header = "time[s],step";
+  for (auto& c : probe_columns(p, dim)) header += "," + c;
+  return header;
+}
+
 ProbeSet::ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, bool append)
     : case_(c), probes_(c.probes) {
   if (!writer || probes_.empty()) return;
@@ -156,16 +219,7 @@ ProbeSet::ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool wri
     const bool fresh = !append || !std::filesystem::exists(path);
     auto f = std::make_unique<std::ofstream>(path, fresh ? std::ios::trunc : std::ios::app);
     f->precision(9);
-    if (fresh) {
-      *f << "time,step,";
-      switch (p.type) {
-        case ProbeType::Pressure: *f << "pressure\n"; break;
-        case ProbeType::Velocity: *f << (c.dim == 2 ? "vx,vy\n" : "vx,vy,vz\n"); break;
-        case ProbeType::Height: *f << "height\n"; break;
-        case ProbeType::Force: *f << (c.dim == 2 ? "fx,fy\n" : "fx,fy,fz\n"); break;
-        case ProbeType::Front: *f << "front\n"; break;
-      }
-    }
+    if (fresh) *f << probe_header(p, c.dim) << '\n';
     files_.push_back(std::move(f));
   }
 }
@@ -182,7 +236,7 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
         // Exactly one slab owns the point and has numbers; the others send NaN.
         std::vector<double> mine;
         if (p.type == ProbeType::Velocity) mine = sample_velocity(w, p.position);
-        else mine.push_back(p.type == ProbeType::Pressure ? sample_pressure(w, p.position) : sample_height(w, p.position, case_));
+        else mine.push_back(p.type == ProbeType::Pressure ? sample_pressure(w, p.position) : sample_height(w, p, case_));
         Bytes b(mine.size() * sizeof(double));
         std::memcpy(b.data(), mine.data(), b.size());
         row.assign(mine.size(), 0.0);
@@ -201,7 +255,7 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
         row.resize(case_.dim);
         break;
       }
-      case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis))); break;
+      case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis, front_level(p, case_)))); break;
     }
     rows.push_back(row);
   }

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <exception>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <mutex>
 #include <numeric>
 #include <fstream>
@@ -131,27 +132,12 @@ GatheredParticles gather_to_writer(SlabWorker& w, const std::vector<SlabWorker*>
   return g;
 }
 
-SlabView slab_view(SlabWorker& w, int slab, int slab_count) {
-  ParticleStore& p = w.particles();
-  SlabView v;
-  v.slab = slab;
-  v.slab_count = slab_count;
-  v.dim = p.dim();
-  v.owned = p.owned();
-  for (int k = 0; k < p.dim(); ++k) {
-    v.pos[k] = p.pos[k].data();
-    v.vel[k] = p.vel[k].data();
-  }
-  v.pressure = p.pressure.data();
-  v.density = p.density.data();
-  v.id = p.id.data();
-  v.kind = p.kind.data();
-  return v;
-}
-
+// The progress line: on a terminal one line rewritten in place every second; otherwise (a log
+// file) an info message every 5 s, timestamped by the log.
 class Progress {
  public:
-  Progress(bool enabled, std::int64_t particles) : enabled_(enabled), particles_(particles), tty_(isatty(STDOUT_FILENO)) {}
+  Progress(bool enabled, std::int64_t particles)
+      : enabled_(enabled && spdlog::should_log(spdlog::level::info)), particles_(particles), tty_(isatty(STDOUT_FILENO)) {}
   void update(std::int64_t steps, double time, double end_time, double start_time, bool force = false) {
     if (!enabled_) return;
     const auto now = Clock::now();
@@ -164,10 +150,13 @@ class Progress {
     const double eta = done > 0 ? wall * (1 - done) / done : 0.0;
     const std::string line = fmt::format("t = {:.5f} s  step {}  {:.2f} steps/s  {:.3g} particle-steps/s  ETA {:.0f} s",
                                          time, steps, sps, sps * particles_, eta);
-    if (tty_) std::printf("\r%s   ", line.c_str());
-    else std::printf("%s\n", line.c_str());
-    std::fflush(stdout);
-    wrote_tty_ = tty_;
+    if (tty_) {
+      std::printf("\r%s   ", line.c_str());
+      std::fflush(stdout);
+      wrote_tty_ = true;
+    } else {
+      spdlog::info("{}", line);
+    }
   }
   void finish() {
     if (enabled_ && wrote_tty_) std::printf("\n");
@@ -287,8 +276,7 @@ class Worker {
         change.step = step;
         change.time = time;
         if (auto why = validate(change, s_.c.dim)) {
-          if (writer) std::fprintf(stderr, "spate: steering: rejected %s at step %lld: %s\n", change.name.c_str(),
-                                   static_cast<long long>(step), why->c_str());
+          if (writer) spdlog::warn("steering: rejected {} at step {}: {}", change.name, step, *why);
           if (writer) ++s_.result.steering_rejected;
           continue;
         }
@@ -299,7 +287,7 @@ class Worker {
           ++s_.result.steering_accepted;
           steering_log << to_log_line(change) << '\n';
           steering_log.flush();
-          if (!s_.opts.quiet) std::printf("\nspate: steering: %s applied from step %lld\n", to_log_line(change).c_str(), static_cast<long long>(step + 1));
+          spdlog::info("steering: {} applied from step {}", to_log_line(change), step + 1);
         }
       }
       w_.set_params(params);
@@ -403,7 +391,7 @@ class Worker {
     if (first != s_.workers.end() && *first == &w_) {
       std::vector<SlabView> views;
       for (std::size_t k = 0; k < s_.workers.size(); ++k)
-        if (s_.workers[k]) views.push_back(slab_view(*s_.workers[k], s_.workers_first_slab + static_cast<int>(k), t_.slab_count()));
+        if (s_.workers[k]) views.push_back(slab_view(s_.workers[k]->particles(), s_.workers_first_slab + static_cast<int>(k), t_.slab_count()));
       sink->execute(step, time, views);
     }
     t_.barrier();
@@ -430,6 +418,7 @@ class Worker {
     for (int s = 0; s < t_.slab_count(); ++s) pieces.push_back(step_name(step) + "/slab_" + std::to_string(s) + ".vtp");
     write_vtm(dir / (step_name(step) + ".vtm"), pieces);
     if (index) pvd.add(time, folder + "/" + step_name(step) + ".vtm");
+    spdlog::debug("snapshot of step {} (t = {:.6g} s): {}", step, time, (dir / (step_name(step) + ".vtm")).string());
   }
 
   std::filesystem::path write_checkpoint_now(double time, std::int64_t step, double dt) {
@@ -445,6 +434,7 @@ class Worker {
         const std::size_t size = fields[0][k].elem_size;
         for (const auto& e : all.by_id) std::memcpy(out, fields[e.slab][k].bytes() + e.index * size, size), out += size;
       });
+      spdlog::debug("checkpoint of step {} (t = {:.6g} s): {}", step, time, path.string());
       prune_checkpoints(path);
     }
     t_.barrier();

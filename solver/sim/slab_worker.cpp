@@ -227,7 +227,7 @@ std::optional<ParticleFault> SlabWorker::health(float min_ratio, float max_ratio
   std::optional<ParticleFault> fault;
   const auto& p = particles_;
   for (std::size_t i = 0; i < p.owned(); ++i) {
-    if (!is_fluid(p.kind[i])) continue;
+    if (!is_fluid(p.material[i])) continue;
     if (fault && p.id[i] >= fault->id) continue;
     float x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
     for (int a = 0; a < lattice_.dim; ++a) x[a] = p.pos[a][i], v[a] = p.vel[a][i];
@@ -265,7 +265,7 @@ PhaseCosts column_costs(const ParticleStore& p, const Lattice& lattice) {
   PhaseCosts c{std::vector<std::int64_t>(lattice.cells[0], 0), std::vector<std::int64_t>(lattice.cells[0], 0)};
   for (std::size_t i = 0; i < p.owned(); ++i) {
     const int column = lattice.cell_of(p.pos[0][i], 0);
-    if (is_fluid(p.kind[i])) c.fluid[column] += kFluidCost;
+    if (is_fluid(p.material[i])) c.fluid[column] += kFluidCost;
     else c.wall[column] += kWallCost;
   }
   return c;
@@ -277,7 +277,7 @@ PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice,
   std::vector<std::int64_t> fluid_count(columns, 0), wall_count(columns, 0);
   std::int64_t fluids = 0, walls = 0;
   for (std::size_t i = 0; i < p.owned(); ++i) {
-    const bool fluid = is_fluid(p.kind[i]);
+    const bool fluid = is_fluid(p.material[i]);
     ++(fluid ? fluid_count : wall_count)[lattice.cell_of(p.pos[0][i], 0)];
     ++(fluid ? fluids : walls);
   }

@@ -6,6 +6,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <unistd.h>
+#include <vtkDataArray.h>
+#include <vtkMultiBlockDataSet.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
 
 #include <algorithm>
 #include <array>
@@ -18,7 +22,9 @@
 
 #include "case/case.hpp"
 #include "catalyst_sink.hpp"
+#include "particle_dataset.hpp"
 #include "particles/particle_memory.hpp"
+#include "particles/particle_store.hpp"
 #include "sim/simulation.hpp"
 
 namespace fs = std::filesystem;
@@ -48,28 +54,34 @@ class CheckingSink : public InSituSink {
     inner_.execute(step, time, slabs);
     auto& seen = steps[step];
     for (const SlabView& v : slabs) {
+      const SlabArray* velocity = v.array("velocity");
+      ASSERT_NE(velocity, nullptr);
+      const float* pressure = v.array("pressure")->values<float>();
+      const float* density = v.array("density")->values<float>();
+      const std::uint32_t* ids = v.array("id")->values<std::uint32_t>();
+      const std::uint8_t* kind = v.array("kind")->values<std::uint8_t>();
       Buffers b{};
       for (int k = 0; k < 3; ++k) {
         b[k] = address(v.pos[k]);
-        b[3 + k] = address(v.vel[k]);
+        b[3 + k] = address(velocity->data[k]);
       }
-      b[6] = address(v.pressure);
-      b[7] = address(v.density);
-      b[8] = address(v.id);
-      b[9] = address(v.kind);
+      b[6] = address(pressure);
+      b[7] = address(density);
+      b[8] = address(ids);
+      b[9] = address(kind);
       buffers[step][v.slab] = b;
       dims = v.dim;
       for (std::size_t i = 0; i < v.owned; ++i) {
         Particle q{};
         for (int k = 0; k < 3; ++k) {
           q.x[k] = v.pos[k] ? v.pos[k][i] : 0.0f;
-          q.v[k] = v.vel[k] ? v.vel[k][i] : 0.0f;
+          q.v[k] = velocity->data[k] ? velocity->values<float>(k)[i] : 0.0f;
         }
-        q.p = v.pressure[i];
-        q.rho = v.density[i];
-        q.kind = v.kind[i];
+        q.p = pressure[i];
+        q.rho = density[i];
+        q.kind = kind[i];
         q.device = v.slab;
-        seen[v.id[i]] = q;
+        seen[ids[i]] = q;
       }
     }
   }
@@ -160,3 +172,30 @@ void run_and_check(int devices, const std::string& tag) {
 // with --gtest_filter for one at a time.
 TEST(CatalystZeroCopy, PipelineReceivesSolverBuffersOneDevice) { run_and_check(1, "one_device"); }
 TEST(CatalystZeroCopy, PipelineReceivesSolverBuffersTwoDevices) { run_and_check(2, "two_devices"); }
+// The dataset's point arrays come from the field registry: a field registered as one FieldSpec
+// (here a test-only one) reaches the pipelines as a point array over the solver's own memory.
+TEST(ParticleDataset, ARegisteredFieldBecomesAPointArrayOnSolverMemory) {
+  static constexpr FieldSpec tracer{"tracer", FieldType::F32, FieldShape::Scalar, FieldRole::State,
+                                    kMigrated | kCheckpointed | kGhost | kExported, "tracer", {"tracer"}};
+  const FieldExtension registered(tracer);
+  ParticleStore p(2);
+  p.resize(7);
+  p.set_owned(7);
+  float* values = nullptr;
+  for (const FieldRef& f : p.fields())
+    if (f.spec->member == "tracer") values = reinterpret_cast<float*>(f.bytes());
+  ASSERT_NE(values, nullptr);
+  for (int i = 0; i < 7; ++i) values[i] = 0.5f * static_cast<float>(i) + 3.0f;
+  catalyst::ParticleDataset dataset;
+  vtkMultiBlockDataSet* data = dataset.update({slab_view(p, 0, 1)});
+  auto* block = vtkPolyData::SafeDownCast(data->GetBlock(0));
+  ASSERT_NE(block, nullptr);
+  vtkDataArray* array = block->GetPointData()->GetArray("tracer");
+  ASSERT_NE(array, nullptr) << "the registered field is not a point array";
+  EXPECT_EQ(array->GetVoidPointer(0), static_cast<void*>(values)) << "the point array is a copy";
+  ASSERT_EQ(array->GetNumberOfTuples(), 7);
+  for (int i = 0; i < 7; ++i) EXPECT_EQ(array->GetTuple1(i), values[i]);
+  // The built-in exported fields are there too, under their exported names.
+  for (const char* name : {"velocity", "density", "pressure", "id", "kind", "device"})
+    EXPECT_NE(block->GetPointData()->GetArray(name), nullptr) << name;
+}

@@ -420,7 +420,8 @@ def unstable_kinds(env):
         check(any(n.endswith(".vtm") for n in os.listdir(os.path.join(out, "diagnostic"))), "no diagnostic snapshot")
 
 
-def main():
+def main(tests=TESTS):
+    """The command line of a test driver: this file's tests, or another driver's (post_tests.py)."""
     ap = argparse.ArgumentParser()
     ap.add_argument("--spate", required=True)
     ap.add_argument("--cases", required=True, help="tests/cases")
@@ -430,15 +431,15 @@ def main():
     ap.add_argument("names", nargs="*")
     args = ap.parse_args()
     if args.list:
-        print("\n".join(TESTS))
+        print("\n".join(tests))
         return 0
     failed = []
-    for name in args.names or list(TESTS):
-        if name not in TESTS:
+    for name in args.names or list(tests):
+        if name not in tests:
             print(f"unknown test {name}")
             return 2
         try:
-            TESTS[name](Env(args, name))
+            tests[name](Env(args, name))
             print(f"PASS {name}")
         except (Failure, subprocess.TimeoutExpired, json.JSONDecodeError) as e:
             print(f"FAIL {name}: {e}")

@@ -37,7 +37,7 @@ inline bool identical_checkpoints(const std::filesystem::path& a, const std::fil
   }
   auto fa = pa.fields(), fb = pb.fields();
   for (std::size_t f = 0; f < fa.size(); ++f) {
-    if (!fa[f].checkpoint) continue;
+    if (!fa[f].has(kCheckpointed)) continue;
     if (std::memcmp(fa[f].bytes(), fb[f].bytes(), pa.size() * fa[f].elem_size) != 0) {
       if (why) *why = "field " + std::string(fa[f].name) + " differs";
       return false;

@@ -31,7 +31,7 @@ HydrostaticResult run_hydrostatic(const std::string& file, double end_time, doub
   SlabWorker w(L, physics_params(c), *t);
   ParticleStore all = generate_particles(c);
   HydrostaticResult r;
-  for (auto k : all.kind) r.fluid_before += k == kFluid;
+  for (auto k : all.material) r.fluid_before += k == kFluid;
   w.take_share(all, SlabLayout::uniform(L.cells[0], 1));
   w.prepare(true);
   TimeStepControl ctl;
@@ -48,7 +48,7 @@ HydrostaticResult run_hydrostatic(const std::string& file, double end_time, doub
     time += dt;
     const ParticleStore& p = w.particles();
     for (std::size_t i = 0; i < p.owned(); ++i) {
-      if (p.kind[i] != kFluid) continue;
+      if (p.material[i] != kFluid) continue;
       for (int a = 0; a < c.dim; ++a) {
         const double lo = c.tank_origin[a], hi = c.tank_origin[a] + c.tank_size[a] * (a == v ? 2.0 : 1.0);
         if (p.pos[a][i] < lo || p.pos[a][i] > hi) ++r.escapes;
@@ -63,7 +63,7 @@ HydrostaticResult run_hydrostatic(const std::string& file, double end_time, doub
   }
   for (std::size_t k = 0; k < samples.size(); ++k)
     if (samples[k]) r.mean_pressure[k] /= static_cast<double>(samples[k]);
-  for (auto k : w.particles().kind) r.fluid_after += k == kFluid;
+  for (auto k : w.particles().material) r.fluid_after += k == kFluid;
   return r;
 }
 

@@ -44,7 +44,7 @@ solids:
 
 std::map<std::uint8_t, std::int64_t> kinds(const ParticleStore& p) {
   std::map<std::uint8_t, std::int64_t> n;
-  for (auto k : p.kind) ++n[k];
+  for (auto k : p.material) ++n[k];
   return n;
 }
 
@@ -103,7 +103,7 @@ TEST(Generator, WallParticlesSurroundTheInteriorOnly) {
   const ParticleStore p = generate_particles(c);
   for (std::size_t i = 0; i < p.size(); ++i) {
     const bool inside = p.pos[0][i] > 0 && p.pos[0][i] < 0.1f && p.pos[1][i] > 0;
-    if (p.kind[i] == kFluid) {
+    if (p.material[i] == kFluid) {
       EXPECT_TRUE(inside) << "fluid particle " << i << " in the wall";
       EXPECT_LE(p.pos[0][i], 0.05f);
       EXPECT_LE(p.pos[1][i], 0.03f);
@@ -136,7 +136,7 @@ TEST(Generator, HollowSolidKeepsWallLayersUnderItsFluidFaces) {
   EXPECT_EQ(k[kTankWall], 24 * 12 - 20 * 10);
   expect_distinct_sites(p, c.dp, c.tank_origin);
   for (std::size_t i = 0; i < p.size(); ++i) {
-    if (p.kind[i] != kFluid) continue;
+    if (p.material[i] != kFluid) continue;
     const bool in_solid = p.pos[0][i] > 0.10f && p.pos[0][i] < 0.16f && p.pos[1][i] < 0.06f;
     EXPECT_FALSE(in_solid) << "wet-bed particle " << i << " inside the solid";
   }
@@ -152,7 +152,7 @@ TEST(Generator, HydrostaticInitialDensity) {
   const ParticleStore p = generate_particles(c);
   const PhysicsParams P = physics_params(c);
   for (std::size_t i = 0; i < p.size(); ++i) {
-    if (p.kind[i] != kFluid) {
+    if (p.material[i] != kFluid) {
       EXPECT_EQ(p.density[i], P.rho0);
       continue;
     }

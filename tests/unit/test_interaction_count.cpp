@@ -64,8 +64,8 @@ cpu::InteractionCounts brute_force(const Case& c) {
     const Vec<Dim> xi = load_vec<Dim>(p.pos, i);
     for (std::size_t j = 0; j < p.size(); ++j) {
       if (j == i || distance_squared<Dim>(xi, p.pos, j) >= P.support2) continue;
-      if (is_fluid(p.kind[i])) ++n.fluid;
-      else if (is_fluid(p.kind[j])) ++n.wall;
+      if (is_fluid(p.material[i])) ++n.fluid;
+      else if (is_fluid(p.material[j])) ++n.wall;
     }
   }
   if (P.density_mode == DensityMode::Summation) n.summation = n.fluid;

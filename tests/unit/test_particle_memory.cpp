@@ -15,13 +15,13 @@ using namespace spate;
 
 TEST(ParticleMemory, HeapUntilShared) {
   EXPECT_EQ(shared_particle_memory(), nullptr);
-  ParticleArray<float> a(1000, 1.5f);
+  FieldVector<float> a(1000, 1.5f);
   EXPECT_EQ(a[999], 1.5f);
   EXPECT_EQ(shared_particle_bytes_in_use(), 0u);
 }
 
 TEST(ParticleMemory, SharedArraysAreSeenByASecondMapping) {
-  ParticleArray<float> before(100, 2.0f);  // heap, freed on the heap after sharing
+  FieldVector<float> before(100, 2.0f);  // heap, freed on the heap after sharing
   const SharedParticleMemory& region = share_particle_memory();
   EXPECT_EQ(&region, shared_particle_memory());
   EXPECT_GE(region.size, std::size_t{1} << 30);
@@ -42,7 +42,7 @@ TEST(ParticleMemory, SharedArraysAreSeenByASecondMapping) {
   EXPECT_EQ(seen[4321], -7.0f);
   munmap(view, region.size);
 
-  before = ParticleArray<float>(3, 1.0f);  // frees the heap block, allocates in the arena
+  before = FieldVector<float>(3, 1.0f);  // frees the heap block, allocates in the arena
   EXPECT_TRUE(region.contains(before.data()));
 }
 
@@ -50,14 +50,14 @@ TEST(ParticleMemory, FreedBlocksMergeAndAreReused) {
   const SharedParticleMemory& region = share_particle_memory();
   const std::size_t base_use = shared_particle_bytes_in_use();
   const std::size_t n = 3 * 4096 / sizeof(float);  // three pages each
-  auto* a = new ParticleArray<float>(n);
-  auto* b = new ParticleArray<float>(n);
-  auto* c = new ParticleArray<float>(n);
+  auto* a = new FieldVector<float>(n);
+  auto* b = new FieldVector<float>(n);
+  auto* c = new FieldVector<float>(n);
   EXPECT_EQ(shared_particle_bytes_in_use(), base_use + 9 * 4096);
   const float* first = a->data();
   delete b;
   delete a;  // a and b merge into six free pages at a's place
-  ParticleArray<float> both(2 * n);
+  FieldVector<float> both(2 * n);
   EXPECT_EQ(both.data(), first);
   EXPECT_TRUE(region.contains(both.data()));
   for (float v : both) EXPECT_EQ(v, 0.0f);

@@ -66,10 +66,10 @@ TEST(ParticlePack, GhostSetCarriesWhatNeighboursNeed) {
   EXPECT_EQ(dst.owned(), 4u);  // appended particles are ghosts
   for (std::size_t k = 0; k < 4; ++k) EXPECT_TRUE(same_particle(before, k, dst, k, FieldSet::All));
   for (std::size_t k = 0; k < picked.size(); ++k) EXPECT_TRUE(same_particle(src, picked[k], dst, 4 + k, FieldSet::Ghost));
-  // Positions, velocities, density, pressure, id and kind are ghost fields; rates are not.
+  // Positions, velocities, density, pressure, id and material are ghost fields; rates are not.
   for (auto& f : src.fields()) {
     const bool expected = f.name == "x" || f.name == "y" || f.name == "z" || f.name == "vx" || f.name == "vy" ||
-                          f.name == "vz" || f.name == "density" || f.name == "pressure" || f.name == "id" || f.name == "kind";
+                          f.name == "vz" || f.name == "density" || f.name == "pressure" || f.name == "id" || f.name == "material";
     EXPECT_EQ(in_set(f, FieldSet::Ghost), expected) << f.name;
   }
 }

@@ -87,7 +87,7 @@ class ResidentKernels : public StepKernels {
     ParticleStore& p = store();
     ParticleStore before = p;
     cpu::fluid_rates(p, arrays_.grid(), P);
-    auto keep = [&](ParticleArray<float>& now, const ParticleArray<float>& old) {
+    auto keep = [&](FieldVector<float>& now, const FieldVector<float>& old) {
       for (std::size_t i = 0; i < p.owned(); ++i)
         if (i < range.first || i >= range.end()) now[i] = old[i];
     };
@@ -206,7 +206,7 @@ std::vector<std::vector<char>> run(const Case& c, int slabs, int steps, const st
   all.permute(0, order);
   std::vector<std::vector<char>> out;
   for (auto& f : all.fields())
-    if (f.checkpoint) out.emplace_back(f.bytes(), f.bytes() + all.size() * f.elem_size);
+    if (f.has(kCheckpointed)) out.emplace_back(f.bytes(), f.bytes() + all.size() * f.elem_size);
   return out;
 }
 
@@ -354,7 +354,7 @@ TEST(ResidentTopology, DeviceHealthAndDomainChecksFindTheHostsFault) {
   };
   std::vector<std::uint32_t> fluid;
   for (std::size_t i = 0; i < device.owned(); ++i)
-    if (is_fluid(device.kind[i])) fluid.push_back(device.id[i]);
+    if (is_fluid(device.material[i])) fluid.push_back(device.id[i]);
   ASSERT_GE(fluid.size(), 2u);
   std::sort(fluid.begin(), fluid.end());
   for (ParticleStore* p : {&host.particles(), &device}) {

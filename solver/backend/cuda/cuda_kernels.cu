@@ -37,21 +37,21 @@ __device__ std::uint32_t thread_index() { return blockIdx.x * blockDim.x + threa
 
 __global__ void predict_kernel(DeviceFields d, int dim, std::uint32_t n, float dt, bool continuity) {
   const std::uint32_t i = thread_index();
-  if (i >= n || !is_fluid(d.kind[i])) return;
+  if (i >= n || !is_fluid(d.material[i])) return;
   for (int k = 0; k < dim; ++k) predict_component(d.pos[k][i], d.vel[k][i], d.acc_prev[k][i], dt);
   if (continuity) predict_density(d.density[i], d.density_rate_prev[i], dt);
 }
 
 __global__ void correct_kernel(DeviceFields d, int dim, std::uint32_t n, float dt, bool continuity) {
   const std::uint32_t i = thread_index();
-  if (i >= n || !is_fluid(d.kind[i])) return;
+  if (i >= n || !is_fluid(d.material[i])) return;
   for (int k = 0; k < dim; ++k) correct(d.vel[k][i], d.acc[k][i], d.acc_prev[k][i], dt);
   if (continuity) correct(d.density[i], d.density_rate[i], d.density_rate_prev[i], dt);
 }
 
 __global__ void eos_kernel(DeviceFields d, std::uint32_t n, PhysicsParams P) {
   const std::uint32_t i = thread_index();
-  if (i < n && is_fluid(d.kind[i])) d.pressure[i] = tait_pressure(d.density[i], P.rho0, P.tait_b);
+  if (i < n && is_fluid(d.material[i])) d.pressure[i] = tait_pressure(d.density[i], P.rho0, P.tait_b);
 }
 
 // One thread per owned particle running one of the shared per-particle bodies
@@ -90,7 +90,7 @@ __global__ void neighbour_kernel(DeviceFields d, std::uint32_t first, std::uint3
 __global__ void time_step_kernel(DeviceFields d, int dim, std::uint32_t n, PhysicsParams P, TimeStepControl c, float* out) {
   const std::uint32_t i = thread_index();
   if (i >= n) return;
-  if (!is_fluid(d.kind[i])) {
+  if (!is_fluid(d.material[i])) {
     out[i] = INFINITY;
     return;
   }

@@ -169,7 +169,7 @@ __global__ void health_kernel(DeviceFields d, int dim, HealthLimits h, std::uint
   if (i >= n) return;
   float x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
   for (int a = 0; a < dim; ++a) x[a] = d.pos[a][i], v[a] = d.vel[a][i];
-  const bool ok = !is_fluid(d.kind[i]) || healthy(h, state_finite(dim, x, v, d.density[i]), d.density[i]);
+  const bool ok = !is_fluid(d.material[i]) || healthy(h, state_finite(dim, x, v, d.density[i]), d.density[i]);
   out[i] = ok ? kNone : d.id[i];
 }
 
@@ -194,20 +194,6 @@ DeviceSlabArrays::DeviceSlabArrays(int device, int dim) : device_(device), dim_(
   result_host_.reserve(64);
   ParticleStore layout(dim);
   for (auto& f : layout.fields()) arrays_.push_back({f, nullptr});
-  static constexpr std::string_view pos[3] = {"x", "y", "z"}, vel[3] = {"vx", "vy", "vz"}, acc[3] = {"ax", "ay", "az"},
-                                    prev[3] = {"ax_prev", "ay_prev", "az_prev"};
-  for (int k = 0; k < dim; ++k) {
-    pos_[k] = field(pos[k]);
-    vel_[k] = field(vel[k]);
-    acc_[k] = field(acc[k]);
-    acc_prev_[k] = field(prev[k]);
-  }
-  density_ = field("density");
-  pressure_ = field("pressure");
-  rate_ = field("density_rate");
-  rate_prev_ = field("density_rate_prev");
-  id_ = field("id");
-  kind_ = field("kind");
 }
 
 DeviceSlabArrays::~DeviceSlabArrays() {
@@ -231,33 +217,41 @@ DeviceSlabArrays::~DeviceSlabArrays() {
 
 void DeviceSlabArrays::select() const { check(cudaSetDevice(device_), "cudaSetDevice"); }
 
-int DeviceSlabArrays::field(std::string_view name) const {
+int DeviceSlabArrays::index_of(int field, int component) const {
   for (std::size_t f = 0; f < arrays_.size(); ++f)
-    if (arrays_[f].meta.name == name) return static_cast<int>(f);
-  throw std::logic_error("DeviceSlabArrays: the host store has no field " + std::string(name));
+    if (arrays_[f].meta.spec == &kParticleFields[field] && arrays_[f].meta.component == component) return static_cast<int>(f);
+  throw std::logic_error("DeviceSlabArrays: no array for component " + std::to_string(component) + " of field " +
+                         std::string(kParticleFields[field].member));
 }
 
+namespace {
+// Binds a DeviceFields member to the next array(s) of ParticleStore::fields() order.
+template <class T>
+void bind(T*& p, const char* const* data, std::size_t& at, int) {
+  p = reinterpret_cast<T*>(const_cast<char*>(data[at++]));
+}
+template <class T>
+void bind(T* (&p)[3], const char* const* data, std::size_t& at, int dim) {
+  for (int k = 0; k < 3; ++k) p[k] = k < dim ? reinterpret_cast<T*>(const_cast<char*>(data[at++])) : nullptr;
+}
+}  // namespace
+
+// The registry's fields come first in arrays_, in registry order, dim components per vector
+// (ParticleStore::fields()); run-time extensions follow and have no DeviceFields member.
 DeviceFields DeviceSlabArrays::fields() const {
+  std::vector<const char*> data(arrays_.size());
+  for (std::size_t f = 0; f < arrays_.size(); ++f) data[f] = arrays_[f].data;
   DeviceFields d{};
-  auto f32 = [&](int f) { return reinterpret_cast<float*>(arrays_[f].data); };
-  for (int k = 0; k < dim_; ++k) {
-    d.pos[k] = f32(pos_[k]);
-    d.vel[k] = f32(vel_[k]);
-    d.acc[k] = f32(acc_[k]);
-    d.acc_prev[k] = f32(acc_prev_[k]);
-  }
-  d.density = f32(density_);
-  d.pressure = f32(pressure_);
-  d.density_rate = f32(rate_);
-  d.density_rate_prev = f32(rate_prev_);
-  d.id = reinterpret_cast<const std::uint32_t*>(arrays_[id_].data);
-  d.kind = reinterpret_cast<const std::uint8_t*>(arrays_[kind_].data);
+  std::size_t at = 0;
+#define SPATE_BIND_FIELD(member, ...) bind(d.member, data.data(), at, dim_);
+  SPATE_PARTICLE_FIELDS(SPATE_BIND_FIELD)
+#undef SPATE_BIND_FIELD
   return d;
 }
 
 void DeviceSlabArrays::swap_rates() {
-  for (int k = 0; k < dim_; ++k) std::swap(arrays_[acc_[k]].data, arrays_[acc_prev_[k]].data);
-  std::swap(arrays_[rate_].data, arrays_[rate_prev_].data);
+  for (int k = 0; k < dim_; ++k) std::swap(arrays_[index_of(kField_acc, k)].data, arrays_[index_of(kField_acc_prev, k)].data);
+  std::swap(arrays_[index_of(kField_density_rate, 0)].data, arrays_[index_of(kField_density_rate_prev, 0)].data);
 }
 
 // Grows every per-slot array, keeping the fields and keys of [0, size_); the sort buffers and the
@@ -410,7 +404,7 @@ void DeviceSlabArrays::sort_by_key(std::size_t first, std::size_t last) {
   sort_count_ = n;
   if (n == 0) return;
   const SortWord word = sort_word(key_count_, id_bound_);
-  launch(compute_, n, compose_kernel, keys_.as<const std::uint32_t>(), reinterpret_cast<const std::uint32_t*>(arrays_[id_].data),
+  launch(compute_, n, compose_kernel, keys_.as<const std::uint32_t>(), static_cast<const std::uint32_t*>(fields().id),
          word.id_bits, sort_keys_[0].as<std::uint64_t>(), sort_values_[0].as<std::uint32_t>(), u32(first), u32(n));
   cub::DoubleBuffer<std::uint64_t> words(sort_keys_[0].as<std::uint64_t>(), sort_keys_[1].as<std::uint64_t>());
   cub::DoubleBuffer<std::uint32_t> perm(sort_values_[0].as<std::uint32_t>(), sort_values_[1].as<std::uint32_t>());
@@ -478,7 +472,7 @@ void DeviceSlabArrays::gather_fields(FieldSet set, const std::uint32_t* from, st
     else
       launch(compute_, count, gather_kernel<std::uint8_t>, reinterpret_cast<const std::uint8_t*>(a.data), from,
              reinterpret_cast<std::uint8_t*>(dst), u32(count));
-    if (shift.axis >= 0 && static_cast<int>(f) == pos_[shift.axis])
+    if (shift.axis >= 0 && a.meta.spec == &kParticleFields[kField_pos] && a.meta.component == shift.axis)
       launch(compute_, count, shift_kernel, reinterpret_cast<float*>(dst), u32(count), shift.offset);
   }
 }
@@ -496,7 +490,7 @@ void DeviceSlabArrays::stage(Side side, FieldSet set, ParticleRange range, Shift
     const std::size_t b = range.count * a.meta.elem_size;
     check(cudaMemcpyAsync(outbox_[side].data + at, a.data + range.first * a.meta.elem_size, b, cudaMemcpyDeviceToDevice, compute_),
           "stage");
-    if (shift.axis >= 0 && static_cast<int>(f) == pos_[shift.axis])
+    if (shift.axis >= 0 && a.meta.spec == &kParticleFields[kField_pos] && a.meta.component == shift.axis)
       launch(compute_, range.count, shift_kernel, reinterpret_cast<float*>(outbox_[side].data + at), u32(range.count), shift.offset);
     at += b;
   }

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "../../domain/slab_arrays.hpp"
@@ -18,19 +19,52 @@ namespace spate::gpu {
 
 void check(cudaError_t e, const char* what);
 
-// The device arrays of one slab, by value into every kernel. Components beyond dim are null.
-struct DeviceFields {
-  float* pos[3];
-  float* vel[3];
-  float* acc[3];
-  float* acc_prev[3];
-  float* density;
-  float* pressure;
-  float* density_rate;
-  float* density_rate_prev;
-  const std::uint32_t* id;
-  const std::uint8_t* kind;
+// The device arrays of one slab, by value into every kernel: one pointer per component of every
+// registry field (field_registry.hpp), e.g. float* pos[3], float* density, std::uint8_t* material.
+// Components beyond dim are null.
+template <class T, FieldShape S>
+struct DevicePointers {
+  using type = T*;
 };
+template <class T>
+struct DevicePointers<T, FieldShape::Vector> {
+  using type = T* [3];
+};
+struct DeviceFields {
+#define SPATE_DEVICE_MEMBER(member, ctype, shape, ...) typename DevicePointers<ctype, FieldShape::shape>::type member;
+  SPATE_PARTICLE_FIELDS(SPATE_DEVICE_MEMBER)
+#undef SPATE_DEVICE_MEMBER
+};
+
+// Host and device layouts agree field by field: the same element type and the same number of
+// component arrays (both are generated from the registry; this catches a hand edit of either).
+template <class Host>
+struct HostLayout {
+  using element = typename Host::value_type;
+  static constexpr int arrays = 1;
+};
+template <class Host>
+struct HostLayout<Host[3]> {
+  using element = typename Host::value_type;
+  static constexpr int arrays = 3;
+};
+template <class Device>
+struct DeviceLayout {
+  using element = std::remove_pointer_t<Device>;
+  static constexpr int arrays = 1;
+};
+template <class Device>
+struct DeviceLayout<Device[3]> {
+  using element = std::remove_pointer_t<Device>;
+  static constexpr int arrays = 3;
+};
+#define SPATE_SAME_LAYOUT(member, ...)                                                                                      \
+  static_assert(std::is_same_v<HostLayout<decltype(ParticleStore::member)>::element,                                      \
+                               DeviceLayout<decltype(DeviceFields::member)>::element> &&                                  \
+                    HostLayout<decltype(ParticleStore::member)>::arrays == DeviceLayout<decltype(DeviceFields::member)>::arrays, \
+                "host and device layouts of field '" #member "' differ");
+SPATE_PARTICLE_FIELDS(SPATE_SAME_LAYOUT)
+#undef SPATE_SAME_LAYOUT
 
 // Device memory that grows (with headroom, never shrinking); growing discards the contents.
 struct DeviceBuffer {
@@ -99,10 +133,11 @@ class DeviceSlabArrays final : public SlabArrays, private DeviceCopies {
 
  private:
   struct Array {
-    FieldRef meta;  // name, element size, sets (data unused)
+    FieldRef meta;  // registry entry, component, element size (data unused)
     char* data = nullptr;
   };
-  int field(std::string_view name) const;
+  // The array of component `component` of registry field `field`.
+  int index_of(int field, int component) const;
   void reserve(std::size_t n);  // particle slots, keeping [0, size_)
   void* cub_scratch(std::size_t bytes);
   // DeviceCopies, for HaloExchange: cudaMemcpy*Async on the copy stream.
@@ -124,9 +159,7 @@ class DeviceSlabArrays final : public SlabArrays, private DeviceCopies {
   cudaStream_t compute_ = nullptr, copy_ = nullptr;
   cudaEvent_t staged_ = nullptr;    // the outgoing buffers are complete
   cudaEvent_t consumed_ = nullptr;  // the incoming buffers were read (append, scatter)
-  std::vector<Array> arrays_;
-  int pos_[3] = {-1, -1, -1}, vel_[3] = {-1, -1, -1}, acc_[3] = {-1, -1, -1}, acc_prev_[3] = {-1, -1, -1};
-  int density_ = -1, pressure_ = -1, rate_ = -1, rate_prev_ = -1, id_ = -1, kind_ = -1;
+  std::vector<Array> arrays_;  // ParticleStore(dim).fields(), in that order
   std::size_t capacity_ = 0, size_ = 0, owned_ = 0;
 
   DeviceBuffer keys_, sort_keys_[2], sort_values_[2], scratch_, cub_;

@@ -31,7 +31,7 @@ std::size_t grown_capacity(std::size_t needed, std::size_t current);
 
 // What the device store holds per particle slot, in bytes (the fields mirror ParticleStore's).
 struct DeviceFootprint {
-  std::size_t field_bytes = 0;    // pos, vel, acc, acc_prev, density, pressure, rates, id, kind
+  std::size_t field_bytes = 0;    // every registry field (field_registry.hpp), as on the host
   std::size_t sort_bytes = 0;     // the key, CUB's double-buffered (key, id) words and permutation
   std::size_t scratch_bytes = 0;  // one 4-byte word: gathers of the sort, reduction inputs
   std::size_t per_particle() const { return field_bytes + sort_bytes + scratch_bytes; }
