@@ -17,7 +17,9 @@ out to it. The test checks, from the simulation's outputs:
   5. with nobody listening, --live runs on normally (exit 0, same result as without --live);
   6. neither the simulation nor any child of it listens on a TCP or UDP port (sampled from /proc
      while it runs);
-  7. a bad --live address, or --live with --steering-log, is bad input (exit 2).
+  7. a bad --live address, or --live with --steering-log, is bad input (exit 2);
+  8. the pvpython recipe in docs/live.md, run as written, receives the particles and its gravity
+     change reaches steering.log.
 
 Usage: live_test.py SPATE PVPYTHON SOURCE_DIR WORK_DIR
 Every wait is bounded; child processes are killed on any exit.
@@ -25,6 +27,7 @@ Every wait is bounded; child processes are killed on any exit.
 import glob
 import json
 import os
+import re
 import shutil
 import signal
 import socket
@@ -76,8 +79,9 @@ def free_port_pair():
     fail("no free pair of localhost ports")
 
 
-def start(cmd, log):
-    p = subprocess.Popen(cmd, stdout=open(log + ".out", "w"), stderr=open(log + ".err", "w"), start_new_session=True)
+def start(cmd, log, cwd=None):
+    p = subprocess.Popen(cmd, stdout=open(log + ".out", "w"), stderr=open(log + ".err", "w"), start_new_session=True,
+                         cwd=cwd)
     children.append(p)
     return p
 
@@ -250,6 +254,38 @@ try:
     for name in ("live", "nobody_listening"):
         if listened.get(name):
             fail(f"spate run --live ({name}) listened on TCP ports {sorted(listened[name])}")
+
+    # 8. the pvpython recipe of docs/live.md, run as it stands there (from the source tree)
+    docs = open(os.path.join(src, "docs", "live.md")).read()
+    at = docs.find("<!-- recipe: steer.py")
+    match = re.search(r"```python\n(.*?)```", docs[at:], re.S) if at >= 0 else None
+    if not match:
+        fail("docs/live.md has no steer.py recipe")
+    recipe = os.path.join(work, "steer.py")
+    with open(recipe, "w") as f:
+        f.write(match.group(1))
+    port = free_port_pair()
+    log = os.path.join(work, "recipe_client")
+    client = start([pvpython, recipe, str(port)], log, cwd=src)
+    deadline = time.time() + 60
+    while "listening on port" not in open(log + ".out").read():
+        if client.poll() is not None or time.time() > deadline:
+            fail(f"the docs/live.md recipe did not start listening:\n{open(log + '.err').read()[-2000:]}")
+        time.sleep(0.1)
+    code, recipe_out = run(["--live", f"localhost:{port}"], "recipe")
+    client_code = wait(client, 60, "the docs/live.md recipe")
+    said = open(log + ".out").read()
+    print("docs/live.md recipe:", *[l for l in said.splitlines() if l.startswith(("step", "asked", "disconnecting"))],
+          sep="\n  ")
+    if code != 0 or client_code != 0:
+        fail(f"docs/live.md recipe: spate exit {code}, recipe exit {client_code}:\n{open(log + '.err').read()[-2000:]}")
+    if f": {expected} particles" not in said:
+        fail(f"the recipe did not receive the {expected} particles:\n{said}")
+    asked = int(re.search(r"asked for gravity \(2, -9.81, 0\) at step (\d+)", said).group(1))
+    log_lines = [l.split() for l in open(os.path.join(recipe_out, "steering.log")) if l.strip() and not l.startswith("#")]
+    if len(log_lines) != 1 or log_lines[0][2] != "gravity" or int(log_lines[0][0]) < asked or \
+            [float(v) for v in log_lines[0][3:]] != [2.0, -9.81, 0.0]:
+        fail(f"the recipe's gravity change is not in steering.log as asked at step {asked}: {log_lines}")
     print("live round trip: OK")
 finally:
     cleanup()
