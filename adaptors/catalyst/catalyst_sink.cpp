@@ -9,10 +9,12 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
 #include <set>
+#include <string_view>
 
 #include "extract_index.hpp"
 #include "helper_process.hpp"
@@ -400,7 +402,12 @@ CatalystSink::CatalystSink(CatalystOptions options) : impl_(std::make_unique<Imp
   m.timing.script_seconds.assign(m.scripts.size(), 0.0);
   m.options = std::move(options);
   quiet_mpi_environment();
-  m.isolated = m.options.isolation == Isolation::kHelper || (m.options.isolation == Isolation::kAuto && !mpi_initialised());
+  // SPATE_INSITU_IN_PROCESS=1 runs the pipelines in the solver's process (no isolation: for a
+  // debugger, and to measure what the helper costs; docs/insitu.md).
+  const char* in_process = std::getenv("SPATE_INSITU_IN_PROCESS");
+  const bool asked_in_process = in_process && std::string_view(in_process) == "1";
+  m.isolated = m.options.isolation == Isolation::kHelper ||
+               (m.options.isolation == Isolation::kAuto && !mpi_initialised() && !asked_in_process);
   if (mpi_rank() == 0 && !m.options.working_dir.empty()) m.index = std::make_unique<ExtractIndex>(m.options.working_dir);
   if (!m.isolated) {
     m.start_in_process();
@@ -447,8 +454,13 @@ void CatalystSink::execute(std::int64_t step, double time, const std::vector<Sla
   m.current = -1;
   m.done.clear();
   if (m.index) m.index->begin_step();
+  const auto t0 = std::chrono::steady_clock::now();
   if (m.isolated) m.run_isolated(slabs);
   else m.run_in_process(slabs);
+  {
+    std::lock_guard lock(m.mutex);
+    m.timing.solver_wait_step_seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
   ++m.steps_done;
   if (m.index) {
     const std::string error = m.index->write(false);

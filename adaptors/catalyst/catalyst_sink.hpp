@@ -65,6 +65,9 @@ struct InSituTiming {
   double pipelines_seconds = 0.0;         // the pipelines' own work, all scripts (sum over steps)
   std::vector<double> pipelines_step_seconds;  // the same, step by step (the first one imports the scripts)
   std::vector<double> script_seconds;     // per script, same order as the options (live.py last)
+  // What the solver waited for each in-situ step: the above plus, isolated, the round trip to the
+  // helper (and any restart of it).
+  std::vector<double> solver_wait_step_seconds;
 };
 
 class CatalystSink final : public InSituSink {

@@ -143,17 +143,22 @@ class LiveHandshakeWatch {
 class Reporter : public ScriptObserver {
  public:
   Reporter(int socket, int live_id, LiveHandshakeWatch* watch) : socket_(socket), live_id_(live_id), watch_(watch) {}
+  // A script is announced once per stretch of work (ParaView asks it twice, then runs it).
   void started(int id) override {
+    if (id == running_) return;
+    running_ = id;
     wire::send(socket_, {{"type", "started"}, {"id", id}});
     if (watch_ && id == live_id_) watch_->arm(true);
   }
   void finished(int id) override {
     if (watch_ && id == live_id_) watch_->arm(false);
+    running_ = -1;
     wire::send(socket_, {{"type", "finished"}, {"id", id}});
   }
 
  private:
   int socket_, live_id_;
+  int running_ = -1;
   LiveHandshakeWatch* watch_;
 };
 

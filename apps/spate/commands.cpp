@@ -67,6 +67,7 @@ void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::pa
   j["adaptor_seconds_each_step"] = t.adaptor_step_seconds;
   j["pipelines_seconds_per_step"] = t.pipelines_seconds / n;
   j["pipelines_seconds_each_step"] = t.pipelines_step_seconds;
+  j["solver_wait_seconds_each_step"] = t.solver_wait_step_seconds;
   j["script_seconds_per_step"] = nlohmann::json::array();
   for (double s : t.script_seconds) j["script_seconds_per_step"].push_back(s / n);
   j["failures"] = sink.failures();
