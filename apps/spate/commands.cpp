@@ -208,16 +208,26 @@ int run_command(const RunArgs& a) {
 #endif
 
   RunResult r;
+  std::string bad_input;  // found once the run had started: a pipeline that fails to load
   try {
     r = Simulation(c, o).run();
   } catch (const InputError& e) {
-    throw BadInput(e.what());
+    bad_input = e.what();
+    r.exit_code = 2;
+    r.exit_status = "bad input";
+    r.message = bad_input;
+#ifdef SPATE_WITH_CATALYST
+    if (insitu) r.insitu_failures = insitu->failures();
+#endif
   } catch (const CaseError& e) {
     throw BadInput(e.what());
   }
   // Every rank knows the outcome; rank 0 reports it.
   const ProcessGroup& group = process_group();
-  if (group.rank != 0) return r.exit_code;
+  if (group.rank != 0) {
+    if (!bad_input.empty()) throw BadInput(bad_input);
+    return r.exit_code;
+  }
 #ifdef SPATE_WITH_CATALYST
   if (insitu) report_insitu(*insitu, o.out_dir);
 #endif
@@ -226,7 +236,9 @@ int run_command(const RunArgs& a) {
   x.devices = a.devices;
   x.backend = a.backend;
   x.ranks = group.ranks;
+  // Also for bad input found during the run: every run that got this far leaves its summary.
   write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
+  if (!bad_input.empty()) throw BadInput(bad_input);
   if (r.exit_code == 3) {
     spdlog::error("the run went unstable: {}", r.message);
   } else {

@@ -124,8 +124,8 @@ def pipeline_failures_later():
 
 
 def pipeline_failures_at_load():
-    """Pipelines that exit, crash or hang while loading: the run stops before step 1 with exit 2
-    and a message naming the script (bad input), never a signal, a hang or exit 0."""
+    """Pipelines that exit, crash or hang while loading: the run stops before step 1 with exit 2, a
+    message naming the script (bad input) and its summary.json; never a signal, a hang or exit 0."""
     for name, (what, words) in MISDEEDS.items():
         if name == "raises":
             continue  # insitu_errors covers a Python error at load
@@ -134,7 +134,10 @@ def pipeline_failures_at_load():
                                    seconds=120)
         if code != 2 or "failed to load" not in err or path not in err:
             fail(f"{name} at load: expected exit 2 naming the script, got {code}:\n{err[-2000:]}")
-        print(f"{name} at load: exit 2, named")
+        s = summary(out)
+        if s["exit_code"] != 2 or path not in s.get("message", ""):
+            fail(f"{name} at load: summary.json should say exit 2 and name the script: {s.get('exit_code')} {s.get('message')}")
+        print(f"{name} at load: exit 2, named, in summary.json")
 
 
 KILL_DISPLAY = '''
