@@ -80,7 +80,7 @@ HelperProcess::HelperProcess(const std::filesystem::path& program, const std::st
 
 HelperProcess::~HelperProcess() {
   if (pid_ > 0) {
-    kill(pid_, SIGKILL);
+    kill(-pid_, SIGKILL);
     waitpid(pid_, nullptr, 0);
   }
   if (socket_ >= 0) close(socket_);
@@ -94,7 +94,7 @@ std::string HelperProcess::wait_for(double seconds) {
     if (r == pid_) break;
     if (r < 0 && errno != EINTR) return "ended";
     if (std::chrono::steady_clock::now() > deadline) {
-      kill(pid_, SIGKILL);
+      kill(-pid_, SIGKILL);
       waitpid(pid_, &status, 0);
       pid_ = -1;
       return fmt::format("did not end within {:g} s and was killed", seconds);
@@ -114,7 +114,7 @@ std::string HelperProcess::reap(double seconds) { return pid_ > 0 ? wait_for(sec
 
 std::string HelperProcess::kill_now() {
   if (pid_ <= 0) return "ended";
-  kill(pid_, SIGKILL);
+  kill(-pid_, SIGKILL);
   int status = 0;
   waitpid(pid_, &status, 0);
   return ended(status);

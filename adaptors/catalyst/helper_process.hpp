@@ -2,7 +2,7 @@
 // The solver's handle on its in-situ helper process (insitu_helper.hpp): starts it, talks to it,
 // and says how it ended when it did. Started with posix_spawn (safe while the solver's threads run)
 // in its own process group, so that a Ctrl-C in the terminal reaches only the solver, which stops
-// the helper itself.
+// the helper itself; killing it kills that group (anything a pipeline started goes too).
 #include <sys/types.h>
 
 #include <filesystem>

@@ -260,6 +260,11 @@ int run_insitu_helper(int argc, char** argv) {
   prctl(PR_SET_PDEATHSIG, SIGKILL);
   if (getppid() != parent) return 1;
   signal(SIGINT, SIG_IGN);
+  // When memory runs out, the kernel should end a pipeline's greed here, not the solver.
+  if (std::FILE* f = std::fopen("/proc/self/oom_score_adj", "w")) {
+    std::fputs("500", f);
+    std::fclose(f);
+  }
   configure_logging(spdlog::level::info);
   const int status = serve(socket, arena);
   // VTK's and Python's static destructors at exit can hang or crash; everything is finalised.
