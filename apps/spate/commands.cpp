@@ -20,9 +20,11 @@
 #include "backend/cuda/device_runtime.hpp"
 #include "case/case.hpp"
 #include "case/generator.hpp"
+#include "case/thin_features.hpp"
 #include "comm/in_process_transport.hpp"
 #include "comm/process_group.hpp"
 #include "io/checkpoint.hpp"
+#include "io/field_scale.hpp"
 #include "io/run_summary.hpp"
 #include "sim/simulation.hpp"
 #include "sim/slab_worker.hpp"
@@ -100,6 +102,15 @@ std::filesystem::path pipelines_dir() {
 }
 #endif
 
+// Thin fluid features (case/thin_features.hpp), each a warning; returns the messages.
+std::vector<std::string> warn_thin_features(const Case& c) {
+  std::vector<std::string> messages;
+  for (const ThinFeature& f : thin_features(c)) messages.push_back(c.file + ": " + f.message(c.dp));
+  if (process_group().rank == 0)
+    for (auto& m : messages) spdlog::warn("{}", m);
+  return messages;
+}
+
 int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 }  // namespace
@@ -107,6 +118,7 @@ int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardw
 int run_command(const RunArgs& a) {
   Case c = load(a.case_file, a.overrides);
   check_backend(a.backend);
+  const std::vector<std::string> warnings = warn_thin_features(c);
   // In situ: the command line replaces the case file's `insitu:` section.
   const std::vector<std::string> pipelines = a.pipelines.empty() ? c.insitu_pipelines : a.pipelines;
   [[maybe_unused]] const int insitu_every = a.insitu_every.value_or(c.insitu_every);
@@ -130,6 +142,10 @@ int run_command(const RunArgs& a) {
   if (a.devices < 1) throw BadInput(fmt::format("--devices {}: must be at least 1", a.devices));
   if (a.checkpoint_every && *a.checkpoint_every < 0)
     throw BadInput(fmt::format("--checkpoint-every {}: must be >= 0", *a.checkpoint_every));
+  if (a.checkpoint_keep_last && *a.checkpoint_keep_last < 0)
+    throw BadInput(fmt::format("--checkpoint-keep-last {}: must be >= 0 (0: keep all)", *a.checkpoint_keep_last));
+  if (a.checkpoint_keep_every && *a.checkpoint_keep_every < 0)
+    throw BadInput(fmt::format("--checkpoint-keep-every {}: must be >= 0 (0: none)", *a.checkpoint_keep_every));
 
   RunOptions o;
   o.out_dir = a.out.empty() ? std::filesystem::path("out") / c.name : std::filesystem::path(a.out);
@@ -139,6 +155,8 @@ int run_command(const RunArgs& a) {
   o.devices = a.devices;
   o.backend = a.backend;
   o.checkpoint_every = a.checkpoint_every;
+  o.checkpoint_keep_last = a.checkpoint_keep_last;
+  o.checkpoint_keep_every = a.checkpoint_keep_every;
   if (!a.restart.empty()) o.restart = a.restart;
   o.quiet = a.quiet;
   std::unique_ptr<SteeringReplay> replay;
@@ -159,8 +177,7 @@ int run_command(const RunArgs& a) {
     co.every = insitu_every;
     co.working_dir = o.out_dir;
     co.timeout = c.insitu_timeout;
-    const PhysicsParams P = physics_params(c);
-    co.constants = {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.rho0}, {"particle_mass", P.mass}};
+    co.constants = case_constants(c);
     if (live) {
       catalyst::LiveOptions lo;
       lo.url = live_url;
@@ -173,7 +190,7 @@ int run_command(const RunArgs& a) {
       // The case's own (double) values: they survive ParaView's state round trips unchanged, so an
       // untouched parameter never shows up as a change.
       for (int k = 0; k < 3; ++k) init.gravity[k] = k < c.dim ? c.gravity[k] : 0.0;
-      init.viscosity = c.viscosity;
+      init.viscosity = c.fluids[0].viscosity;
       init.artificial_viscosity = c.artificial_viscosity;
       init.insitu_every = insitu_every;
       // A restart continues steered (the checkpoint holds the accepted changes): show those values.
@@ -236,6 +253,7 @@ int run_command(const RunArgs& a) {
   x.devices = a.devices;
   x.backend = a.backend;
   x.ranks = group.ranks;
+  x.warnings = warnings;
   // Also for bad input found during the run: every run that got this far leaves its summary.
   write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
   if (!bad_input.empty()) throw BadInput(bad_input);
@@ -253,11 +271,15 @@ int info_command(const InfoArgs& a) {
   Case c = load(a.case_file, a.overrides);
   if (a.backend != "cpu" && a.backend != "cuda") throw BadInput(fmt::format("--backend {}: expected 'cpu' or 'cuda'", a.backend));
   if (a.devices < 1) throw BadInput(fmt::format("--devices {}: must be at least 1", a.devices));
+  const std::vector<ThinFeature> thin = thin_features(c);
+  if (!a.json) warn_thin_features(c);
   const ParticleCounts n = count_particles(c);
   if (n.fluid == 0) throw BadInput(c.file + ": the case generates no fluid particles (check fluid_blocks, wet_bed and dp)");
   const PhysicsParams P = physics_params(c);
   const Lattice L = make_lattice(c);
-  const double dt = c.fixed_dt ? *c.fixed_dt : c.cfl * P.h / P.c0;
+  const FluidMaterial& fluid = P.materials.fluid[0];
+  const double dt = c.fixed_dt ? *c.fixed_dt : c.cfl * P.h / fluid.c0;
+  const std::vector<std::string> names = material_names(c);
   const std::size_t bpp = ParticleStore(c.dim).bytes_per_particle();
   const double memory = static_cast<double>(n.total()) * bpp;
   // The GPU estimate needs no device: it is arithmetic on the case (backend/cuda/device_plan.hpp).
@@ -272,14 +294,33 @@ int info_command(const InfoArgs& a) {
     j["particles"] = {{"fluid", n.fluid}, {"wall", n.wall}, {"total", n.total()}};
     j["dp"] = c.dp;
     j["smoothing_length"] = P.h;
-    j["sound_speed"] = P.c0;
-    j["sound_speed_automatic"] = !c.sound_speed.has_value();
+    j["sound_speed"] = fluid.c0;
+    j["sound_speed_automatic"] = !c.fluids[0].sound_speed.has_value();
+    nlohmann::ordered_json materials = nlohmann::ordered_json::array();
+    for (int m = 0; m < P.materials.count; ++m) {
+      nlohmann::ordered_json e{{"index", m}, {"name", names[m]}, {"kind", P.is_fluid(m) ? "fluid" : m == P.materials.tank() ? "tank" : "solid"}};
+      if (P.is_fluid(m)) {
+        const FluidMaterial& f = P.materials.of(m);
+        e["rest_density"] = f.rho0;
+        e["particle_mass"] = f.mass;
+        e["viscosity"] = f.viscosity;
+        e["sound_speed"] = f.c0;
+        e["tait_exponent"] = f.gamma;
+        e["background_pressure"] = f.background_pressure;
+      }
+      materials.push_back(e);
+    }
+    j["materials"] = materials;
     j["dt"] = dt;
     j["dt_adaptive"] = !c.fixed_dt.has_value();
     j["cells"] = {L.cells[0], L.cells[1], L.cells[2]};
     j["bytes_per_particle"] = bpp;
     j["memory_bytes"] = memory;
     j["backend"] = a.backend;
+    j["warnings"] = nlohmann::ordered_json::array();
+    for (const ThinFeature& f : thin)
+      j["warnings"].push_back({{"key", f.key}, {"what", f.what}, {"thickness", f.thickness}, {"layers", f.layers},
+                               {"resolving_dp", f.resolving_dp}, {"message", c.file + ": " + f.message(c.dp)}});
     if (a.backend == "cuda") {
       j["device_bytes_per_particle"] = gpu::device_footprint(c.dim).per_particle();
       j["devices"] = a.devices;
@@ -295,7 +336,17 @@ int info_command(const InfoArgs& a) {
     std::printf("particles       %lld fluid, %lld wall, %lld total\n", static_cast<long long>(n.fluid),
                 static_cast<long long>(n.wall), static_cast<long long>(n.total()));
     std::printf("resolution      dp = %g m, h = %g m (%.2f dp), support 2h\n", c.dp, P.h, c.smoothing_ratio);
-    std::printf("sound speed     c0 = %g m/s (%s)\n", P.c0, c.sound_speed ? "from the case" : "automatic: 10 sqrt(g H)");
+    std::printf("sound speed     c0 = %g m/s (%s)\n", fluid.c0, c.fluids[0].sound_speed ? "from the case" : "automatic: 10 sqrt(g H)");
+    std::printf("materials       %d (index: name, kind, properties)\n", static_cast<int>(P.materials.count));
+    for (int m = 0; m < P.materials.count; ++m) {
+      if (P.is_fluid(m)) {
+        const FluidMaterial& f = P.materials.of(m);
+        std::printf("  %-3d %-12s fluid: rho0 = %g kg/m3, mass = %g kg, mu = %g Pa s, c0 = %g m/s, gamma = %g, p_b = %g Pa\n", m,
+                    names[m].c_str(), f.rho0, f.mass, f.viscosity, f.c0, f.gamma, f.background_pressure);
+      } else {
+        std::printf("  %-3d %-12s %s\n", m, names[m].c_str(), m == P.materials.tank() ? "tank walls" : "solid");
+      }
+    }
     std::printf("time step       %g s (%s)\n", dt, c.fixed_dt ? "fixed" : "adaptive, initial CFL estimate");
     std::printf("cell lattice    %d x %d x %d\n", L.cells[0], L.cells[1], L.cells[2]);
     std::printf("memory          %zu bytes/particle, %.1f MiB for the particles (%s backend)\n", bpp, memory / 1048576.0,
@@ -314,6 +365,8 @@ int info_command(const InfoArgs& a) {
 
 int compare_command(const CompareArgs& a) {
   if (!(a.tolerance >= 0)) throw BadInput(fmt::format("--tolerance {}: must be >= 0", a.tolerance));
+  if (a.scaled_tolerance && !(*a.scaled_tolerance >= 0))
+    throw BadInput(fmt::format("--scaled-tolerance {}: must be >= 0", *a.scaled_tolerance));
   ParticleStore pa, pb;
   CheckpointMeta ma, mb;
   try {
@@ -330,8 +383,19 @@ int compare_command(const CompareArgs& a) {
     std::printf("different particle ids\n");
     return 1;
   }
+  // With --scaled-tolerance each field allows that fraction of its scale, from the case the first
+  // checkpoint ran (its physics: dp, h, c0, rho0), or --tolerance where that is larger.
+  std::optional<PhysicsParams> P;
+  if (a.scaled_tolerance) {
+    try {
+      P = physics_params(parse_case(ma.case_yaml, a.a + " (its stored case)"));
+    } catch (const std::exception& e) {
+      throw BadInput(e.what());
+    }
+  }
   bool ok = true;
-  std::printf("%-18s %-14s %s\n", "field", "max |a - b|", "at id");
+  if (P) std::printf("%-18s %-14s %-10s %s\n", "field", "max |a - b|", "at id", "tolerance");
+  else std::printf("%-18s %-14s %s\n", "field", "max |a - b|", "at id");
   auto fa = pa.fields(), fb = pb.fields();
   for (std::size_t f = 0; f < fa.size(); ++f) {
     if (!fa[f].has(kCheckpointed) || fa[f].name == "id") continue;
@@ -348,12 +412,15 @@ int compare_command(const CompareArgs& a) {
       const double d = (std::isnan(x) != std::isnan(y)) ? INFINITY : (std::isnan(x) ? 0.0 : std::fabs(x - y));
       if (d > worst) worst = d, at = pa.id[i];
     }
-    ok = ok && worst <= a.tolerance;
-    std::printf("%-18s %-14.6g %u\n", std::string(fa[f].name).c_str(), worst, at);
+    const double tolerance = P ? std::max(a.tolerance, *a.scaled_tolerance * field_scale(fa[f].name, *P)) : a.tolerance;
+    ok = ok && worst <= tolerance;
+    if (P) std::printf("%-18s %-14.6g %-10u %.3g\n", std::string(fa[f].name).c_str(), worst, at, tolerance);
+    else std::printf("%-18s %-14.6g %u\n", std::string(fa[f].name).c_str(), worst, at);
   }
   std::printf("step %lld vs %lld, time %.17g vs %.17g\n", static_cast<long long>(ma.step), static_cast<long long>(mb.step),
               ma.time, mb.time);
-  std::printf("%s (tolerance %g)\n", ok ? "MATCH" : "DIFFERENT", a.tolerance);
+  if (P) std::printf("%s (tolerance %g of each field's scale)\n", ok ? "MATCH" : "DIFFERENT", *a.scaled_tolerance);
+  else std::printf("%s (tolerance %g)\n", ok ? "MATCH" : "DIFFERENT", a.tolerance);
   return ok ? 0 : 1;
 }
 

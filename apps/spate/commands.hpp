@@ -17,7 +17,7 @@ struct RunArgs {
   std::optional<double> until;
   std::vector<std::string> overrides, pipelines;
   int threads = 0, devices = 1;
-  std::optional<int> checkpoint_every, insitu_every;
+  std::optional<int> checkpoint_every, checkpoint_keep_last, checkpoint_keep_every, insitu_every;
   bool quiet = false;
   bool live_requested = false;  // --live given (with or without an address)
 };
@@ -30,6 +30,7 @@ struct InfoArgs {
 struct CompareArgs {
   std::string a, b;
   double tolerance = 0.0;
+  std::optional<double> scaled_tolerance;  // per field: this times field_scale (io/field_scale.hpp)
 };
 struct BenchArgs {
   std::string case_file, backend = "cpu";

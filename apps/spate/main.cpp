@@ -78,6 +78,9 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--devices", run.devices, "Device workers (x-slabs) in this process");
   run_cmd->add_option("--backend", run.backend, "cpu or cuda");
   run_cmd->add_option("--checkpoint-every", run.checkpoint_every, "Write a checkpoint every N steps");
+  run_cmd->add_option("--checkpoint-keep-last", run.checkpoint_keep_last, "Keep the newest K checkpoints (default 2; 0: all)");
+  run_cmd->add_option("--checkpoint-keep-every", run.checkpoint_keep_every,
+                      "Also keep for good every checkpoint at a multiple of N x --checkpoint-every steps");
   run_cmd->add_option("--restart", run.restart, "Continue from a checkpoint (HDF5)");
   run_cmd->add_flag("--quiet", run.quiet, "No progress output");
   run_cmd->add_option("--pipeline", run.pipelines, "ParaView Catalyst script (repeatable)");
@@ -100,6 +103,9 @@ int main(int argc, char** argv) {
   cmp_cmd->add_option("a", cmp.a, "First checkpoint")->required();
   cmp_cmd->add_option("b", cmp.b, "Second checkpoint")->required();
   cmp_cmd->add_option("--tolerance", cmp.tolerance, "Largest allowed absolute difference (default 0: bit-identical)");
+  cmp_cmd->add_option("--scaled-tolerance", cmp.scaled_tolerance,
+                      "Largest allowed difference of each field as a fraction of its scale (dp, c0, rho0, c0^2/h, rho0 c0/h; material exact), "
+                      "from the case stored in the first checkpoint");
 
   BenchArgs bench;
   auto* bench_cmd = app.add_subcommand("bench", "Measure particle-steps and neighbour interactions per second");

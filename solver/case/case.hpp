@@ -41,6 +41,17 @@ struct ProbeSpec {
   double min_depth = 0.0;   // front: only water at least this deep counts (a bore over a wet bed)
 };
 
+// A fluid (a material, physics/materials.hpp). The case's `fluid:` section is fluid 0; every fluid
+// block and the wet bed are made of it.
+struct FluidSpec {
+  std::string name = "water";
+  double density = 1000.0;               // rest density rho0 [kg/m3]
+  double viscosity = 1.0e-3;             // dynamic viscosity [Pa s]
+  std::optional<double> sound_speed;     // empty: automatic, 10 sqrt(g H)
+  double tait_exponent = 7.0;            // gamma of eq. 9
+  double background_pressure = 0.0;      // [Pa], added to the Tait pressure
+};
+
 struct Case {
   std::string file;  // where it came from, for messages
   std::string name;
@@ -50,9 +61,7 @@ struct Case {
   double smoothing_ratio = 1.3;
   KernelType kernel = KernelType::WendlandC2;
 
-  double rho0 = 1000.0;
-  double viscosity = 1.0e-3;
-  std::optional<double> sound_speed;  // empty: automatic, 10 sqrt(g H)
+  std::vector<FluidSpec> fluids{FluidSpec{}};  // material k is fluids[k] (one today)
   double artificial_viscosity = 0.0;
   DensityMode density_mode = DensityMode::Continuity;
   DensityDiffusion diffusion = DensityDiffusion::Fourtakas;
@@ -102,7 +111,10 @@ Case parse_case(const std::string& yaml_text, const std::string& file_name,
 
 // Highest fluid column, for the automatic sound speed.
 double highest_fluid_column(const Case& c);
-double sound_speed(const Case& c);
+// The sound speed of fluid k: given, or automatic.
+double sound_speed(const Case& c, int fluid = 0);
 PhysicsParams physics_params(const Case& c);
+// Names of the materials of the case, by material index (fluids, then "tank", then the solids).
+std::vector<std::string> material_names(const Case& c);
 
 }  // namespace spate

@@ -2,7 +2,10 @@
 
 #include <hdf5.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <fstream>
 #include <stdexcept>
 #include <string_view>
 #include <vector>
@@ -85,6 +88,64 @@ std::vector<CheckpointDataset> checkpoint_datasets(int dim, int version) {
   return out;
 }
 
+std::vector<CheckpointDataset> derived_datasets(int dim) {
+  std::vector<CheckpointDataset> out;
+  const auto fields = ParticleStore(dim).fields();
+  for (std::size_t k = 0; k < fields.size(); ++k)
+    if (fields[k].has(kExported) && !fields[k].has(kCheckpointed)) out.push_back(CheckpointDataset{std::string(fields[k].name), fields[k].spec->type, k});
+  return out;
+}
+
+std::filesystem::path xdmf_sidecar(const std::filesystem::path& checkpoint) {
+  std::filesystem::path p = checkpoint;
+  return p.replace_extension(".xmf2");
+}
+
+namespace {
+
+// The sidecar: one uniform grid of `count` vertices; geometry from the separate coordinate
+// datasets (X_Y_Z, X_Y), each exported vector joined from its component datasets. Extension .xmf2:
+// ParaView 5.11 then picks its XDMF (version 2) reader, which reads these files; for .xmf it
+// prefers the Xdmf3 reader, which does not.
+void write_xdmf(const std::filesystem::path& h5, const CheckpointMeta& meta, int dim, std::size_t count) {
+  const std::string file = h5.filename().string();
+  auto item = [&](const FieldRef& f) {
+    const char* type = f.spec->type == FieldType::F32 ? "Float" : f.spec->type == FieldType::U32 ? "UInt" : "UChar";
+    return fmt::format("<DataItem Dimensions=\"{}\" NumberType=\"{}\" Precision=\"{}\" Format=\"HDF\">{}:/particles/{}</DataItem>", count,
+                       type, f.elem_size, file, f.name);
+  };
+  std::string geometry, attributes;
+  ParticleStore layout(dim);
+  for (const ExportedField& e : exported_fields(layout)) {
+    std::string items;
+    for (const FieldRef& f : layout.fields())
+      if (f.spec == e.spec) items += "\n      " + item(f);
+    if (e.spec->member == "pos") {
+      geometry = fmt::format("    <Geometry GeometryType=\"{}\">{}\n    </Geometry>\n", dim == 3 ? "X_Y_Z" : "X_Y", items);
+      continue;
+    }
+    if (e.spec->shape == FieldShape::Vector)
+      items = fmt::format("\n      <DataItem ItemType=\"Function\" Function=\"JOIN({})\" Dimensions=\"{} {}\">{}\n      </DataItem>",
+                          dim == 3 ? "$0, $1, $2" : "$0, $1", count, dim, items);
+    attributes += fmt::format("    <Attribute Name=\"{}\" AttributeType=\"{}\" Center=\"Node\">{}\n    </Attribute>\n", e.spec->exported,
+                              e.spec->shape == FieldShape::Vector ? "Vector" : "Scalar", items);
+  }
+  const std::string text = fmt::format(
+      "<?xml version=\"1.0\" ?>\n<!-- The particles of {} (spate checkpoint, step {}) for ParaView's XDMF reader. -->\n"
+      "<Xdmf Version=\"2.0\">\n <Domain>\n  <Grid Name=\"particles\" GridType=\"Uniform\">\n    <Time Value=\"{:.17g}\"/>\n"
+      "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"{}\" NodesPerElement=\"1\"/>\n{}{}  </Grid>\n </Domain>\n</Xdmf>\n",
+      file, meta.step, meta.time, count, geometry, attributes);
+  const std::filesystem::path path = xdmf_sidecar(h5), tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << text;
+    if (!out) throw std::runtime_error(tmp.string() + ": cannot write");
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+}  // namespace
+
 void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& meta, ParticleStore& particles) {
   auto fields = particles.fields();
   const std::size_t n = particles.owned();
@@ -112,7 +173,9 @@ void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& m
   hid_t group = H5Gcreate2(file, "particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   const hsize_t n = count;
   std::vector<char> buffer;  // one field at a time
-  for (const CheckpointDataset& d : checkpoint_datasets(dim)) {
+  std::vector<CheckpointDataset> datasets = checkpoint_datasets(dim);
+  for (auto& d : derived_datasets(dim)) datasets.push_back(d);
+  for (const CheckpointDataset& d : datasets) {
     buffer.resize(count * field_type_size(d.type));
     if (count > 0) fill(d.field, buffer.data());
     hid_t space = H5Screate_simple(1, &n, nullptr);
@@ -124,6 +187,7 @@ void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& m
   H5Gclose(group);
   check(H5Fclose(file), tmp, "closing");
   std::filesystem::rename(tmp, path);
+  write_xdmf(path, meta, dim, count);
 }
 
 CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore& particles) {
@@ -174,6 +238,18 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
     hid_t dset = H5Dopen2(group, d.name.c_str(), H5P_DEFAULT);
     if (dset < 0) throw std::runtime_error(path.string() + ": checkpoint lacks field '" + d.name + "'");
     if (n > 0 && H5Dread(dset, h5_type(d.type), H5S_ALL, H5S_ALL, H5P_DEFAULT, fields[d.field].bytes()) < 0)
+      throw std::runtime_error(path.string() + ": cannot read field '" + d.name + "'");
+    H5Dclose(dset);
+  }
+  // The derived fields as they were (files written before they were saved: left zero).
+  meta.derived_saved = true;
+  for (const CheckpointDataset& d : derived_datasets(dim)) {
+    if (H5Lexists(group, d.name.c_str(), H5P_DEFAULT) <= 0) {
+      meta.derived_saved = false;
+      continue;
+    }
+    hid_t dset = H5Dopen2(group, d.name.c_str(), H5P_DEFAULT);
+    if (dset < 0 || (n > 0 && H5Dread(dset, h5_type(d.type), H5S_ALL, H5S_ALL, H5P_DEFAULT, fields[d.field].bytes()) < 0))
       throw std::runtime_error(path.string() + ": cannot read field '" + d.name + "'");
     H5Dclose(dset);
   }

@@ -46,7 +46,7 @@ void write_summary(const std::filesystem::path& path, const Case& c, const Physi
   j["backend"] = x.backend;
   j["dp"] = c.dp;
   j["smoothing_length"] = P.h;
-  j["sound_speed"] = P.c0;
+  j["sound_speed"] = P.materials.fluid[0].c0;
   j["device_particles"] = r.slab_particles;
   j["device_busy_seconds"] = r.slab_busy_seconds;
   j["imbalance"] = r.imbalance;

@@ -40,15 +40,17 @@ struct WallState {
 };
 
 // Negative wall pressures would glue fluid to walls at a free surface; they are clipped to zero.
+// The density comes from the equation of state of the fluid the wall bounds (materials.hpp).
 template <int Dim>
 SPATE_HD WallState<Dim> finish_wall(const PhysicsParams& P, const WallSums<Dim>& s) {
-  WallState<Dim> out{0.0f, P.rho0, zero_vec<Dim>()};
+  const FluidMaterial& M = P.materials.wall_fluid();
+  WallState<Dim> out{0.0f, M.rho0, zero_vec<Dim>()};
   if (s.w <= 0.0f) return out;
   float g_dot = 0.0f;
   for (int k = 0; k < Dim; ++k) g_dot += (P.gravity[k] + P.body_force[k]) * s.rho_r_w[k];
   const float p = (s.pw + g_dot) / s.w;
   out.p = p > 0.0f ? p : 0.0f;
-  out.rho = tait_density(out.p, P.rho0, P.tait_b);
+  out.rho = tait_density(out.p, M);
   for (int k = 0; k < Dim; ++k) out.v[k] = -s.v_w[k] / s.w;
   return out;
 }

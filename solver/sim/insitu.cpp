@@ -22,4 +22,10 @@ SlabView slab_view(ParticleStore& p, int slab, int slab_count) {
   return v;
 }
 
+std::vector<std::pair<std::string, double>> case_constants(const Case& c) {
+  const PhysicsParams P = physics_params(c);
+  return {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.fluids[0].density},
+          {"particle_mass", P.materials.fluid[0].mass}};
+}
+
 }  // namespace spate

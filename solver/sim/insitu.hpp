@@ -5,8 +5,10 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
+#include "../case/case.hpp"
 #include "../particles/field_registry.hpp"
 
 namespace spate {
@@ -41,6 +43,11 @@ class ParticleStore;
 // The view of a slab's owned particles [0, owned): every exported field of the registry, pointing
 // at the store's arrays (zero copy; valid until the store next changes).
 SlabView slab_view(ParticleStore& p, int slab, int slab_count);
+
+// Case constants that pipelines read from the dataset's field data (sprite sizes, interpolation
+// kernels): put there in situ by the Catalyst adaptor and into every snapshot's .vtm, so that a
+// pipeline finds them in both.
+std::vector<std::pair<std::string, double>> case_constants(const Case& c);
 
 class InSituSink {
  public:

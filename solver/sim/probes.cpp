@@ -34,8 +34,8 @@ ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const FieldVector<float
   ShepardSums<Dim> s;
   w.grid().view().for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t j = b; j < e; ++j)
-      if (is_fluid(p.material[j]))
-        accumulate_shepard<Kernel, Dim>(w.params(), x, load_vec<Dim>(p.pos, j), p.density[j], field ? (*field)[j] : 0.0f, s);
+      if (w.params().is_fluid(p.material[j]))
+        accumulate_shepard<Kernel, Dim>(w.params(), x, load_vec<Dim>(p.pos, j), p.density[j], p.material[j], field ? (*field)[j] : 0.0f, s);
   });
   return s;
 }
@@ -130,13 +130,14 @@ double local_front(SlabWorker& w, int axis, double lowest) {
   const int v = p.dim() - 1;
   double front = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < p.owned(); ++i)
-    if (is_fluid(p.material[i]) && p.pos[v][i] >= lowest) front = std::max(front, static_cast<double>(p.pos[axis][i]));
+    if (w.params().is_fluid(p.material[i]) && p.pos[v][i] >= lowest) front = std::max(front, static_cast<double>(p.pos[axis][i]));
   return front;
 }
 
 namespace {
 
-// Pressure force of the fluid on every owned particle of solid `kind`, as (id, fx, fy, fz) records.
+// Pressure force of the fluid on every owned particle of material `kind` (a solid), as
+// (id, fx, fy, fz) records.
 Bytes solid_force_records(SlabWorker& w, std::uint8_t kind) {
   Bytes out;
   ParticleStore& p = w.particles();
@@ -152,7 +153,7 @@ Bytes solid_force_records(SlabWorker& w, std::uint8_t kind) {
         Vec<Dim> f = zero_vec<Dim>();
         view.for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
           for (std::uint32_t j = b; j < e; ++j)
-            if (is_fluid(p.material[j])) f += wall_pressure_force<Kernel, Dim>(w.params(), wi, load_state<Dim>(p, j));
+            if (w.params().is_fluid(p.material[j])) f += wall_pressure_force<Kernel, Dim>(w.params(), wi, load_state<Dim>(p, j));
         });
         float rec[4] = {0, 0, 0, 0};
         std::memcpy(&rec[0], &p.id[i], sizeof(float));
@@ -248,9 +249,9 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
         break;
       }
       case ProbeType::Force: {
-        std::uint8_t kind = kSolidBase;
+        std::uint8_t kind = w.params().materials.solid(0);
         for (std::size_t k = 0; k < case_.solids.size(); ++k)
-          if (case_.solids[k].name == p.solid) kind = static_cast<std::uint8_t>(kSolidBase + k);
+          if (case_.solids[k].name == p.solid) kind = w.params().materials.solid(static_cast<int>(k));
         row = sum_by_id(t.allgather(solid_force_records(w, kind)));
         row.resize(case_.dim);
         break;

@@ -416,7 +416,9 @@ class Worker {
     if (t_.slab() != 0) return;
     std::vector<std::string> pieces;
     for (int s = 0; s < t_.slab_count(); ++s) pieces.push_back(step_name(step) + "/slab_" + std::to_string(s) + ".vtp");
-    write_vtm(dir / (step_name(step) + ".vtm"), pieces);
+    FieldData field_data = case_constants(s_.c);
+    field_data.insert(field_data.end(), {{"time", time}, {"step", static_cast<double>(step)}, {"TimeValue", time}});
+    write_vtm(dir / (step_name(step) + ".vtm"), pieces, field_data);
     if (index) pvd.add(time, folder + "/" + step_name(step) + ".vtm");
     spdlog::debug("snapshot of step {} (t = {:.6g} s): {}", step, time, (dir / (step_name(step) + ".vtm")).string());
   }
@@ -435,25 +437,37 @@ class Worker {
         for (const auto& e : all.by_id) std::memcpy(out, fields[e.slab][k].bytes() + e.index * size, size), out += size;
       });
       spdlog::debug("checkpoint of step {} (t = {:.6g} s): {}", step, time, path.string());
-      prune_checkpoints(path);
+      prune_checkpoints(path, step);
     }
     t_.barrier();
     return path;
   }
 
-  // Keeps the newest keep_checkpoints files this run wrote. Files of earlier runs in a reused
-  // output folder are never touched (a restart may still need them, and their step numbers say
-  // nothing about which is newer).
-  void prune_checkpoints(const std::filesystem::path& just_written) {
-    if (written_.empty() || written_.back() != just_written) written_.push_back(just_written);
-    const std::size_t keep = static_cast<std::size_t>(std::max(1, s_.opts.keep_checkpoints));
-    while (written_.size() > keep) {
-      std::filesystem::remove(written_.front());
-      written_.erase(written_.begin());
+  // Retention (output.checkpoint_keep_last / keep_every, or the command line): of the checkpoints
+  // this run wrote, the newest keep_last stay (0: all), and so does, for good, every one at a step
+  // that is a multiple of keep_every x checkpoint_every; the others go, with their XDMF sidecars.
+  // Files of earlier runs in a reused output folder are never touched (a restart may still need
+  // them, and their step numbers say nothing about which is newer).
+  void prune_checkpoints(const std::filesystem::path& just_written, std::int64_t step) {
+    const int keep_last = s_.opts.checkpoint_keep_last.value_or(s_.c.checkpoint_keep_last);
+    const std::int64_t keep_every = s_.opts.checkpoint_keep_every.value_or(s_.c.checkpoint_keep_every);
+    const std::int64_t every = s_.opts.checkpoint_every.value_or(s_.c.checkpoint_every);
+    if (written_.empty() || written_.back().first != just_written)
+      written_.emplace_back(just_written, keep_every > 0 && every > 0 && step % (keep_every * every) == 0);
+    if (keep_last <= 0) return;
+    for (std::size_t k = 0; k + static_cast<std::size_t>(keep_last) < written_.size();) {
+      if (written_[k].second) {
+        ++k;
+        continue;
+      }
+      std::filesystem::remove(written_[k].first);
+      std::filesystem::remove(xdmf_sidecar(written_[k].first));
+      spdlog::debug("checkpoint {} removed (retention)", written_[k].first.string());
+      written_.erase(written_.begin() + static_cast<std::ptrdiff_t>(k));
     }
   }
 
-  std::vector<std::filesystem::path> written_;
+  std::vector<std::pair<std::filesystem::path, bool>> written_;  // this run's checkpoints, oldest first; kept for good
   Shared& s_;
   SlabTransport& t_;
   SlabWorker w_;
@@ -504,7 +518,7 @@ RunResult Simulation::run() {
   const int slabs = group.ranks * local_slabs;
   s.layout = SlabLayout::uniform(s.lattice.cells[0], slabs);
   if (s.layout.narrowest() >= kMinColumnsPerSlab && slabs > 1 && case_.balanced_start)
-    s.layout = balanced_layout(column_costs(s.initial, s.lattice), slabs, kMinColumnsPerSlab);  // start balanced
+    s.layout = balanced_layout(column_costs(s.initial, s.lattice, s.params.materials), slabs, kMinColumnsPerSlab);  // start balanced
   if (s.layout.narrowest() < kMinColumnsPerSlab) {
     const std::string split = group.ranks > 1 ? fmt::format("{} ranks x --devices {} = {} slabs", group.ranks, local_slabs, slabs)
                                               : fmt::format("--devices {}", slabs);
@@ -519,6 +533,13 @@ RunResult Simulation::run() {
   s.local_slabs = local_slabs;
   s.workers.assign(local_slabs, nullptr);
   std::filesystem::create_directories(options_.out_dir);
+  // The effective case (file plus --set), for spate post and for the record.
+  if (group.rank == 0) {
+    const auto path = options_.out_dir / "case.yaml", tmp = options_.out_dir / "case.yaml.tmp";
+    std::ofstream(tmp) << "# The effective case of the run in this folder (" << case_.file << " with --set applied), written by spate run.\n"
+                       << case_.source_yaml << "\n";
+    std::filesystem::rename(tmp, path);
+  }
 
   std::unique_ptr<LocalSlabs> local;
 #ifdef SPATE_WITH_MPI

@@ -107,15 +107,15 @@ class SlabWorker {
 
 // Estimated work per x column of the owned particles (fluid 7 in the fluid phase, wall 1 in the wall
 // phase, per particle): the first faces, before anything was timed.
-PhaseCosts column_costs(const ParticleStore& p, const Lattice& lattice);
+PhaseCosts column_costs(const ParticleStore& p, const Lattice& lattice, const MaterialTable& materials);
 
 // This slab's measured seconds spread over its x columns, in nanoseconds: the wall phase in
 // proportion to the owned particles' wall-phase share, the fluid phase to the fluid particles (a
 // slab without fluid charges both phases to its walls and vice versa). Summed over slabs it is
 // the measured histogram the balancer evens out.
 // `sort_seconds` (the owned sort and the ghosts' arrival) are spread evenly over all particles.
-PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice, double wall_seconds, double fluid_seconds,
-                                 double sort_seconds = 0.0);
+PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice, const MaterialTable& materials,
+                                 double wall_seconds, double fluid_seconds, double sort_seconds = 0.0);
 
 // The fault with the lowest particle id over all slabs (collective), or none.
 std::optional<ParticleFault> first_fault(SlabTransport& t, const std::optional<ParticleFault>& mine);

@@ -95,5 +95,57 @@ def log_levels_and_format(env):
     check(p.returncode == 2 and "--log-level" in p.stderr, "a bad --log-level is not bad input")
 
 
+# ---- thin features ------------------------------------------------------------------------------
+
+@test
+def thin_feature_warning(env):
+    """The column case's 1 cm wet bed at dp = 0.015 (0.67 layers): info and run say so, with the dp
+    that resolves it; a resolved case says nothing."""
+    column = os.path.join(env.shipped, "dam_break_column_3d.yaml")
+    needle = "wet_bed: the wet bed is 0.01 m deep: 0.67 particle layers at dp = 0.015 m"
+    p = env.run("info", column, "--set", "dp=0.015")
+    check(p.returncode == 0 and needle in p.stderr and "dp <= 0.00333 m resolves it" in p.stderr,
+          "info: no thin-feature warning on stderr")
+    check("spate: warning:" in p.stderr, "info: the warning is not a warning line")
+    p = env.run("info", column, "--set", "dp=0.015", "--json")
+    w = json.loads(p.stdout)["warnings"]
+    check(len(w) == 1 and w[0]["key"] == "wet_bed" and abs(w[0]["resolving_dp"] - 0.01 / 3) < 1e-9, f"info --json warnings {w}")
+    out = env.path("out")
+    p = env.run("run", column, "--set", "dp=0.015", "--steps", "0", "--out", out, "--quiet")
+    check(p.returncode == 0 and needle in p.stderr, "run: no thin-feature warning")
+    s = summary(out)
+    check(len(s["warnings"]) == 1 and needle in s["warnings"][0], f"summary.json warnings {s['warnings']}")
+    p = env.run("info", column, "--set", "dp=0.015", "--set", "wet_bed=0")
+    check(p.returncode == 0 and "warning" not in p.stderr, "a case without thin features warns")
+
+
+# ---- checkpoints --------------------------------------------------------------------------------
+
+@test
+def checkpoint_retention(env):
+    """--checkpoint-keep-last K keeps the newest K, --checkpoint-keep-every N every Nth for good;
+    each checkpoint has its XDMF sidecar and loses it with it. The case keys do the same."""
+    out = env.path("out")
+    p = env.run("run", env.tiny, "--steps", "23", "--checkpoint-every", "2", "--checkpoint-keep-last", "3",
+                "--checkpoint-keep-every", "4", "--out", out, "--quiet")
+    check(p.returncode == 0, f"exit {p.returncode}")
+    kept = sorted(os.listdir(os.path.join(out, "checkpoints")))
+    steps = [8, 16, 20, 22, 23]  # every 4th of the checkpoints at 2, 4, ..., 22, the newest 3, the final one
+    expected = sorted([f"checkpoint_step_{s:08d}.h5" for s in steps] + [f"checkpoint_step_{s:08d}.xmf2" for s in steps])
+    check(kept == expected, f"kept {kept}, expected {expected}")
+    out = env.path("out_case")
+    p = env.run("run", env.tiny, "--steps", "7", "--set", "output.checkpoint_every=1", "--set", "output.checkpoint_keep_last=0",
+                "--out", out, "--quiet")
+    check(p.returncode == 0 and len([f for f in os.listdir(os.path.join(out, "checkpoints")) if f.endswith(".h5")]) == 7,
+          "output.checkpoint_keep_last=0 does not keep every checkpoint")
+    out = env.path("out_default")
+    p = env.run("run", env.tiny, "--steps", "7", "--checkpoint-every", "1", "--out", out, "--quiet")
+    check(sorted(os.listdir(os.path.join(out, "checkpoints"))) ==
+          ["checkpoint_step_00000006.h5", "checkpoint_step_00000006.xmf2", "checkpoint_step_00000007.h5", "checkpoint_step_00000007.xmf2"],
+          "by default the two newest are kept")
+    p = env.run("run", env.tiny, "--steps", "1", "--checkpoint-keep-last", "-1", "--out", env.path("bad"), "--quiet")
+    check(p.returncode == 2 and "--checkpoint-keep-last" in p.stderr, "a negative --checkpoint-keep-last is not bad input")
+
+
 if __name__ == "__main__":
     sys.exit(main(TESTS))

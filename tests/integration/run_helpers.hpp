@@ -5,13 +5,14 @@
 #include <string>
 #include <vector>
 
+#include "../source_dir.hpp"
 #include "case/case.hpp"
 #include "io/checkpoint.hpp"
 #include "sim/simulation.hpp"
 
 namespace spate::test {
 
-inline std::string case_path(const std::string& name) { return std::string(SPATE_SOURCE_DIR) + "/cases/" + name; }
+inline std::string case_path(const std::string& name) { return test::source_dir() + "/cases/" + name; }
 
 inline std::filesystem::path scratch(const std::string& name) {
   auto p = std::filesystem::temp_directory_path() / ("spate-test-" + name);

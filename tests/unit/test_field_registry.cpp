@@ -35,23 +35,6 @@ float* tracer(ParticleStore& p) {
   return nullptr;
 }
 
-// The values of point-data array `name` of a .vtp piece written by write_vtp_piece (raw appended
-// binary, UInt64 block headers), as floats.
-std::vector<float> vtp_floats(const std::filesystem::path& file, const std::string& name) {
-  std::ifstream in(file, std::ios::binary);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const auto at = text.find("Name=\"" + name + "\"");
-  if (at == std::string::npos) return {};
-  const auto off_at = text.find("offset=\"", at) + 8;
-  const std::uint64_t offset = std::stoull(text.substr(off_at, text.find('"', off_at) - off_at));
-  const std::size_t data = text.find("<AppendedData encoding=\"raw\">\n_") + std::string("<AppendedData encoding=\"raw\">\n_").size();
-  std::uint64_t bytes = 0;
-  std::memcpy(&bytes, text.data() + data + offset, sizeof bytes);
-  std::vector<float> v(bytes / sizeof(float));
-  std::memcpy(v.data(), text.data() + data + offset + sizeof bytes, bytes);
-  return v;
-}
-
 }  // namespace
 
 TEST(FieldRegistry, TheNeighbourRecordAndTheMemoryFigureFollowTheRegistry) {
@@ -112,9 +95,11 @@ TEST(FieldRegistry, AnEntryAloneCarriesATestFieldThroughHaloMigrationCheckpointS
     // Snapshot: the piece has the field under its exported name, in owned order.
     const auto piece = dir / ("slab_" + std::to_string(s) + ".vtp");
     write_vtp_piece(piece, p, s);
-    const std::vector<float> written = vtp_floats(piece, "tracer");
+    ParticleStore written = read_vtp_piece(piece, p.dim());
     ASSERT_EQ(written.size(), p.owned());
-    for (std::size_t i = 0; i < p.owned(); ++i) EXPECT_EQ(written[i], tracer_of(p.id[i]));
+    const float* w_tracer = tracer(written);
+    ASSERT_NE(w_tracer, nullptr);
+    for (std::size_t i = 0; i < p.owned(); ++i) EXPECT_EQ(w_tracer[i], tracer_of(p.id[i]));
     // In situ: the view has the field, pointing at the solver's own array.
     const SlabView view = slab_view(p, s, kSlabs);
     const SlabArray* a = view.array("tracer");

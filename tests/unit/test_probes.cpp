@@ -65,11 +65,12 @@ TEST(HeightGauge, FollowsTheSurfaceContinuously) {
   const Case c = parse_case(kTank, "probes.yaml");
   const ParticleStore initial = generate_particles(c);
   const double lift = c.dp / 40;  // a tenth of the sampling step
+  const PhysicsParams P = physics_params(c);
   std::vector<double> heights;
   for (int k = 0; k <= 10; ++k) {
     ParticleStore p = initial;
     for (std::size_t i = 0; i < p.size(); ++i)
-      if (is_fluid(p.material[i])) p.pos[1][i] += static_cast<float>(k * lift);
+      if (P.is_fluid(p.material[i])) p.pos[1][i] += static_cast<float>(k * lift);
     Slab s(c, p);
     heights.push_back(sample_height(s.w, c.probes[0], c));
   }
@@ -84,7 +85,7 @@ TEST(HeightGauge, ConnectedColumnIgnoresSpray) {
   ParticleStore p = generate_particles(c);
   // A 3 x 3 blob of fluid 3 cm above the surface, over the gauge.
   std::size_t donor = 0;
-  while (!is_fluid(p.material[donor])) ++donor;
+  while (!physics_params(c).is_fluid(p.material[donor])) ++donor;
   std::uint32_t id = static_cast<std::uint32_t>(p.size());
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) {

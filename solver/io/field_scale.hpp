@@ -1,0 +1,30 @@
+#pragma once
+// The natural scale of a stored particle field, for comparisons with a relative tolerance
+// (`spate compare --scaled-tolerance`, the GPU-against-CPU checks): a difference of X times the
+// scale means the same thing in a 2 mm dam break and a 50 um channel.
+#include <string_view>
+
+#include "../physics/params.hpp"
+
+namespace spate {
+
+// Positions: dp. Velocities: c0 of the (first) fluid (weakly compressible SPH keeps speeds below c0 / 10).
+// Density: rho0. Accelerations: c0^2 / h (the pressure gradient of a 1 % density jump over h is
+// 0.01 c0^2 / h up to the Tait factor). Density rates: rho0 c0 / h. Anything else (material, id): 0,
+// compared exactly.
+inline double field_scale(std::string_view field, const PhysicsParams& P) {
+  auto is = [&](std::initializer_list<std::string_view> names) {
+    for (auto n : names)
+      if (field == n) return true;
+    return false;
+  };
+  const double h = P.h, c0 = P.materials.fluid[0].c0, rho0 = P.materials.fluid[0].rho0;
+  if (is({"x", "y", "z"})) return P.dp;
+  if (is({"vx", "vy", "vz"})) return c0;
+  if (is({"density"})) return rho0;
+  if (is({"ax", "ay", "az", "ax_prev", "ay_prev", "az_prev"})) return c0 * c0 / h;
+  if (is({"density_rate", "density_rate_prev"})) return rho0 * c0 / h;
+  return 0.0;
+}
+
+}  // namespace spate
