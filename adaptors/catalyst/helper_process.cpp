@@ -57,7 +57,7 @@ HelperProcess::HelperProcess(const std::filesystem::path& program, const std::st
 
   const std::string parent = std::to_string(getpid());
   const std::string exe = program.string();
-  const char* argv[] = {exe.c_str(), kHelperCommand, "3", "4", parent.c_str(), nullptr};
+  const char* argv[] = {"spate", kHelperCommand, "3", "4", parent.c_str(), nullptr};
   std::vector<std::string> env_text;
   for (char** e = environ; e && *e; ++e)
     if (std::strncmp(*e, "DISPLAY=", 8) != 0) env_text.emplace_back(*e);
