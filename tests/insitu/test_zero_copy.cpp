@@ -172,6 +172,54 @@ void run_and_check(int devices, const std::string& tag) {
 // with --gtest_filter for one at a time.
 TEST(CatalystZeroCopy, PipelineReceivesSolverBuffersOneDevice) { run_and_check(1, "one_device"); }
 TEST(CatalystZeroCopy, PipelineReceivesSolverBuffersTwoDevices) { run_and_check(2, "two_devices"); }
+// The seam for data that does not come from a running solver (spate post over saved snapshots):
+// arrays allocated before the sink existed are on the heap, outside the shared arena; the sink
+// copies them into the arena for the step, and the pipeline sees their values exactly.
+TEST(CatalystZeroCopy, ArraysOutsideTheArenaAreCopiedForTheHelper) {
+  const fs::path out = fs::path(testing::TempDir()) / "spate_zero_copy_staged";
+  fs::remove_all(out);
+  fs::create_directories(out / "record");
+  setenv("SPATE_RECORD_DIR", (out / "record").c_str(), 1);
+  ParticleStore p(2);  // before the sink: on the heap
+  p.resize(50);
+  p.set_owned(50);
+  for (std::size_t i = 0; i < 50; ++i) {
+    p.pos[0][i] = 0.01f * static_cast<float>(i);
+    p.pos[1][i] = 0.5f;
+    p.vel[0][i] = static_cast<float>(i);
+    p.density[i] = 1000.0f + static_cast<float>(i);
+    p.id[i] = static_cast<std::uint32_t>(100 + i);
+  }
+  catalyst::CatalystOptions co;
+  co.scripts = {SPATE_SOURCE_DIR "/tests/insitu/record_arrays.py"};
+  co.working_dir = out;
+  co.helper_program = SPATE_BINARY;
+  catalyst::CatalystSink sink(co);
+  ASSERT_FALSE(shared_particle_memory()->contains(p.pos[0].data()));
+  sink.execute(7, 0.5, {slab_view(p, 0, 1)});
+  EXPECT_TRUE(sink.failures().empty());
+  const auto j = nlohmann::json::parse(std::ifstream(out / "record" / "step_7.json"));
+  ASSERT_EQ(j["blocks"].size(), 1u);
+  EXPECT_NE(j["blocks"][0]["x_buffer"].get<std::uintptr_t>(), address(p.pos[0].data())) << "a heap buffer reached another process";
+  std::ifstream cf(out / "record" / "step_7.csv");
+  std::size_t rows = 0;
+  for (std::string line; std::getline(cf, line);) {
+    if (line.empty()) continue;
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream s(line);
+    std::uint32_t id;
+    double x, y, z, vx, vy, vz, pressure, rho;
+    s >> id >> x >> y >> z >> vx >> vy >> vz >> pressure >> rho;
+    const std::size_t i = id - 100;
+    ASSERT_LT(i, 50u);
+    EXPECT_EQ(static_cast<float>(x), p.pos[0][i]);
+    EXPECT_EQ(static_cast<float>(vx), p.vel[0][i]);
+    EXPECT_EQ(static_cast<float>(rho), p.density[i]);
+    ++rows;
+  }
+  EXPECT_EQ(rows, 50u);
+}
+
 // The dataset's point arrays come from the field registry: a field registered as one FieldSpec
 // (here a test-only one) reaches the pipelines as a point array over the solver's own memory.
 TEST(ParticleDataset, ARegisteredFieldBecomesAPointArrayOnSolverMemory) {
