@@ -39,6 +39,30 @@ struct Particle {
 
 std::uintptr_t address(const void* p) { return reinterpret_cast<std::uintptr_t>(p); }
 
+// The values record_arrays.py saw, by particle id (Python's repr round-trips doubles; floats
+// widened to double compare exactly).
+std::map<std::uint32_t, Particle> recorded(const fs::path& csv) {
+  std::map<std::uint32_t, Particle> seen;
+  std::ifstream cf(csv);
+  for (std::string line; std::getline(cf, line);) {
+    if (line.empty()) continue;
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream s(line);
+    std::uint32_t id;
+    double x[3], v[3], p, rho;
+    Particle q{};
+    s >> id >> x[0] >> x[1] >> x[2] >> v[0] >> v[1] >> v[2] >> p >> rho >> q.kind >> q.device;
+    for (int k = 0; k < 3; ++k) {
+      q.x[k] = static_cast<float>(x[k]);
+      q.v[k] = static_cast<float>(v[k]);
+    }
+    q.p = static_cast<float>(p);
+    q.rho = static_cast<float>(rho);
+    seen[id] = q;
+  }
+  return seen;
+}
+
 // Buffers of one slab, in the order the pipeline reports them: x y z vx vy vz pressure density id kind.
 using Buffers = std::array<std::uintptr_t, 10>;
 
@@ -138,31 +162,21 @@ void run_and_check(int devices, const std::string& tag) {
         EXPECT_TRUE(arena->contains(reinterpret_cast<const void*>(want[k]))) << key << " is not in the shared arena";
       }
     }
-    // And it saw every particle's values exactly (Python's repr round-trips doubles; floats
-    // widened to double compare exactly).
-    std::ifstream cf(out / "record" / ("step_" + std::to_string(step) + ".csv"));
-    std::size_t rows = 0;
-    for (std::string line; std::getline(cf, line);) {
-      if (line.empty()) continue;
-      std::replace(line.begin(), line.end(), ',', ' ');
-      std::istringstream s(line);
-      std::uint32_t id;
-      double x[3], v[3], p, rho;
-      int kind, device;
-      s >> id >> x[0] >> x[1] >> x[2] >> v[0] >> v[1] >> v[2] >> p >> rho >> kind >> device;
+    // And it saw every particle's values exactly.
+    const auto seen = recorded(out / "record" / ("step_" + std::to_string(step) + ".csv"));
+    EXPECT_EQ(seen.size(), solver.size()) << "step " << step;
+    for (auto& [id, got] : seen) {
       ASSERT_TRUE(solver.count(id)) << "unknown particle id " << id;
       const Particle& q = solver.at(id);
       for (int k = 0; k < 3; ++k) {
-        EXPECT_EQ(static_cast<float>(x[k]), q.x[k]) << "id " << id;
-        EXPECT_EQ(static_cast<float>(v[k]), q.v[k]) << "id " << id;
+        EXPECT_EQ(got.x[k], q.x[k]) << "id " << id;
+        EXPECT_EQ(got.v[k], q.v[k]) << "id " << id;
       }
-      EXPECT_EQ(static_cast<float>(p), q.p);
-      EXPECT_EQ(static_cast<float>(rho), q.rho);
-      EXPECT_EQ(kind, q.kind);
-      EXPECT_EQ(device, q.device);
-      ++rows;
+      EXPECT_EQ(got.p, q.p);
+      EXPECT_EQ(got.rho, q.rho);
+      EXPECT_EQ(got.kind, q.kind);
+      EXPECT_EQ(got.device, q.device);
     }
-    EXPECT_EQ(rows, solver.size()) << "step " << step;
   }
 }
 
@@ -201,23 +215,15 @@ TEST(CatalystZeroCopy, ArraysOutsideTheArenaAreCopiedForTheHelper) {
   const auto j = nlohmann::json::parse(std::ifstream(out / "record" / "step_7.json"));
   ASSERT_EQ(j["blocks"].size(), 1u);
   EXPECT_NE(j["blocks"][0]["x_buffer"].get<std::uintptr_t>(), address(p.pos[0].data())) << "a heap buffer reached another process";
-  std::ifstream cf(out / "record" / "step_7.csv");
-  std::size_t rows = 0;
-  for (std::string line; std::getline(cf, line);) {
-    if (line.empty()) continue;
-    std::replace(line.begin(), line.end(), ',', ' ');
-    std::istringstream s(line);
-    std::uint32_t id;
-    double x, y, z, vx, vy, vz, pressure, rho;
-    s >> id >> x >> y >> z >> vx >> vy >> vz >> pressure >> rho;
+  const auto seen = recorded(out / "record" / "step_7.csv");
+  EXPECT_EQ(seen.size(), 50u);
+  for (auto& [id, r] : seen) {
     const std::size_t i = id - 100;
     ASSERT_LT(i, 50u);
-    EXPECT_EQ(static_cast<float>(x), p.pos[0][i]);
-    EXPECT_EQ(static_cast<float>(vx), p.vel[0][i]);
-    EXPECT_EQ(static_cast<float>(rho), p.density[i]);
-    ++rows;
+    EXPECT_EQ(r.x[0], p.pos[0][i]);
+    EXPECT_EQ(r.v[0], p.vel[0][i]);
+    EXPECT_EQ(r.rho, p.density[i]);
   }
-  EXPECT_EQ(rows, 50u);
 }
 
 // The dataset's point arrays come from the field registry: a field registered as one FieldSpec
