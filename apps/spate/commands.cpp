@@ -225,17 +225,19 @@ int run_command(const RunArgs& a) {
 #endif
 
   RunResult r;
-  std::string bad_input;  // found once the run had started: a pipeline that fails to load
+  std::string bad_input;  // found once the run had written outputs: a pipeline that fails to load
   try {
     r = Simulation(c, o).run();
-  } catch (const InputError& e) {
+#ifdef SPATE_WITH_CATALYST
+  } catch (const catalyst::InSituLoadError& e) {
     bad_input = e.what();
     r.exit_code = 2;
     r.exit_status = "bad input";
     r.message = bad_input;
-#ifdef SPATE_WITH_CATALYST
-    if (insitu) r.insitu_failures = insitu->failures();
+    r.insitu_failures = insitu->failures();
 #endif
+  } catch (const InputError& e) {
+    throw BadInput(e.what());  // before any output (a bad restart file): no output folder
   } catch (const CaseError& e) {
     throw BadInput(e.what());
   }
@@ -254,7 +256,8 @@ int run_command(const RunArgs& a) {
   x.backend = a.backend;
   x.ranks = group.ranks;
   x.warnings = warnings;
-  // Also for bad input found during the run: every run that got this far leaves its summary.
+  // Also for a pipeline that failed to load: the run had started writing outputs, so it leaves its
+  // summary like every run that got this far.
   write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
   if (!bad_input.empty()) throw BadInput(bad_input);
   if (r.exit_code == 3) {
