@@ -13,12 +13,13 @@ struct TimeStepControl {
   float viscous_factor = 0.125f;
 };
 
-// The step one fluid particle of material M allows. A particle whose speed is NaN allows 0, not NaN: the global
+// The step one fluid particle allows. A particle whose speed is NaN allows 0, not NaN: the global
 // step is a minimum (an OpenMP reduction on the CPU, a CUB reduction on the GPU) built on `<`,
 // which keeps or drops a NaN depending on where the reduction meets it; 0 is the same minimum in
 // any order, and the run stops with "the time step collapsed to 0". (A NaN acceleration already
 // gives a number: the sound-speed limit, `acc_magnitude > 0` being false; the health check then
 // names the particle once its velocity follows.)
+// M is the particle's fluid material.
 SPATE_HD float particle_time_step(const PhysicsParams& P, const FluidMaterial& M, const TimeStepControl& c, float speed,
                                   float acc_magnitude) {
   float dt = c.cfl * P.h / (M.c0 + speed);

@@ -227,6 +227,7 @@ struct SlabOutcome {
 // periodic copy x + period can round into the column beyond the ghost layer; see docs/gpu.md.)
 std::vector<SlabOutcome> topology(const MakeArrays& make, const Case& c, int slabs) {
   const Lattice L = make_lattice(c);
+  const PhysicsParams P = physics_params(c);
   const ParticleStore global = generate_particles(c);
   const SlabLayout layout = SlabLayout::uniform(L.cells[0], slabs);
   InProcessHub hub(slabs);
@@ -251,7 +252,7 @@ std::vector<SlabOutcome> topology(const MakeArrays& make, const Case& c, int sla
     host.resize(host.owned());
     const float middle = L.origin[0] + 0.5f * static_cast<float>(L.cells[0]) * L.cell_size[0];
     for (std::size_t i = 0; i < host.size(); ++i) {
-      if (!MaterialTable{}.is_fluid(host.material[i])) continue;
+      if (!P.is_fluid(host.material[i])) continue;
       const float step = 1.37f * L.cell_size[0];
       host.pos[0][i] += L.periodic[0] || host.pos[0][i] < middle ? step : -step;
     }
@@ -260,7 +261,7 @@ std::vector<SlabOutcome> topology(const MakeArrays& make, const Case& c, int sla
     out[s].moved += topo.rebuild(*a, grid, layout, *t);
     topo.begin_refresh(*a);
     topo.finish_refresh(*a, *t);
-    out[s].unhealthy = a->find_unhealthy(HealthLimits(physics_params(c).materials, 0.5f, 0.9f));
+    out[s].unhealthy = a->find_unhealthy(HealthLimits(P.materials, 0.5f, 0.9f));
     out[s].particles = ParticleStore(c.dim);
     a->download(out[s].particles, mirror);
     out[s].table = mirror.starts();
@@ -306,7 +307,7 @@ TEST(HostTwin, TheTopologyScenarioOfTheDeviceTestIsSound) {
     const ParticleStore global = generate_particles(c);
     std::uint32_t lowest_fluid = SlabArrays::kNoFault, found = SlabArrays::kNoFault;
     for (std::size_t i = 0; i < global.size(); ++i)
-      if (MaterialTable{}.is_fluid(global.material[i])) lowest_fluid = std::min(lowest_fluid, global.id[i]);
+      if (physics_params(c).is_fluid(global.material[i])) lowest_fluid = std::min(lowest_fluid, global.id[i]);
     std::int64_t moved = 0;
     std::size_t owned = 0;
     for (auto& o : out) {

@@ -461,10 +461,9 @@ TEST(TimeStep, ANanParticleAllowsZeroWhereverItSits) {
   const Case c = small_dam_break();
   const PhysicsParams P = physics_params(c);
   const TimeStepControl ctl;
-  const FluidMaterial& M = P.materials.fluid[0];
-  EXPECT_EQ(particle_time_step(P, M, ctl, NAN, 1.0f), 0.0f);
-  EXPECT_EQ(particle_time_step(P, M, ctl, 1.0f, NAN), particle_time_step(P, M, ctl, 1.0f, 0.0f));
-  EXPECT_GT(particle_time_step(P, M, ctl, 1.0f, 1.0f), 0.0f);
+  EXPECT_EQ(particle_time_step(P, P.materials.fluid[0], ctl, NAN, 1.0f), 0.0f);
+  EXPECT_EQ(particle_time_step(P, P.materials.fluid[0], ctl, 1.0f, NAN), particle_time_step(P, P.materials.fluid[0], ctl, 1.0f, 0.0f));
+  EXPECT_GT(particle_time_step(P, P.materials.fluid[0], ctl, 1.0f, 1.0f), 0.0f);
   const ParticleStore p = generate_particles(c);
   EXPECT_GT(cpu::min_time_step(p, P, ctl), 0.0f);
   for (std::size_t i = 0; i < p.owned(); i += p.owned() / 7) {
