@@ -72,9 +72,12 @@ void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::pa
   j["adaptor_seconds_each_step"] = t.adaptor_step_seconds;
   j["pipelines_seconds_per_step"] = t.pipelines_seconds / n;
   j["pipelines_seconds_each_step"] = t.pipelines_step_seconds;
+  j["solver_wait_seconds_each_step"] = t.solver_wait_step_seconds;
   j["script_seconds_per_step"] = nlohmann::json::array();
   for (double s : t.script_seconds) j["script_seconds_per_step"].push_back(s / n);
   j["failures"] = sink.failures();
+  j["incidents"] = sink.incidents();
+  j["isolated"] = sink.isolated();
   write_file_atomically(out_dir / "insitu.json", j.dump(2) + "\n");
   spdlog::info("in situ: {} steps, adaptor {:.3g} ms/step, pipelines {:.3g} s/step", t.steps, 1e3 * t.adaptor_seconds / n,
                t.pipelines_seconds / n);
@@ -95,10 +98,10 @@ std::string live_address(const std::string& arg) {
 }
 
 #ifdef SPATE_WITH_CATALYST
-// pipelines/ (live.py, spate_steering.xml): $SPATE_PIPELINES_DIR, else the source tree's.
+// pipelines/ (live.py, spate_steering.xml): $SPATE_PIPELINES_DIR, else the data folder's.
 std::filesystem::path pipelines_dir() {
   const char* env = std::getenv("SPATE_PIPELINES_DIR");
-  return env && *env ? std::filesystem::path(env) : std::filesystem::path(SPATE_PIPELINES_DIR);
+  return env && *env ? std::filesystem::path(env) : data_dir() / "pipelines";
 }
 #endif
 
@@ -111,7 +114,11 @@ std::vector<std::string> warn_thin_features(const Case& c) {
   return messages;
 }
 
+}  // namespace
+
 int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
+
+namespace {
 
 // SIGINT (Ctrl-C) and SIGTERM (a batch system's notice) stop the run at the next step boundary with
 // its final checkpoint and summary (exit 128 + signal); a second one ends it at once.
@@ -121,6 +128,33 @@ extern "C" void on_stop_signal(int signal) {
 }
 
 }  // namespace
+
+std::filesystem::path data_dir() {
+  const char* env = std::getenv("SPATE_DATA_DIR");
+  if (env && *env) return env;
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  const auto installed = exe.parent_path().parent_path() / "share" / "spate";
+  if (!ec && std::filesystem::is_directory(installed / "pipelines", ec)) return installed;
+  return SPATE_SOURCE_DIR;
+}
+
+#ifdef SPATE_WITH_CATALYST
+std::unique_ptr<catalyst::CatalystSink> make_catalyst_sink(catalyst::CatalystOptions co, const Case& c) {
+  co.constants = case_constants(c);
+  co.timeout = c.insitu_timeout;
+  try {
+    create_output_folder(co.working_dir);
+  } catch (const OutputError& e) {
+    throw BadInput(fmt::format("the output folder {} is not usable: {}", co.working_dir.string(), e.what()));
+  }
+  try {
+    return std::make_unique<catalyst::CatalystSink>(std::move(co));
+  } catch (const catalyst::InSituLoadError& e) {
+    throw BadInput(e.what());
+  }
+}
+#endif
 
 int run_command(const RunArgs& a) {
   Case c = load(a.case_file, a.overrides);
@@ -178,36 +212,20 @@ int run_command(const RunArgs& a) {
 
 #ifdef SPATE_WITH_CATALYST
   std::unique_ptr<catalyst::CatalystSink> insitu;
-  std::unique_ptr<catalyst::CatalystSteering> live_steering;
   if (!pipelines.empty() || live) {
     catalyst::CatalystOptions co;
     co.scripts.assign(pipelines.begin(), pipelines.end());
-    if (live) {
-      // pipelines/live.py reads the address from the environment (ParaView scripts take no arguments).
-      ::setenv("SPATE_LIVE_URL", live_url.c_str(), 1);
-      co.scripts.push_back(pipelines_dir() / "live.py");
-    }
     co.every = insitu_every;
     co.working_dir = o.out_dir;
-    co.constants = case_constants(c);
-    try {
-      create_output_folder(o.out_dir);
-    } catch (const OutputError& e) {
-      throw BadInput(fmt::format("--out {}: the output folder is not usable: {}", o.out_dir.string(), e.what()));
-    }
-    // Started outside mpirun, ParaView initialises MPI itself, and OpenMPI's TCP transport would
-    // then listen on every interface (ports 1024 and up) for the whole run. One process needs only
-    // shared memory; with it the run opens no listening socket at all (docs/live.md, Security).
-    // An explicit OMPI_MCA_btl in the environment wins.
-    if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK")) ::setenv("OMPI_MCA_btl", "self,vader", 0);
-    try {
-      insitu = std::make_unique<catalyst::CatalystSink>(co);
-    } catch (const catalyst::InSituLoadError& e) {
-      throw BadInput(e.what());
-    }
-    o.insitu = insitu.get();
     if (live) {
-      catalyst::SteeringInitial init;
+      catalyst::LiveOptions lo;
+      lo.url = live_url;
+      lo.script = pipelines_dir() / "live.py";
+      lo.xml = pipelines_dir() / "spate_steering.xml";
+      lo.handshake_timeout = c.insitu_live_timeout;
+      // pipelines/live.py reads the address from the environment (ParaView scripts take no arguments).
+      ::setenv("SPATE_LIVE_URL", live_url.c_str(), 1);
+      catalyst::SteeringInitial& init = lo.initial;
       // The case's own (double) values: they survive ParaView's state round trips unchanged, so an
       // untouched parameter never shows up as a change.
       for (int k = 0; k < 3; ++k) init.gravity[k] = k < c.dim ? c.gravity[k] : 0.0;
@@ -229,12 +247,12 @@ int run_command(const RunArgs& a) {
           // an unreadable checkpoint is reported by the run itself (exit 2)
         }
       }
-      try {
-        live_steering = std::make_unique<catalyst::CatalystSteering>(pipelines_dir() / "spate_steering.xml", init);
-      } catch (const catalyst::InSituLoadError& e) {
-        throw BadInput(e.what());
-      }
-      o.steering = live_steering.get();
+      co.live = lo;
+    }
+    insitu = make_catalyst_sink(std::move(co), c);
+    o.insitu = insitu.get();
+    if (live) {
+      o.steering = insitu->steering();
       spdlog::info("live: connecting out to ParaView at {} on every in-situ step (Catalyst > Connect there)", live_url);
     }
   }
@@ -243,10 +261,19 @@ int run_command(const RunArgs& a) {
   RunResult r;
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
+  std::string bad_input;  // found once the run had written outputs: a pipeline that fails to load
   try {
     r = Simulation(c, o).run();
+#ifdef SPATE_WITH_CATALYST
+  } catch (const catalyst::InSituLoadError& e) {
+    bad_input = e.what();
+    r.exit_code = 2;
+    r.exit_status = "bad input";
+    r.message = bad_input;
+    r.insitu_failures = insitu->failures();
+#endif
   } catch (const InputError& e) {
-    throw BadInput(e.what());
+    throw BadInput(e.what());  // before any output (a bad restart file): no output folder
   } catch (const CaseError& e) {
     throw BadInput(e.what());
   }
@@ -254,7 +281,10 @@ int run_command(const RunArgs& a) {
   // writes the summary: under mpirun its failure ends the other ranks before they could.
   const ProcessGroup& group = process_group();
   const bool own_failure = r.exit_code >= 4 && r.exit_code <= 6;
-  if (group.rank != 0 && !own_failure) return r.exit_code;
+  if (group.rank != 0 && !own_failure) {
+    if (!bad_input.empty()) throw BadInput(bad_input);
+    return r.exit_code;
+  }
 #ifdef SPATE_WITH_CATALYST
   try {
     if (insitu && group.rank == 0) report_insitu(*insitu, o.out_dir);
@@ -277,6 +307,7 @@ int run_command(const RunArgs& a) {
     spdlog::error("{}", e.what());
     if (r.exit_code == 0 || r.exit_code == 3) r.exit_code = 5;
   }
+  if (!bad_input.empty()) throw BadInput(bad_input);
   if (r.exit_code == 3) {
     spdlog::error("the run went unstable: {}", r.message);
   } else if (r.exit_code != 0) {
