@@ -84,6 +84,9 @@ struct Case {
   bool open_top = true;
   std::array<bool, 3> periodic{false, false, false};
   double headroom = 0.5;  // domain extends this fraction of the tank height above an open top
+  // Fluid that leaves through the open top (over the walls, above the headroom) is removed; more
+  // than this fraction of the fluid removed stops the run (exit 3).
+  double max_removed_fraction = 0.05;
 
   int tank_motion = -1;  // index into `motions`, or -1: the tank stands still
   // Prescribed wall motions (motion.hpp), of the tank and of solids; at most kMaxMotions.
@@ -106,6 +109,8 @@ struct Case {
   // file's folder, run every `insitu_every` steps; --pipeline/--insitu-every replace them.
   std::vector<std::string> insitu_pipelines;
   int insitu_every = 1;
+  double insitu_timeout = 300.0;      // seconds a pipeline may take on one in-situ step
+  double insitu_live_timeout = 15.0;  // seconds a Catalyst Live peer may take to answer the handshake
 };
 
 // Reads, applies `overrides` ("key.path=value"), validates. Throws CaseError.

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -240,7 +241,9 @@ std::string apply_override(YAML::Node root, const std::string& file, const std::
   const std::string path = assignment.substr(0, eq);
   YAML::Node value;
   try {
-    value = YAML::Load(assignment.substr(eq + 1));
+    const std::vector<YAML::Node> docs = YAML::LoadAll(assignment.substr(eq + 1));
+    if (docs.size() > 1) throw CaseError(file + ": --set '" + assignment + "': the value holds more than one YAML document");
+    if (!docs.empty()) value = docs.front();
   } catch (const YAML::Exception& e) {
     throw CaseError(file + ": --set '" + assignment + "': value is not valid YAML: " + e.msg);
   }
@@ -279,6 +282,27 @@ bool overlap(const Box& a, const Box& b, int dim, double tol) {
     if (a.max[k] <= b.min[k] + tol || b.max[k] <= a.min[k] + tol) return false;
   return true;
 }
+
+// Why `name` cannot be a file name (case names name the default output folder out/<name>, probe
+// names their probes/<name>.csv), or nothing when it can: no path separators, no '..' or hidden
+// names, no control characters, not an option.
+std::optional<std::string> file_name_problem(const std::string& name) {
+  if (name.empty()) return "must not be empty";
+  if (name.size() > 100) return "is longer than 100 characters";
+  if (name.find('/') != std::string::npos || name.find('\\') != std::string::npos)
+    return "must not contain '/' or '\\' (it names a file inside the output folder)";
+  if (name.front() == '.') return "must not start with '.' (no '..', no hidden files)";
+  if (name.front() == '-') return "must not start with '-'";
+  for (const unsigned char ch : name)
+    if (ch < 0x20 || ch == 0x7f) return "must not contain control characters";
+  return std::nullopt;
+}
+
+// float32 positions resolve a spacing of dp only so far from the origin: beyond 2^20 dp the
+// rounding of a coordinate is 1/8 dp and neighbour distances are noise (and a lattice of sites
+// that large overflows its indices).
+constexpr double kLargestCoordinateInDp = 1048576.0;
+constexpr double kLargestCoordinate = 1.0e7;  // metres
 
 constexpr double kDegrees = 3.14159265358979323846 / 180.0;
 
@@ -358,6 +382,7 @@ Case read(Section& root, const std::string& file) {
   Case c;
   c.file = file;
   c.name = root.text("name");
+  if (auto why = file_name_problem(c.name)) root.fail(root.raw("name"), "name", "'" + c.name + "' " + *why);
   c.dim = root.integer("dimensions", 3);
   if (c.dim != 2 && c.dim != 3) root.fail(root.raw("dimensions"), "dimensions", "must be 2 or 3");
   const int d = c.dim;
@@ -417,6 +442,13 @@ Case read(Section& root, const std::string& file) {
     if (t->has("dt") && !(t->raw("dt").IsScalar() && t->raw("dt").Scalar() == "auto")) {
       c.fixed_dt = t->number("dt");
       if (!(*c.fixed_dt > 0)) t->fail(t->raw("dt"), "dt", "must be > 0 or 'auto'");
+      // A step that needs more than 1e12 steps to the end would run for ever (and below the
+      // resolution of t not even advance it).
+      if (c.end_time / *c.fixed_dt > 1e12) {
+        std::ostringstream m;
+        m << "a fixed step of " << *c.fixed_dt << " s takes more than 1e12 steps to time.end = " << c.end_time << " s";
+        t->fail(t->raw("dt"), "dt", m.str());
+      }
     }
     c.cfl = t->number("cfl", 0.2);
     if (!(c.cfl > 0 && c.cfl <= 1)) t->fail(t->raw("cfl"), "cfl", "must be in (0, 1]");
@@ -435,7 +467,10 @@ Case read(Section& root, const std::string& file) {
   if (c.wall_layers < 1 || c.wall_layers > 8) tank->fail(tank->raw("wall_layers"), "wall_layers", "must be between 1 and 8");
   c.open_top = tank->boolean("open_top", true);
   c.headroom = tank->number("headroom", 0.5);
-  if (c.headroom < 0) tank->fail(tank->raw("headroom"), "headroom", "must be >= 0 (a fraction of the tank height)");
+  if (c.headroom < 0 || c.headroom > 10) tank->fail(tank->raw("headroom"), "headroom", "must be >= 0 and <= 10 (a fraction of the tank height)");
+  c.max_removed_fraction = tank->number("max_removed_fraction", 0.05);
+  if (!(c.max_removed_fraction >= 0 && c.max_removed_fraction <= 1))
+    tank->fail(tank->raw("max_removed_fraction"), "max_removed_fraction", "must be in [0, 1] (a fraction of the fluid particles)");
   if (tank->has("periodic")) {
     YAML::Node p = tank->raw("periodic");
     if (!p.IsSequence()) tank->fail(p, "periodic", "expected a list of axes, e.g. [x]");
@@ -457,6 +492,27 @@ Case read(Section& root, const std::string& file) {
     c.motions.push_back(read_motion(*m, c, "tank", lo, hi));
   }
   tank->finish();
+  {
+    double largest = 0;
+    for (int k = 0; k < d; ++k) {
+      const double extra = c.wall_layers * c.dp + (k == d - 1 ? c.headroom * c.tank_size[k] : 0.0);
+      largest = std::max({largest, std::fabs(c.tank_origin[k] - extra), std::fabs(c.tank_origin[k] + c.tank_size[k] + extra)});
+    }
+    if (largest > kLargestCoordinate) {
+      bool far_origin = false;
+      for (int k = 0; k < d; ++k) far_origin = far_origin || std::fabs(c.tank_origin[k]) > kLargestCoordinate / 2;
+      std::ostringstream m;
+      m << "the domain reaches " << largest << " m from the origin of the coordinates; at most 1e7 m";
+      const char* key = far_origin ? "origin" : "size";
+      tank->fail(tank->raw(key), key, m.str());
+    }
+    if (largest / c.dp > kLargestCoordinateInDp) {
+      std::ostringstream m;
+      m << "dp = " << c.dp << " m is too fine for float32 positions in a domain reaching " << largest
+        << " m from the origin (at most 2^20 spacings: dp >= " << largest / kLargestCoordinateInDp << " m)";
+      root.fail(root.raw("dp"), "dp", m.str());
+    }
+  }
 
   const Vec3d tank_hi{c.tank_origin[0] + c.tank_size[0], c.tank_origin[1] + c.tank_size[1], c.tank_origin[2] + c.tank_size[2]};
   const double tol = 1e-9;
@@ -486,6 +542,7 @@ Case read(Section& root, const std::string& file) {
     c.solids.push_back(spec);
   }
   if (c.solids.size() > 200) root.fail(root.raw("solids"), "solids", "at most 200 solids");
+  if (c.fluid_blocks.size() > 200) root.fail(root.raw("fluid_blocks"), "fluid_blocks", "at most 200 fluid blocks");
   if (static_cast<int>(c.motions.size()) > kMaxMotions)
     root.fail(root.raw("solids"), "solids", "at most " + std::to_string(kMaxMotions) + " motions (tank and solids together)");
   if (!c.motions.empty() && (c.periodic[0] || c.periodic[1] || c.periodic[2]))
@@ -495,6 +552,7 @@ Case read(Section& root, const std::string& file) {
   for (auto& p : root.list("probes")) {
     ProbeSpec probe;
     probe.name = p.text("name");
+    if (auto why = file_name_problem(probe.name)) p.fail(p.raw("name"), "name", "'" + probe.name + "' " + *why);
     // Each probe writes probes/<name>.csv.
     for (auto& other : c.probes)
       if (other.name == probe.name) p.fail(p.raw("name"), "name", "probe '" + probe.name + "' is defined twice");
@@ -538,6 +596,7 @@ Case read(Section& root, const std::string& file) {
     p.finish();
     c.probes.push_back(probe);
   }
+  if (c.probes.size() > 1000) root.fail(root.raw("probes"), "probes", "at most 1000 probes");
   {
     auto o = root.optional_child("output");
     c.output_interval = o.number("interval", 0.0);
@@ -578,6 +637,12 @@ Case read(Section& root, const std::string& file) {
     }
     c.insitu_every = in->integer("every", 1);
     if (c.insitu_every < 1) in->fail(in->raw("every"), "every", "must be >= 1 (steps between in-situ runs)");
+    c.insitu_timeout = in->number("timeout", c.insitu_timeout);
+    if (!(c.insitu_timeout > 0) || !std::isfinite(c.insitu_timeout))
+      in->fail(in->raw("timeout"), "timeout", "must be > 0 (seconds a pipeline may take on one in-situ step)");
+    c.insitu_live_timeout = in->number("live_timeout", c.insitu_live_timeout);
+    if (!(c.insitu_live_timeout > 0) || !std::isfinite(c.insitu_live_timeout))
+      in->fail(in->raw("live_timeout"), "live_timeout", "must be > 0 (seconds a live peer may take to answer)");
     in->finish();
   }
   root.finish();
@@ -589,7 +654,14 @@ Case read(Section& root, const std::string& file) {
 Case parse_case(const std::string& yaml_text, const std::string& file_name, const std::vector<std::string>& overrides) {
   YAML::Node root;
   try {
-    root = YAML::Load(yaml_text);
+    // Every document is parsed: a second one would otherwise be ignored without a word.
+    const std::vector<YAML::Node> docs = YAML::LoadAll(yaml_text);
+    if (docs.size() > 1) {
+      const int line = docs[1].Mark().line;
+      throw CaseError(file_name + (line >= 0 ? ":" + std::to_string(line + 1) : std::string()) +
+                      ": a second YAML document ('---'): a case file holds exactly one");
+    }
+    if (!docs.empty()) root = docs.front();
   } catch (const YAML::ParserException& e) {
     throw CaseError(file_name + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +
                     ": YAML syntax error: " + e.msg);

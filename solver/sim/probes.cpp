@@ -4,8 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <limits>
+#include <sstream>
 
 #include "../particles/particle_access.hpp"
 #include "../physics/dispatch.hpp"
@@ -251,18 +254,40 @@ std::string probe_header(const ProbeSpec& p, int dim) {
   return header;
 }
 
-ProbeSet::ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, bool append)
+namespace {
+
+// The rows of an existing probe file up to `step` (whole lines only; a torn last line is dropped),
+// or just the header when the file is missing or is not one of ours.
+std::string rows_up_to(const std::filesystem::path& path, const std::string& header, std::int64_t step) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line, kept;
+  if (!in || !std::getline(in, line) || line + "\n" != header) return header;
+  kept = header;
+  while (std::getline(in, line)) {
+    if (in.eof()) break;  // no newline after it: a row cut short
+    const auto comma = line.find(',');
+    if (comma == std::string::npos) continue;
+    char* end = nullptr;
+    const long long s = std::strtoll(line.c_str() + comma + 1, &end, 10);
+    if (end == line.c_str() + comma + 1 || *end != ',' || s > step) continue;
+    kept += line + "\n";
+  }
+  return kept;
+}
+
+}  // namespace
+
+ProbeSet::ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, std::optional<std::int64_t> resume_step)
     : case_(c), probes_(c.probes) {
   if (!writer || probes_.empty()) return;
   const auto dir = out_dir / "probes";
-  std::filesystem::create_directories(dir);
+  create_output_folder(dir);
   for (auto& p : probes_) {
+    // Probe names are plain file names (checked by the case loader).
     const auto path = dir / (p.name + ".csv");
-    const bool fresh = !append || !std::filesystem::exists(path);
-    auto f = std::make_unique<std::ofstream>(path, fresh ? std::ios::trunc : std::ios::app);
-    f->precision(9);
-    if (fresh) *f << probe_header(p, c.dim) << '\n';
-    files_.push_back(std::move(f));
+    const std::string header = probe_header(p, c.dim) + "\n";
+    write_file_atomically(path, resume_step ? rows_up_to(path, header, *resume_step) : header);
+    files_.emplace_back(path, false);
   }
 }
 
@@ -310,10 +335,12 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
     rows.push_back(row);
   }
   for (std::size_t k = 0; k < files_.size(); ++k) {
-    *files_[k] << time << ',' << step;
-    for (double v : rows[k]) *files_[k] << ',' << v;
-    *files_[k] << '\n';
-    files_[k]->flush();
+    std::ostringstream row;
+    row.precision(9);
+    row << time << ',' << step;
+    for (double v : rows[k]) row << ',' << v;
+    row << '\n';
+    files_[k].append(row.str());
   }
   return rows;
 }

@@ -8,7 +8,6 @@
 // then one row per sample; the first column is the simulated time in seconds.
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -16,14 +15,17 @@
 #include <vector>
 
 #include "../case/case.hpp"
+#include "../io/output_file.hpp"
 #include "slab_worker.hpp"
 
 namespace spate {
 
 class ProbeSet {
  public:
-  // `writer`: this slab writes the files. `append`: continue existing files (restart).
-  ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, bool append);
+  // `writer`: this slab writes the files. `resume_step`: continue existing files after a restart
+  // from that step (their rows of later steps, written by the run that went on past the
+  // checkpoint, are dropped); none: start them afresh.
+  ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, std::optional<std::int64_t> resume_step);
   // Collective over all slabs. Returns the sampled row values in probe order (for tests).
   // `motions`: where probes that follow a moving body are at `time` (none: they stay put).
   std::vector<std::vector<double>> sample(double time, std::int64_t step, SlabWorker& w, const MotionSet* motions = nullptr);
@@ -32,7 +34,7 @@ class ProbeSet {
  private:
   const Case& case_;
   std::vector<ProbeSpec> probes_;
-  std::vector<std::unique_ptr<std::ofstream>> files_;
+  std::vector<AppendFile> files_;
 };
 
 // The probe's value columns with their units, as in its CSV header ("pressure[Pa]", "vx[m/s]", ...).
