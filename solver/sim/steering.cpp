@@ -46,7 +46,15 @@ std::optional<std::string> validate(const SteeringChange& c, int dim, const Moti
   if (c.name == "motion_amplitude" || c.name == "motion_frequency") {
     const double k = c.value[0];
     if (k != std::floor(k) || k < 0) return c.name + ": the motion number must be a whole number >= 0";
-    if (!motions || motions->size() == 0) return c.name + ": the case has no moving walls";
+    if (!motions) {
+      // The case's motions are not known here (a recorded log read before the run, e.g. a
+      // checkpoint's): only the ranges; the run checks the motion itself before applying it.
+      const double v = c.value[1];
+      if (v < spec->min || v > spec->max || (c.name == "motion_frequency" && !(v > 0)))
+        return c.name + ": " + std::to_string(v) + " is outside the parameter's range";
+      return std::nullopt;
+    }
+    if (motions->size() == 0) return c.name + ": the case has no moving walls";
     const auto why = c.name == "motion_amplitude" ? motions->check_amplitude(static_cast<int>(k), c.value[1])
                                                   : motions->check_frequency(static_cast<int>(k), c.value[1]);
     if (why) return c.name + ": " + *why;

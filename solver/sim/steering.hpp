@@ -41,7 +41,8 @@ struct SteeringTarget {
 };
 
 // Reason for rejection, or nothing when the change is acceptable. `motions`: the run's wall
-// motions (a motion change names one of them).
+// motions (a motion change names one of them); null: not known (a recorded log read before the
+// run), only the ranges are checked.
 std::optional<std::string> validate(const SteeringChange& change, int dim, const MotionSet* motions = nullptr);
 void apply(const SteeringChange& change, SteeringTarget& target);
 

@@ -185,7 +185,12 @@ TEST(MotionSet, SteeringChangesAmplitudeAndFrequencyWithoutAJump) {
   c.value = {3, 1.5};
   EXPECT_NE(validate(c, 2, &m).value_or("").find("no motion 3"), std::string::npos);
   c.value = {0, 1.5};
-  EXPECT_NE(validate(c, 2, nullptr).value_or("").find("no moving walls"), std::string::npos);
+  const MotionSet none;
+  EXPECT_NE(validate(c, 2, &none).value_or("").find("no moving walls"), std::string::npos);
+  // Without the case's motions (a recorded log read before the run): the ranges only.
+  EXPECT_FALSE(validate(c, 2, nullptr).has_value());
+  c.value = {0, 2.5};
+  EXPECT_TRUE(validate(c, 2, nullptr).has_value());
   c = {10, 0.1, "motion_frequency", {0, 200}};
   EXPECT_NE(validate(c, 2, &m).value_or("").find("outside (0, 100]"), std::string::npos);
   c.value = {0};
