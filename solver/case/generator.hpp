@@ -16,6 +16,9 @@ struct ParticleCounts {
 };
 
 Lattice make_lattice(const Case& c);
+
+// How deep x lies below face `face` (2 axis + (0 lower, 1 upper side)) of box b.
+double face_depth(const Box& b, const double x[3], int face);
 // Counts without allocating (spate info on the paper's 12M-particle case).
 ParticleCounts count_particles(const Case& c);
 // All particles, ids 0..n-1 in generation order, all owned.

@@ -1,8 +1,10 @@
 #pragma once
 // Probes written as CSV time series (probes/<name>.csv): pressure at a point (Shepard average of the
-// fluid), water height at a gauge, total pressure force on a named solid, surge-front position.
-// Sampling is collective; every value is independent of the split (owner-computed or exact).
+// fluid), wall pressure on a sensor disc, water height at a gauge, pressure force on a named solid or
+// one of its faces, surge-front position. Sampling is collective; every value is independent of the
+// split (owner-computed or exact). What each probe measures: docs/cases.md, "probes".
 #include <cstdint>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -13,19 +15,44 @@
 
 namespace spate {
 
+// The trailing moving average of a sampled signal over a window of time, as the (piecewise-linear)
+// signal's mean over [t - window, t]; while fewer than `window` seconds have been sampled, the mean
+// over what has been. A sensor averaging over its window this way reports a peak about half a
+// window late and lower than the instantaneous one, like a laboratory sensor sampled or filtered
+// at that rate.
+class MovingAverage {
+ public:
+  explicit MovingAverage(double window = 0.0) : window_(window) {}
+  // Adds the sample (t, v) (t after every earlier sample) and returns the mean up to t.
+  double add(double t, double v);
+
+ private:
+  double window_;
+  std::deque<std::pair<double, double>> samples_;
+};
+
 class ProbeSet {
  public:
-  // `writer`: this slab writes the files. `append`: continue existing files (restart).
-  ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, bool append);
+  // `writer`: this slab writes the files. `append`: continue existing files (restart at step
+  // `resume_step`: sensors with a window re-read their samples up to it from their file).
+  ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, bool append, std::int64_t resume_step = 0);
   // Collective over all slabs. Returns the sampled row values in probe order (for tests).
   std::vector<std::vector<double>> sample(double time, std::int64_t step, SlabWorker& w);
   bool empty() const { return probes_.empty(); }
 
  private:
+  struct Probe {
+    ProbeSpec spec;
+    std::vector<Vec3d> points;  // wall_pressure: where the disc samples the fluid
+    MovingAverage average;      // wall_pressure with a window
+  };
   const Case& case_;
-  std::vector<ProbeSpec> probes_;
+  std::vector<Probe> probes_;
   std::vector<std::unique_ptr<std::ofstream>> files_;
 };
+
+// The CSV columns after `time,step` of a probe.
+std::vector<std::string> probe_columns(const ProbeSpec& p, int dim);
 
 // Single probe evaluations on one slab (exposed for tests). NaN when this slab does not own the point.
 double sample_pressure(SlabWorker& w, const Vec3d& at);
@@ -33,5 +60,13 @@ double sample_pressure(SlabWorker& w, const Vec3d& at);
 std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at);
 double sample_height(SlabWorker& w, const Vec3d& gauge, const Case& c);
 double local_front(SlabWorker& w, int axis);
+// Where a wall-pressure sensor samples the fluid: points on its disc (in 2D a segment of length
+// `diameter` along the face) on a square lattice of spacing at most dp/4, the centre alone for a
+// point sensor; the same order on every slab.
+std::vector<Vec3d> sensor_points(const ProbeSpec& sensor, int dim, double dp);
+// The wall pressure at each of `points` that this slab owns (NaN at the others): the Adami pressure
+// the fluid within reach implies at that point of the wall (physics/wall_boundary.hpp), not clipped;
+// 0 where no fluid is within reach (a dry part of the sensor).
+std::vector<double> sample_wall_pressure(SlabWorker& w, const std::vector<Vec3d>& points);
 
 }  // namespace spate

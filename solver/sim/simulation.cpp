@@ -227,7 +227,7 @@ class Worker {
     t_.barrier();
     w_.prepare(!s_.restarted);
 
-    ProbeSet probes(s_.c, s_.opts.out_dir, writer, s_.restarted);
+    ProbeSet probes(s_.c, s_.opts.out_dir, writer, s_.restarted, s_.start.step);
     PvdIndex pvd(s_.opts.out_dir / "particles.pvd");
     double time = s_.start.time;
     std::int64_t step = s_.start.step;
@@ -250,7 +250,8 @@ class Worker {
     auto output = [&](bool final_step) {
       if (!probes.empty() && (s_.c.probe_interval <= 0 || time >= next_probe - 1e-12 || final_step)) {
         probes.sample(time, step, w_);
-        while (next_probe <= time + 1e-12) next_probe += std::max(s_.c.probe_interval, 1e-300);
+        // probe_interval 0 samples every step (stepping next_probe by a tiny amount would never end).
+        while (s_.c.probe_interval > 0 && next_probe <= time + 1e-12) next_probe += s_.c.probe_interval;
       }
       if (out_dt > 0 && (time >= next_output - 1e-9 * out_dt || (final_step && last_snapshot != step))) {
         write_snapshot(pvd, time, step, "snapshots");
