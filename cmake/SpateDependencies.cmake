@@ -4,6 +4,12 @@ find_package(Threads REQUIRED)
 find_package(yaml-cpp REQUIRED)
 find_package(fmt REQUIRED)
 find_package(nlohmann_json REQUIRED)
+# Case-file digests in summary.json (SHA-256) and snapshot compression (zlib).
+find_package(OpenSSL REQUIRED COMPONENTS Crypto)
+find_package(ZLIB REQUIRED)
+find_package(spdlog REQUIRED)
+# spate plot runs scripts/plot_probes.py (matplotlib) with this Python.
+find_package(Python3 COMPONENTS Interpreter)
 find_package(CLI11 CONFIG QUIET)
 if(NOT CLI11_FOUND)
   # Debian's libcli11-dev ships only the header.

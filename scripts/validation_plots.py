@@ -13,8 +13,10 @@ work, data, images = (Path(a) for a in sys.argv[1:4])
 
 
 def probe(path, column):
+    """Time [s] and one column of a probe CSV; columns are named without their unit ("pressure" for
+    "pressure[Pa]")."""
     with open(path) as f:
-        rows = list(csv.DictReader(f))
+        rows = [{k.split("[")[0]: v for k, v in r.items()} for r in csv.DictReader(f)]
     return [float(r["time"]) for r in rows], [float(r[column]) for r in rows]
 
 

@@ -6,6 +6,7 @@
 #include <vtkCPProcessor.h>
 #include <vtkCPPythonScriptV2Pipeline.h>
 #include <vtkDataObject.h>
+#include <vtkLogger.h>
 #include <vtkMultiBlockDataSet.h>
 #include <vtkObjectFactory.h>
 #include <vtkOutputWindow.h>
@@ -17,6 +18,7 @@
 #endif
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <chrono>
 #include <cstdio>
@@ -35,15 +37,26 @@ constexpr const char* kChannel = "particles";
 
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// Prints what VTK and Python report as usual, and keeps a copy while armed: that is how a
-// pipeline's Python traceback reaches failures() and summary.json.
+// What VTK and Python report goes to spate's log (plain text, timestamped in files, at the
+// message's level), and a copy is kept while armed: that is how a pipeline's Python traceback
+// reaches failures() and summary.json. Messages of VTK's error/warning macros reach the log through
+// vtkLogger instead (see forward_vtk_log); the base class would not print those either.
 class CapturingOutputWindow : public vtkOutputWindow {
  public:
   static CapturingOutputWindow* New();
   vtkTypeMacro(CapturingOutputWindow, vtkOutputWindow)
   void DisplayText(const char* text) override {
-    if (armed_ && text) captured_ += text;
-    vtkOutputWindow::DisplayText(text);
+    if (!text) return;
+    if (armed_) captured_ += text;
+    const MessageTypes type = GetCurrentMessageType();
+    if (GetDisplayStream(type) == StreamType::Null) return;
+    switch (type) {
+      case MESSAGE_TYPE_ERROR: spdlog::error("{}", text); break;
+      case MESSAGE_TYPE_WARNING:
+      case MESSAGE_TYPE_GENERIC_WARNING: spdlog::warn("{}", text); break;
+      case MESSAGE_TYPE_DEBUG: spdlog::debug("{}", text); break;
+      default: spdlog::info("{}", text); break;
+    }
   }
   void arm() {
     captured_.clear();
@@ -109,6 +122,25 @@ class GuardedPipeline : public vtkCPPipeline {
 };
 vtkStandardNewMacro(GuardedPipeline);
 
+// vtkLogger (loguru) writes VTK's and ParaView's messages to stderr itself, coloured whenever TERM
+// names a colour terminal, even into a file. Its stderr output is switched off and its messages
+// (warnings and errors; info at debug level) go to spate's log, one line each, naming the source
+// file as loguru did.
+void forward_vtk_log() {
+  vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
+  vtkLogger::AddCallback(
+      "spate",
+      [](void*, const vtkLogger::Message& m) {
+        std::string text = m.message ? m.message : "";
+        while (!text.empty() && text.back() == '\n') text.pop_back();
+        const std::string where = m.filename ? fmt::format(" ({}:{})", std::filesystem::path(m.filename).filename().string(), m.line) : "";
+        if (m.verbosity <= vtkLogger::VERBOSITY_ERROR) spdlog::error("{}{}", text, where);
+        else if (m.verbosity == vtkLogger::VERBOSITY_WARNING) spdlog::warn("{}{}", text, where);
+        else spdlog::debug("{}{}", text, where);
+      },
+      nullptr, vtkLogger::VERBOSITY_INFO);
+}
+
 }  // namespace
 
 struct CatalystSink::Impl {
@@ -125,6 +157,7 @@ struct CatalystSink::Impl {
   mutable std::mutex mutex;  // guards failures and timing, read from other threads
 
   void start() {
+    forward_vtk_log();
     display = std::make_unique<PrivateDisplay>();
     processor = vtkSmartPointer<vtkCPProcessor>::New();
     const std::string dir = options.working_dir.string();
@@ -165,6 +198,7 @@ struct CatalystSink::Impl {
     dataset.reset();
     vtkOutputWindow::SetInstance(nullptr);
     log = nullptr;
+    vtkLogger::RemoveCallback("spate");
   }
 
   void run_step(std::int64_t step, double time, const std::vector<SlabView>& slabs) {
@@ -204,8 +238,7 @@ struct CatalystSink::Impl {
       if (p->failed_on_first_run()) {
         load_errors.push_back(fmt::format("--pipeline {}: the script failed to load:\n{}", p->script().string(), p->error()));
       } else {
-        std::fprintf(stderr, "spate: in-situ pipeline %s failed at step %lld and is switched off; the run continues\n",
-                     p->script().c_str(), static_cast<long long>(step));
+        spdlog::warn("in-situ pipeline {} failed at step {} and is switched off; the run continues", p->script().string(), step);
         failures.push_back(fmt::format("{}: failed at step {} (t = {:.6g} s), switched off:\n{}", p->script().string(), step, time, p->error()));
       }
     }
@@ -249,7 +282,7 @@ CatalystSink::~CatalystSink() {
   try {
     impl_->stop();
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "spate: finalising Catalyst: %s\n", e.what());
+    spdlog::error("finalising Catalyst: {}", e.what());
   }
 }
 

@@ -17,6 +17,7 @@
 #include <vtkUnsignedIntArray.h>
 
 #include <algorithm>
+#include <map>
 #include <numeric>
 #include <string>
 
@@ -48,21 +49,29 @@ struct ParticleDataset::Partition {
   Partition() {
     xyz->SetNumberOfComponents(3);
     xyz->SetName("Points");
-    velocity->SetNumberOfComponents(3);
-    velocity->SetName("velocity");
-    pressure->SetName("pressure");
-    density->SetName("density");
-    id->SetName("id");
-    kind->SetName("kind");
     device->SetName("device");
     points->SetData(xyz);
     poly->SetPoints(points);
   }
 
+  // The VTK array wrapping one exported solver field, made on first use.
+  vtkDataArray* array_for(const SlabArray& a) {
+    auto& slot = arrays[std::string(a.name)];
+    if (!slot) {
+      if (a.components > 1) slot = vtkSmartPointer<vtkSOADataArrayTemplate<float>>::New();
+      else if (a.type == FieldType::F32) slot = vtkSmartPointer<vtkFloatArray>::New();
+      else if (a.type == FieldType::U32) slot = vtkSmartPointer<vtkUnsignedIntArray>::New();
+      else slot = vtkSmartPointer<vtkUnsignedCharArray>::New();
+      slot->SetNumberOfComponents(a.components);
+      slot->SetName(std::string(a.name).c_str());
+    }
+    return slot;
+  }
+
   void wrap(const SlabView& v, const std::function<bool(std::string_view)>& wanted) {
     const auto n = static_cast<vtkIdType>(v.owned);
     const float* zero = reserve_filled(zeros, v.owned, [](auto& b) { std::fill(b.begin(), b.end(), 0.0f); });
-    auto component = [&](const float* p) { return unconst(p && n > 0 ? p : zero); };
+    auto component = [&](const void* p) { return unconst(static_cast<const float*>(p && n > 0 ? p : zero)); };
     for (int k = 0; k < 3; ++k) xyz->SetArray(k, component(v.pos[k]), n, /*updateMaxId=*/true, /*save=*/true);
     points->Modified();
 
@@ -75,19 +84,20 @@ struct ParticleDataset::Partition {
       set();
       if (!pd->HasArray(std::string(name).c_str())) pd->AddArray(array);
     };
-    attach(velocity, "velocity", [&] {
-      for (int k = 0; k < 3; ++k) velocity->SetArray(k, component(v.vel[k]), n, true, true);
-    });
-    attach(pressure, "pressure", [&] { pressure->SetArray(component(v.pressure), n, 1); });
-    attach(density, "density", [&] { density->SetArray(component(v.density), n, 1); });
-    attach(id, "id", [&] {
-      const std::uint32_t* p = v.id && n > 0 ? v.id : reinterpret_cast<const std::uint32_t*>(zero);
-      id->SetArray(unconst(p), n, 1);
-    });
-    attach(kind, "kind", [&] {
-      const std::uint8_t* p = v.kind && n > 0 ? v.kind : reinterpret_cast<const std::uint8_t*>(zero);
-      kind->SetArray(unconst(p), n, 1);
-    });
+    for (const SlabArray& a : v.arrays) {
+      vtkDataArray* array = array_for(a);
+      attach(array, a.name, [&] {
+        if (auto* soa = vtkSOADataArrayTemplate<float>::SafeDownCast(array)) {
+          for (int k = 0; k < a.components; ++k) soa->SetArray(k, component(a.data[k]), n, true, true);
+        } else if (auto* f = vtkFloatArray::SafeDownCast(array)) {
+          f->SetArray(component(a.data[0]), n, 1);
+        } else if (auto* u = vtkUnsignedIntArray::SafeDownCast(array)) {
+          u->SetArray(unconst(static_cast<const unsigned int*>(a.data[0] && n > 0 ? a.data[0] : zero)), n, 1);
+        } else if (auto* c = vtkUnsignedCharArray::SafeDownCast(array)) {
+          c->SetArray(unconst(static_cast<const unsigned char*>(a.data[0] && n > 0 ? a.data[0] : zero)), n, 1);
+        }
+      });
+    }
     attach(device, "device", [&] {
       const int owner = v.slab;
       device->SetArray(reserve_filled(device_ids, v.owned, [owner](auto& b) { std::fill(b.begin(), b.end(), owner); }), n, 1);
@@ -105,11 +115,7 @@ struct ParticleDataset::Partition {
   vtkNew<vtkPolyData> poly;
   vtkNew<vtkPoints> points;
   vtkNew<vtkSOADataArrayTemplate<float>> xyz;
-  vtkNew<vtkSOADataArrayTemplate<float>> velocity;
-  vtkNew<vtkFloatArray> pressure;
-  vtkNew<vtkFloatArray> density;
-  vtkNew<vtkUnsignedIntArray> id;
-  vtkNew<vtkUnsignedCharArray> kind;
+  std::map<std::string, vtkSmartPointer<vtkDataArray>> arrays;  // by exported name
   vtkNew<vtkIntArray> device;
   vtkNew<vtkTypeInt32Array> offsets;
   vtkNew<vtkTypeInt32Array> connectivity;

@@ -6,10 +6,11 @@
 // Block k (of slab_count, the same on every rank; blocks of other ranks are null) holds:
 //   points    x, y, z     vtkSOADataArrayTemplate<float> over the solver's three position arrays;
 //                         in 2D, z is a shared array of zeros (the solver has no z)
-//   velocity  3 floats    vtkSOADataArrayTemplate<float> over the three velocity arrays (z = 0 in 2D)
-//   pressure, density     float, wrapping the solver arrays
-//   id        uint32      wrapping the solver array
-//   kind      uint8       0 fluid, 1 tank wall, 2 + k solid k (wrapping the solver array)
+//   every exported field of the field registry (solver/particles/field_registry.hpp), under its
+//   exported name, wrapping the solver array: vectors as vtkSOADataArrayTemplate<float> with 3
+//   components (z = 0 in 2D), float scalars as vtkFloatArray, uint32 as vtkUnsignedIntArray,
+//   uint8 as vtkUnsignedCharArray. Today: velocity, density, pressure, id, kind (the material
+//   index: 0 fluid, 1 tank wall, 2 + k solid k).
 //   device    int32       the owning slab index (a constant array kept by the adaptor)
 //   verts     one vertex cell per particle (connectivity kept by the adaptor)
 // The solver reorders its arrays every step, so pointers are refreshed on every in-situ step; the
@@ -31,9 +32,6 @@ class vtkMultiBlockDataSet;
 class vtkPolyData;
 
 namespace spate::catalyst {
-
-// Names of the point arrays, as pipelines see them.
-inline constexpr std::string_view kPointArrays[] = {"velocity", "pressure", "density", "id", "kind", "device"};
 
 class ParticleDataset {
  public:

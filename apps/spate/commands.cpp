@@ -10,6 +10,7 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
 #include <thread>
 #include <unistd.h>
 
@@ -19,9 +20,11 @@
 #include "backend/cuda/device_runtime.hpp"
 #include "case/case.hpp"
 #include "case/generator.hpp"
+#include "case/thin_features.hpp"
 #include "comm/in_process_transport.hpp"
 #include "comm/process_group.hpp"
 #include "io/checkpoint.hpp"
+#include "io/field_scale.hpp"
 #include "io/run_summary.hpp"
 #include "sim/simulation.hpp"
 #include "sim/slab_worker.hpp"
@@ -57,7 +60,7 @@ void check_backend(const std::string& backend) {
 
 #ifdef SPATE_WITH_CATALYST
 // Timing of the in-situ steps: a line on stdout and insitu.json beside summary.json.
-void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::path& out_dir, bool quiet) {
+void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::path& out_dir) {
   const catalyst::InSituTiming t = sink.timing();
   const double n = static_cast<double>(std::max<std::int64_t>(1, t.steps));
   nlohmann::ordered_json j;
@@ -70,9 +73,8 @@ void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::pa
   for (double s : t.script_seconds) j["script_seconds_per_step"].push_back(s / n);
   j["failures"] = sink.failures();
   std::ofstream(out_dir / "insitu.json") << j.dump(2) << "\n";
-  if (!quiet)
-    std::printf("spate: in situ: %lld steps, adaptor %.3g ms/step, pipelines %.3g s/step\n", static_cast<long long>(t.steps),
-                1e3 * t.adaptor_seconds / n, t.pipelines_seconds / n);
+  spdlog::info("in situ: {} steps, adaptor {:.3g} ms/step, pipelines {:.3g} s/step", t.steps, 1e3 * t.adaptor_seconds / n,
+               t.pipelines_seconds / n);
 }
 #endif
 
@@ -90,20 +92,62 @@ std::string live_address(const std::string& arg) {
 }
 
 #ifdef SPATE_WITH_CATALYST
-// pipelines/ (live.py, spate_steering.xml): $SPATE_PIPELINES_DIR, else the source tree's.
+// pipelines/ (live.py, spate_steering.xml): $SPATE_PIPELINES_DIR, else the data folder's.
 std::filesystem::path pipelines_dir() {
   const char* env = std::getenv("SPATE_PIPELINES_DIR");
-  return env && *env ? std::filesystem::path(env) : std::filesystem::path(SPATE_PIPELINES_DIR);
+  return env && *env ? std::filesystem::path(env) : data_dir() / "pipelines";
 }
 #endif
 
-int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
+// Thin fluid features (case/thin_features.hpp), each a warning; returns the messages.
+std::vector<std::string> warn_thin_features(const Case& c) {
+  std::vector<std::string> messages;
+  for (const ThinFeature& f : thin_features(c)) messages.push_back(c.file + ": " + f.message(c.dp));
+  if (process_group().rank == 0)
+    for (auto& m : messages) spdlog::warn("{}", m);
+  return messages;
+}
 
 }  // namespace
+
+int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
+
+std::filesystem::path data_dir() {
+  const char* env = std::getenv("SPATE_DATA_DIR");
+  if (env && *env) return env;
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  const auto installed = exe.parent_path().parent_path() / "share" / "spate";
+  if (!ec && std::filesystem::is_directory(installed / "pipelines", ec)) return installed;
+  return SPATE_SOURCE_DIR;
+}
+
+#ifdef SPATE_WITH_CATALYST
+std::unique_ptr<catalyst::CatalystSink> make_catalyst_sink(const std::vector<std::filesystem::path>& scripts, int every,
+                                                           const std::filesystem::path& working_dir, const Case& c) {
+  catalyst::CatalystOptions co;
+  co.scripts = scripts;
+  co.every = every;
+  co.working_dir = working_dir;
+  co.constants = case_constants(c);
+  std::filesystem::create_directories(working_dir);
+  // Started outside mpirun, ParaView initialises MPI itself, and OpenMPI's TCP transport would
+  // then listen on every interface (ports 1024 and up) for the whole run. One process needs only
+  // shared memory; with it the run opens no listening socket at all (docs/live.md, Security).
+  // An explicit OMPI_MCA_btl in the environment wins.
+  if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK")) ::setenv("OMPI_MCA_btl", "self,vader", 0);
+  try {
+    return std::make_unique<catalyst::CatalystSink>(co);
+  } catch (const catalyst::InSituLoadError& e) {
+    throw BadInput(e.what());
+  }
+}
+#endif
 
 int run_command(const RunArgs& a) {
   Case c = load(a.case_file, a.overrides);
   check_backend(a.backend);
+  const std::vector<std::string> warnings = warn_thin_features(c);
   // In situ: the command line replaces the case file's `insitu:` section.
   const std::vector<std::string> pipelines = a.pipelines.empty() ? c.insitu_pipelines : a.pipelines;
   [[maybe_unused]] const int insitu_every = a.insitu_every.value_or(c.insitu_every);
@@ -127,6 +171,10 @@ int run_command(const RunArgs& a) {
   if (a.devices < 1) throw BadInput(fmt::format("--devices {}: must be at least 1", a.devices));
   if (a.checkpoint_every && *a.checkpoint_every < 0)
     throw BadInput(fmt::format("--checkpoint-every {}: must be >= 0", *a.checkpoint_every));
+  if (a.checkpoint_keep_last && *a.checkpoint_keep_last < 0)
+    throw BadInput(fmt::format("--checkpoint-keep-last {}: must be >= 0 (0: keep all)", *a.checkpoint_keep_last));
+  if (a.checkpoint_keep_every && *a.checkpoint_keep_every < 0)
+    throw BadInput(fmt::format("--checkpoint-keep-every {}: must be >= 0 (0: none)", *a.checkpoint_keep_every));
 
   RunOptions o;
   o.out_dir = a.out.empty() ? std::filesystem::path("out") / c.name : std::filesystem::path(a.out);
@@ -136,6 +184,8 @@ int run_command(const RunArgs& a) {
   o.devices = a.devices;
   o.backend = a.backend;
   o.checkpoint_every = a.checkpoint_every;
+  o.checkpoint_keep_last = a.checkpoint_keep_last;
+  o.checkpoint_keep_every = a.checkpoint_keep_every;
   if (!a.restart.empty()) o.restart = a.restart;
   o.quiet = a.quiet;
   std::unique_ptr<SteeringReplay> replay;
@@ -152,35 +202,20 @@ int run_command(const RunArgs& a) {
   std::unique_ptr<catalyst::CatalystSink> insitu;
   std::unique_ptr<catalyst::CatalystSteering> live_steering;
   if (!pipelines.empty() || live) {
-    catalyst::CatalystOptions co;
-    co.scripts.assign(pipelines.begin(), pipelines.end());
+    std::vector<std::filesystem::path> scripts(pipelines.begin(), pipelines.end());
     if (live) {
       // pipelines/live.py reads the address from the environment (ParaView scripts take no arguments).
       ::setenv("SPATE_LIVE_URL", live_url.c_str(), 1);
-      co.scripts.push_back(pipelines_dir() / "live.py");
+      scripts.push_back(pipelines_dir() / "live.py");
     }
-    co.every = insitu_every;
-    co.working_dir = o.out_dir;
-    const PhysicsParams P = physics_params(c);
-    co.constants = {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.rho0}, {"particle_mass", P.mass}};
-    std::filesystem::create_directories(o.out_dir);
-    // Started outside mpirun, ParaView initialises MPI itself, and OpenMPI's TCP transport would
-    // then listen on every interface (ports 1024 and up) for the whole run. One process needs only
-    // shared memory; with it the run opens no listening socket at all (docs/live.md, Security).
-    // An explicit OMPI_MCA_btl in the environment wins.
-    if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK")) ::setenv("OMPI_MCA_btl", "self,vader", 0);
-    try {
-      insitu = std::make_unique<catalyst::CatalystSink>(co);
-    } catch (const catalyst::InSituLoadError& e) {
-      throw BadInput(e.what());
-    }
+    insitu = make_catalyst_sink(scripts, insitu_every, o.out_dir, c);
     o.insitu = insitu.get();
     if (live) {
       catalyst::SteeringInitial init;
       // The case's own (double) values: they survive ParaView's state round trips unchanged, so an
       // untouched parameter never shows up as a change.
       for (int k = 0; k < 3; ++k) init.gravity[k] = k < c.dim ? c.gravity[k] : 0.0;
-      init.viscosity = c.viscosity;
+      init.viscosity = c.fluids[0].viscosity;
       init.artificial_viscosity = c.artificial_viscosity;
       init.insitu_every = insitu_every;
       // A restart continues steered (the checkpoint holds the accepted changes): show those values.
@@ -204,8 +239,7 @@ int run_command(const RunArgs& a) {
         throw BadInput(e.what());
       }
       o.steering = live_steering.get();
-      if (!a.quiet)
-        std::printf("spate: live: connecting out to ParaView at %s on every in-situ step (Catalyst > Connect there)\n", live_url.c_str());
+      spdlog::info("live: connecting out to ParaView at {} on every in-situ step (Catalyst > Connect there)", live_url);
     }
   }
 #endif
@@ -222,21 +256,21 @@ int run_command(const RunArgs& a) {
   const ProcessGroup& group = process_group();
   if (group.rank != 0) return r.exit_code;
 #ifdef SPATE_WITH_CATALYST
-  if (insitu) report_insitu(*insitu, o.out_dir, a.quiet);
+  if (insitu) report_insitu(*insitu, o.out_dir);
 #endif
   SummaryExtras x;
   x.threads = a.threads > 0 ? a.threads : std::max(1, hardware_threads() / group.ranks_on_node);
   x.devices = a.devices;
   x.backend = a.backend;
   x.ranks = group.ranks;
+  x.warnings = warnings;
   write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
   if (r.exit_code == 3) {
-    std::fprintf(stderr, "spate: the run went unstable: %s\n", r.message.c_str());
-  } else if (!a.quiet) {
-    std::printf("spate: %s done: %lld steps to t = %.6g s in %.2f s (%.3g particle-steps/s); outputs in %s\n", c.name.c_str(),
-                static_cast<long long>(r.steps), r.simulated_time, r.wall_seconds,
-                r.wall_seconds > 0 ? r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds : 0.0,
-                o.out_dir.string().c_str());
+    spdlog::error("the run went unstable: {}", r.message);
+  } else {
+    spdlog::info("{} done: {} steps to t = {:.6g} s in {:.2f} s ({:.3g} particle-steps/s); outputs in {}", c.name, r.steps,
+                 r.simulated_time, r.wall_seconds,
+                 r.wall_seconds > 0 ? r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds : 0.0, o.out_dir.string());
   }
   return r.exit_code;
 }
@@ -245,11 +279,15 @@ int info_command(const InfoArgs& a) {
   Case c = load(a.case_file, a.overrides);
   if (a.backend != "cpu" && a.backend != "cuda") throw BadInput(fmt::format("--backend {}: expected 'cpu' or 'cuda'", a.backend));
   if (a.devices < 1) throw BadInput(fmt::format("--devices {}: must be at least 1", a.devices));
+  const std::vector<ThinFeature> thin = thin_features(c);
+  if (!a.json) warn_thin_features(c);
   const ParticleCounts n = count_particles(c);
   if (n.fluid == 0) throw BadInput(c.file + ": the case generates no fluid particles (check fluid_blocks, wet_bed and dp)");
   const PhysicsParams P = physics_params(c);
   const Lattice L = make_lattice(c);
-  const double dt = c.fixed_dt ? *c.fixed_dt : c.cfl * P.h / P.c0;
+  const FluidMaterial& fluid = P.materials.fluid[0];
+  const double dt = c.fixed_dt ? *c.fixed_dt : c.cfl * P.h / fluid.c0;
+  const std::vector<std::string> names = material_names(c);
   const std::size_t bpp = ParticleStore(c.dim).bytes_per_particle();
   const double memory = static_cast<double>(n.total()) * bpp;
   // The GPU estimate needs no device: it is arithmetic on the case (backend/cuda/device_plan.hpp).
@@ -264,14 +302,33 @@ int info_command(const InfoArgs& a) {
     j["particles"] = {{"fluid", n.fluid}, {"wall", n.wall}, {"total", n.total()}};
     j["dp"] = c.dp;
     j["smoothing_length"] = P.h;
-    j["sound_speed"] = P.c0;
-    j["sound_speed_automatic"] = !c.sound_speed.has_value();
+    j["sound_speed"] = fluid.c0;
+    j["sound_speed_automatic"] = !c.fluids[0].sound_speed.has_value();
+    nlohmann::ordered_json materials = nlohmann::ordered_json::array();
+    for (int m = 0; m < P.materials.count; ++m) {
+      nlohmann::ordered_json e{{"index", m}, {"name", names[m]}, {"kind", P.is_fluid(m) ? "fluid" : m == P.materials.tank() ? "tank" : "solid"}};
+      if (P.is_fluid(m)) {
+        const FluidMaterial& f = P.materials.of(m);
+        e["rest_density"] = f.rho0;
+        e["particle_mass"] = f.mass;
+        e["viscosity"] = f.viscosity;
+        e["sound_speed"] = f.c0;
+        e["tait_exponent"] = f.gamma;
+        e["background_pressure"] = f.background_pressure;
+      }
+      materials.push_back(e);
+    }
+    j["materials"] = materials;
     j["dt"] = dt;
     j["dt_adaptive"] = !c.fixed_dt.has_value();
     j["cells"] = {L.cells[0], L.cells[1], L.cells[2]};
     j["bytes_per_particle"] = bpp;
     j["memory_bytes"] = memory;
     j["backend"] = a.backend;
+    j["warnings"] = nlohmann::ordered_json::array();
+    for (const ThinFeature& f : thin)
+      j["warnings"].push_back({{"key", f.key}, {"what", f.what}, {"thickness", f.thickness}, {"layers", f.layers},
+                               {"resolving_dp", f.resolving_dp}, {"message", c.file + ": " + f.message(c.dp)}});
     if (a.backend == "cuda") {
       j["device_bytes_per_particle"] = gpu::device_footprint(c.dim).per_particle();
       j["devices"] = a.devices;
@@ -287,7 +344,17 @@ int info_command(const InfoArgs& a) {
     std::printf("particles       %lld fluid, %lld wall, %lld total\n", static_cast<long long>(n.fluid),
                 static_cast<long long>(n.wall), static_cast<long long>(n.total()));
     std::printf("resolution      dp = %g m, h = %g m (%.2f dp), support 2h\n", c.dp, P.h, c.smoothing_ratio);
-    std::printf("sound speed     c0 = %g m/s (%s)\n", P.c0, c.sound_speed ? "from the case" : "automatic: 10 sqrt(g H)");
+    std::printf("sound speed     c0 = %g m/s (%s)\n", fluid.c0, c.fluids[0].sound_speed ? "from the case" : "automatic: 10 sqrt(g H)");
+    std::printf("materials       %d (index: name, kind, properties)\n", static_cast<int>(P.materials.count));
+    for (int m = 0; m < P.materials.count; ++m) {
+      if (P.is_fluid(m)) {
+        const FluidMaterial& f = P.materials.of(m);
+        std::printf("  %-3d %-12s fluid: rho0 = %g kg/m3, mass = %g kg, mu = %g Pa s, c0 = %g m/s, gamma = %g, p_b = %g Pa\n", m,
+                    names[m].c_str(), f.rho0, f.mass, f.viscosity, f.c0, f.gamma, f.background_pressure);
+      } else {
+        std::printf("  %-3d %-12s %s\n", m, names[m].c_str(), m == P.materials.tank() ? "tank walls" : "solid");
+      }
+    }
     std::printf("time step       %g s (%s)\n", dt, c.fixed_dt ? "fixed" : "adaptive, initial CFL estimate");
     std::printf("cell lattice    %d x %d x %d\n", L.cells[0], L.cells[1], L.cells[2]);
     std::printf("memory          %zu bytes/particle, %.1f MiB for the particles (%s backend)\n", bpp, memory / 1048576.0,
@@ -306,6 +373,8 @@ int info_command(const InfoArgs& a) {
 
 int compare_command(const CompareArgs& a) {
   if (!(a.tolerance >= 0)) throw BadInput(fmt::format("--tolerance {}: must be >= 0", a.tolerance));
+  if (a.scaled_tolerance && !(*a.scaled_tolerance >= 0))
+    throw BadInput(fmt::format("--scaled-tolerance {}: must be >= 0", *a.scaled_tolerance));
   ParticleStore pa, pb;
   CheckpointMeta ma, mb;
   try {
@@ -322,31 +391,44 @@ int compare_command(const CompareArgs& a) {
     std::printf("different particle ids\n");
     return 1;
   }
+  // With --scaled-tolerance each field allows that fraction of its scale, from the case the first
+  // checkpoint ran (its physics: dp, h, c0, rho0), or --tolerance where that is larger.
+  std::optional<PhysicsParams> P;
+  if (a.scaled_tolerance) {
+    try {
+      P = physics_params(parse_case(ma.case_yaml, a.a + " (its stored case)"));
+    } catch (const std::exception& e) {
+      throw BadInput(e.what());
+    }
+  }
   bool ok = true;
-  std::printf("%-18s %-14s %s\n", "field", "max |a - b|", "at id");
+  if (P) std::printf("%-18s %-14s %-10s %s\n", "field", "max |a - b|", "at id", "tolerance");
+  else std::printf("%-18s %-14s %s\n", "field", "max |a - b|", "at id");
   auto fa = pa.fields(), fb = pb.fields();
   for (std::size_t f = 0; f < fa.size(); ++f) {
-    if (!fa[f].checkpoint || fa[f].name == "id") continue;
+    if (!fa[f].has(kCheckpointed) || fa[f].name == "id") continue;
     double worst = 0.0;
     std::uint32_t at = 0;
+    const FieldType type = fa[f].spec->type;
+    auto value = [type](const FieldRef& r, std::size_t i) -> double {
+      if (type == FieldType::U8) return static_cast<unsigned char>(r.bytes()[i]);
+      if (type == FieldType::U32) return reinterpret_cast<const std::uint32_t*>(r.bytes())[i];
+      return reinterpret_cast<const float*>(r.bytes())[i];
+    };
     for (std::size_t i = 0; i < pa.size(); ++i) {
-      double x, y;
-      if (fa[f].elem_size == 1) {
-        x = static_cast<unsigned char>(fa[f].bytes()[i]);
-        y = static_cast<unsigned char>(fb[f].bytes()[i]);
-      } else {
-        x = reinterpret_cast<const float*>(fa[f].bytes())[i];
-        y = reinterpret_cast<const float*>(fb[f].bytes())[i];
-      }
+      const double x = value(fa[f], i), y = value(fb[f], i);
       const double d = (std::isnan(x) != std::isnan(y)) ? INFINITY : (std::isnan(x) ? 0.0 : std::fabs(x - y));
       if (d > worst) worst = d, at = pa.id[i];
     }
-    ok = ok && worst <= a.tolerance;
-    std::printf("%-18s %-14.6g %u\n", std::string(fa[f].name).c_str(), worst, at);
+    const double tolerance = P ? std::max(a.tolerance, *a.scaled_tolerance * field_scale(fa[f].name, *P)) : a.tolerance;
+    ok = ok && worst <= tolerance;
+    if (P) std::printf("%-18s %-14.6g %-10u %.3g\n", std::string(fa[f].name).c_str(), worst, at, tolerance);
+    else std::printf("%-18s %-14.6g %u\n", std::string(fa[f].name).c_str(), worst, at);
   }
   std::printf("step %lld vs %lld, time %.17g vs %.17g\n", static_cast<long long>(ma.step), static_cast<long long>(mb.step),
               ma.time, mb.time);
-  std::printf("%s (tolerance %g)\n", ok ? "MATCH" : "DIFFERENT", a.tolerance);
+  if (P) std::printf("%s (tolerance %g of each field's scale)\n", ok ? "MATCH" : "DIFFERENT", *a.scaled_tolerance);
+  else std::printf("%s (tolerance %g)\n", ok ? "MATCH" : "DIFFERENT", a.tolerance);
   return ok ? 0 : 1;
 }
 

@@ -9,6 +9,9 @@
 
 #include "commands.hpp"
 #include "comm/process_group.hpp"
+#include "io/log.hpp"
+#include "io/provenance.hpp"
+#include "io/version.hpp"
 
 namespace {
 
@@ -30,13 +33,24 @@ std::string who() {
 
 int main(int argc, char** argv) {
   using namespace spate::app;
+  spate::record_invocation(argc, argv);
+  spate::configure_logging(spdlog::level::info);
   try {
     spate::init_process_group(argc, argv);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "spate: error: %s\n", e.what());
+    spdlog::error("{}", e.what());
     return 2;
   }
+  spate::configure_logging(spdlog::level::info, who());
   CLI::App app{"spate: weakly-compressible SPH for free-surface flows, on CPUs and GPUs, watched and steered in situ.\n"};
+  app.set_version_flag("--version", fmt::format("spate {} (commit {})", spate::version(), spate::git_commit()),
+                       "Print the version and the git commit it was built from, then exit");
+  // Options of the program itself may also follow the command (spate run case.yaml --log-level debug).
+  app.fallthrough();
+  std::string log_level = "info";
+  app.add_option("--log-level", log_level,
+                 "trace, debug, info (default), warning, error or off. Without a terminal lines carry a UTC timestamp")
+      ->check([](const std::string& v) { return spate::parse_log_level(v) ? std::string() : "expected trace, debug, info, warning, error or off"; });
   app.footer(
       "Exit codes: 0 done; 1 compare found differences; 2 bad input (case file, options, restart file);\n"
       "            3 the run went unstable (diagnostic snapshot written, last good checkpoint kept); 4 internal error.");
@@ -57,6 +71,9 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--devices", run.devices, "Device workers (x-slabs) in this process");
   run_cmd->add_option("--backend", run.backend, "cpu or cuda");
   run_cmd->add_option("--checkpoint-every", run.checkpoint_every, "Write a checkpoint every N steps");
+  run_cmd->add_option("--checkpoint-keep-last", run.checkpoint_keep_last, "Keep the newest K checkpoints (default 2; 0: all)");
+  run_cmd->add_option("--checkpoint-keep-every", run.checkpoint_keep_every,
+                      "Also keep for good every checkpoint at a multiple of N x --checkpoint-every steps");
   run_cmd->add_option("--restart", run.restart, "Continue from a checkpoint (HDF5)");
   run_cmd->add_flag("--quiet", run.quiet, "No progress output");
   run_cmd->add_option("--pipeline", run.pipelines, "ParaView Catalyst script (repeatable)");
@@ -79,6 +96,27 @@ int main(int argc, char** argv) {
   cmp_cmd->add_option("a", cmp.a, "First checkpoint")->required();
   cmp_cmd->add_option("b", cmp.b, "Second checkpoint")->required();
   cmp_cmd->add_option("--tolerance", cmp.tolerance, "Largest allowed absolute difference (default 0: bit-identical)");
+  cmp_cmd->add_option("--scaled-tolerance", cmp.scaled_tolerance,
+                      "Largest allowed difference of each field as a fraction of its scale (dp, c0, rho0, c0^2/h, rho0 c0/h; material exact), "
+                      "from the case stored in the first checkpoint");
+
+  PostArgs post;
+  auto* post_cmd = app.add_subcommand("post", "After a run: evaluate probes and run Catalyst pipelines on its saved snapshots or checkpoints");
+  post_cmd->add_option("run_dir", post.run_dir, "The run's output folder (spate run --out)")->required();
+  post_cmd->add_option("--probe", post.probes,
+                       "A probe as in a case file, in YAML: '{name: p1, type: pressure, position: [0.5, 0.1]}' (repeatable; "
+                       "replaces the case's probes)");
+  post_cmd->add_option("--from", post.from, "snapshots or checkpoints (default: snapshots when the run wrote any)");
+  post_cmd->add_option("--step", post.steps, "Only this saved step (repeatable)");
+  post_cmd->add_option("--pipeline", post.pipelines, "ParaView Catalyst script to run on every saved step (repeatable)");
+  post_cmd->add_option("--out", post.out, "Output folder (default RUN_DIR/post)");
+  post_cmd->add_option("--threads", post.threads, "CPU threads (default: all cores)");
+  post_cmd->add_flag("--plot", post.plot, "Also plot the probes (as spate plot OUT)");
+
+  PlotArgs plot;
+  auto* plot_cmd = app.add_subcommand("plot", "PNG plots of every probe of a run (or of a spate post output folder)");
+  plot_cmd->add_option("dir", plot.dir, "Run folder (or post output folder) with probes/*.csv")->required();
+  plot_cmd->add_option("--out", plot.out, "Where the PNGs go (default DIR/plots)");
 
   BenchArgs bench;
   auto* bench_cmd = app.add_subcommand("bench", "Measure particle-steps and neighbour interactions per second");
@@ -96,17 +134,23 @@ int main(int argc, char** argv) {
     const int code = app.exit(e);
     return finish(code == 0 ? 0 : 2);
   }
+  // --quiet (run) means warnings and errors only, unless a level was asked for.
+  spdlog::level::level_enum level = *spate::parse_log_level(log_level);
+  if (run.quiet && app.get_option("--log-level")->count() == 0) level = spdlog::level::warn;
+  spate::configure_logging(level, who());
   try {
     run.live_requested = live_opt->count() > 0;
     if (*run_cmd) return finish(run_command(run));
     if (*info_cmd) return finish(info_command(info));
     if (*cmp_cmd) return finish(compare_command(cmp));
+    if (*post_cmd) return finish(post_command(post));
+    if (*plot_cmd) return finish(plot_command(plot));
     if (*bench_cmd) return finish(bench_command(bench));
   } catch (const BadInput& e) {
-    std::fprintf(stderr, "%s: error: %s\n", who().c_str(), e.what());
+    spdlog::error("{}", e.what());
     return finish(2);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: internal error: %s\n", who().c_str(), e.what());
+    spdlog::error("internal error: {}", e.what());
     return finish(4);
   }
   return finish(0);

@@ -13,20 +13,22 @@
 namespace spate {
 
 // Acceleration and density rate of fluid particle i (zero rates for walls).
-template <class Kernel, int Dim, class Fields>
+template <class Kernel, int Dim, bool Gamma7, class Fields>
 SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
-  if (!is_fluid(f.kind[i])) {
+  if (!P.is_fluid(f.material[i])) {
     SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = 0.0f;
     f.density_rate[i] = 0.0f;
     return;
   }
   const ParticleState<Dim> si = load_state<Dim>(f, i);
+  const FluidMaterial& M = P.materials.of(si.material);
   FluidRates<Dim> rates;
   // About 1 in 6 candidates of the 27 cells lies inside the support (3D); skip the others before
   // paying for the pair terms (which would add exactly zero for them).
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
     for (std::uint32_t j = jb; j < je; ++j) {
-      if (distance_squared<Dim>(si.x, f.pos, j) < P.support2) accumulate_fluid_pair<Kernel, Dim>(P, si, load_state<Dim>(f, j), rates);
+      if (distance_squared<Dim>(si.x, f.pos, j) < P.support2)
+        accumulate_fluid_pair<Kernel, Dim, Gamma7>(P, M, si, load_state<Dim>(f, j), rates);
     }
   });
   add_body_forces(P, rates);
@@ -37,12 +39,12 @@ SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, 
 // Adami pressure, density and no-slip velocity of wall particle w (fluid particles are skipped).
 template <class Kernel, int Dim, class Fields>
 SPATE_HD void update_wall_state(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t w, const int g[3]) {
-  if (is_fluid(f.kind[w])) return;
+  if (P.is_fluid(f.material[w])) return;
   const Vec<Dim> xw = load_vec<Dim>(f.pos, w);
   WallSums<Dim> sums;
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
     for (std::uint32_t j = jb; j < je; ++j)
-      if (is_fluid(f.kind[j])) accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(f, j), sums);
+      if (P.is_fluid(f.material[j])) accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(f, j), sums);
   });
   const WallState<Dim> s = finish_wall(P, sums);
   f.pressure[w] = s.p;
@@ -54,13 +56,14 @@ SPATE_HD void update_wall_state(const PhysicsParams& P, const CellGridView& v, F
 template <class Kernel, int Dim, class Fields>
 SPATE_HD void update_summation_density(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i,
                                        const int g[3]) {
-  if (!is_fluid(f.kind[i])) return;
+  if (!P.is_fluid(f.material[i])) return;
+  const FluidMaterial& M = P.materials.of(f.material[i]);
   const Vec<Dim> xi = load_vec<Dim>(f.pos, i);
   float rho = 0.0f;
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
-    for (std::uint32_t j = jb; j < je; ++j) rho += summation_density_term<Kernel, Dim>(P, xi, load_vec<Dim>(f.pos, j));
+    for (std::uint32_t j = jb; j < je; ++j) rho += summation_density_term<Kernel, Dim>(P, M, xi, load_vec<Dim>(f.pos, j));
   });
-  f.density[i] = rho < P.rho0 ? P.rho0 : rho;
+  f.density[i] = rho < M.rho0 ? M.rho0 : rho;
 }
 
 }  // namespace spate

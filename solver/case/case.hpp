@@ -42,6 +42,19 @@ struct ProbeSpec {
   Vec3d normal{0, 0, 0};    // wall_pressure: unit normal of the face, pointing into the fluid
   double diameter = 0.0;    // wall_pressure: diameter of the sensing disc [m] (0: a point)
   double window = 0.0;      // wall_pressure: moving-average window [s] (0: none)
+  bool connected = false;   // height: the top of the water column standing on the floor (spray above ignored)
+  double min_depth = 0.0;   // front: only water at least this deep counts (a bore over a wet bed)
+};
+
+// A fluid (a material, physics/materials.hpp). The case's `fluid:` section is fluid 0; every fluid
+// block and the wet bed are made of it.
+struct FluidSpec {
+  std::string name = "water";
+  double density = 1000.0;               // rest density rho0 [kg/m3]
+  double viscosity = 1.0e-3;             // dynamic viscosity [Pa s]
+  std::optional<double> sound_speed;     // empty: automatic, 10 sqrt(g H)
+  double tait_exponent = 7.0;            // gamma of eq. 9
+  double background_pressure = 0.0;      // [Pa], added to the Tait pressure
 };
 
 struct Case {
@@ -53,9 +66,7 @@ struct Case {
   double smoothing_ratio = 1.3;
   KernelType kernel = KernelType::WendlandC2;
 
-  double rho0 = 1000.0;
-  double viscosity = 1.0e-3;
-  std::optional<double> sound_speed;  // empty: automatic, 10 sqrt(g H)
+  std::vector<FluidSpec> fluids{FluidSpec{}};  // material k is fluids[k] (one today)
   double artificial_viscosity = 0.0;
   DensityMode density_mode = DensityMode::Continuity;
   DensityDiffusion diffusion = DensityDiffusion::Fourtakas;
@@ -84,6 +95,8 @@ struct Case {
   double output_interval = 0.0;   // simulated seconds between snapshots; 0: none
   double probe_interval = 0.0;    // 0: every step
   int checkpoint_every = 0;       // steps; 0: only at the end
+  int checkpoint_keep_last = 2;   // periodic checkpoints kept (the newest); 0: all
+  int checkpoint_keep_every = 0;  // also keep every Nth periodic checkpoint (step a multiple of N x checkpoint_every); 0: none
   int balance_every = 100;        // steps between load-balancing passes
   bool balanced_start = true;     // first faces from the balancer (else equal column counts, as the paper)
 
@@ -101,7 +114,10 @@ Case parse_case(const std::string& yaml_text, const std::string& file_name,
 
 // Highest fluid column, for the automatic sound speed.
 double highest_fluid_column(const Case& c);
-double sound_speed(const Case& c);
+// The sound speed of fluid k: given, or automatic.
+double sound_speed(const Case& c, int fluid = 0);
 PhysicsParams physics_params(const Case& c);
+// Names of the materials of the case, by material index (fluids, then "tank", then the solids).
+std::vector<std::string> material_names(const Case& c);
 
 }  // namespace spate

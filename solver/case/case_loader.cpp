@@ -371,14 +371,21 @@ Case read(Section& root, const std::string& file) {
 
   {
     auto f = root.optional_child("fluid");
-    c.rho0 = f.number("density", 1000.0);
-    if (!(c.rho0 > 0)) f.fail(f.raw("density"), "density", "must be > 0");
-    c.viscosity = f.number("viscosity", 1.0e-3);
-    if (c.viscosity < 0) f.fail(f.raw("viscosity"), "viscosity", "must be >= 0");
+    FluidSpec& fluid = c.fluids[0];
+    fluid.name = f.text("name", std::string("water"));
+    fluid.density = f.number("density", 1000.0);
+    if (!(fluid.density > 0)) f.fail(f.raw("density"), "density", "must be > 0");
+    fluid.viscosity = f.number("viscosity", 1.0e-3);
+    if (fluid.viscosity < 0) f.fail(f.raw("viscosity"), "viscosity", "must be >= 0");
     if (f.has("sound_speed") && !(f.raw("sound_speed").IsScalar() && f.raw("sound_speed").Scalar() == "auto")) {
-      c.sound_speed = f.number("sound_speed");
-      if (!(*c.sound_speed > 0)) f.fail(f.raw("sound_speed"), "sound_speed", "must be > 0 or 'auto'");
+      fluid.sound_speed = f.number("sound_speed");
+      if (!(*fluid.sound_speed > 0)) f.fail(f.raw("sound_speed"), "sound_speed", "must be > 0 or 'auto'");
     }
+    fluid.tait_exponent = f.number("tait_exponent", 7.0);
+    if (!(fluid.tait_exponent >= 1 && fluid.tait_exponent <= 10))
+      f.fail(f.raw("tait_exponent"), "tait_exponent", "must be between 1 and 10 (7 for water)");
+    fluid.background_pressure = f.number("background_pressure", 0.0);
+    if (fluid.background_pressure < 0) f.fail(f.raw("background_pressure"), "background_pressure", "must be >= 0");
     c.artificial_viscosity = f.number("artificial_viscosity", 0.0);
     if (c.artificial_viscosity < 0) f.fail(f.raw("artificial_viscosity"), "artificial_viscosity", "must be >= 0");
     c.body_force = f.vector("body_force", d, Vec3d{0, 0, 0});
@@ -477,7 +484,10 @@ Case read(Section& root, const std::string& file) {
     switch (probe.type) {
       case ProbeType::Pressure:
       case ProbeType::Velocity: probe.position = p.vector("position", d); break;
-      case ProbeType::Height: probe.position = p.vector("position", d - 1); break;
+      case ProbeType::Height:
+        probe.position = p.vector("position", d - 1);
+        probe.connected = p.boolean("connected", false);
+        break;
       case ProbeType::Force:
         probe.solid = p.text("solid");
         if (!solid_names.count(probe.solid)) p.fail(p.raw("solid"), "solid", "no solid named '" + probe.solid + "'");
@@ -494,6 +504,9 @@ Case read(Section& root, const std::string& file) {
         const std::string axis = p.text("axis", std::string("x"));
         probe.axis = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;
         if (probe.axis < 0 || probe.axis >= d) p.fail(p.raw("axis"), "axis", "must be an axis of the case");
+        probe.min_depth = p.number("min_depth", 0.0);
+        if (!(probe.min_depth >= 0) || probe.min_depth >= c.tank_size[d - 1])
+          p.fail(p.raw("min_depth"), "min_depth", "must be >= 0 and below the tank top");
         break;
       }
     }
@@ -505,9 +518,13 @@ Case read(Section& root, const std::string& file) {
     c.output_interval = o.number("interval", 0.0);
     c.probe_interval = o.number("probe_interval", 0.0);
     c.checkpoint_every = o.integer("checkpoint_every", 0);
+    c.checkpoint_keep_last = o.integer("checkpoint_keep_last", 2);
+    c.checkpoint_keep_every = o.integer("checkpoint_keep_every", 0);
     if (c.output_interval < 0) o.fail(o.raw("interval"), "interval", "must be >= 0");
     if (c.probe_interval < 0) o.fail(o.raw("probe_interval"), "probe_interval", "must be >= 0");
     if (c.checkpoint_every < 0) o.fail(o.raw("checkpoint_every"), "checkpoint_every", "must be >= 0");
+    if (c.checkpoint_keep_last < 0) o.fail(o.raw("checkpoint_keep_last"), "checkpoint_keep_last", "must be >= 0 (0: keep all)");
+    if (c.checkpoint_keep_every < 0) o.fail(o.raw("checkpoint_keep_every"), "checkpoint_keep_every", "must be >= 0 (0: none)");
     o.finish();
   }
   {
@@ -579,8 +596,8 @@ double highest_fluid_column(const Case& c) {
   return h;
 }
 
-double sound_speed(const Case& c) {
-  if (c.sound_speed) return *c.sound_speed;
+double sound_speed(const Case& c, int fluid) {
+  if (c.fluids[fluid].sound_speed) return *c.fluids[fluid].sound_speed;
   double g = 0;
   for (int k = 0; k < c.dim; ++k) g += c.gravity[k] * c.gravity[k];
   g = std::sqrt(g);
@@ -603,12 +620,16 @@ PhysicsParams physics_params(const Case& c) {
                                                           : lattice_gradient_moment<CubicSpline>(c.dim, P.h, c.dp);
   P.gradient_norm = static_cast<float>(P.kernel_norm / moment);
   P.eta2 = 0.01f * P.h * P.h;
-  P.rho0 = static_cast<float>(c.rho0);
-  P.c0 = static_cast<float>(sound_speed(c));
-  P.gamma = 7.0f;
-  P.tait_b = P.c0 * P.c0 * P.rho0 / P.gamma;
-  P.mass = static_cast<float>(c.rho0 * std::pow(c.dp, c.dim));
-  P.viscosity = static_cast<float>(c.viscosity);
+  // Materials (physics/materials.hpp): the fluids, then the tank, then every solid.
+  P.materials.fluids = static_cast<std::uint8_t>(c.fluids.size());
+  P.materials.count = static_cast<std::uint8_t>(c.fluids.size() + 1 + c.solids.size());
+  for (std::size_t k = 0; k < c.fluids.size(); ++k) {
+    const FluidSpec& f = c.fluids[k];
+    P.materials.fluid[k] = make_fluid(static_cast<float>(f.density), static_cast<float>(sound_speed(c, static_cast<int>(k))),
+                                      static_cast<float>(f.tait_exponent), static_cast<float>(f.viscosity),
+                                      static_cast<float>(f.density * std::pow(c.dp, c.dim)),
+                                      static_cast<float>(f.background_pressure));
+  }
   P.artificial_viscosity = static_cast<float>(c.artificial_viscosity);
   P.delta = static_cast<float>(c.delta);
   P.diffusion = c.diffusion;
@@ -618,6 +639,14 @@ PhysicsParams physics_params(const Case& c) {
     P.body_force[k] = static_cast<float>(c.body_force[k]);
   }
   return P;
+}
+
+std::vector<std::string> material_names(const Case& c) {
+  std::vector<std::string> names;
+  for (const FluidSpec& f : c.fluids) names.push_back(f.name);
+  names.push_back("tank");
+  for (const SolidSpec& s : c.solids) names.push_back(s.name);
+  return names;
 }
 
 }  // namespace spate

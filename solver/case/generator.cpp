@@ -37,13 +37,14 @@ bool in_box(const Box& b, const double x[3], int dim) {
   return true;
 }
 
-// Which kind of particle, if any, sits at site (i, j, k). Returns false for an empty site.
-bool classify(const Case& c, const Sites& s, const int idx[3], std::uint8_t& kind) {
+// The material of the particle at site (i, j, k), if any (physics/materials.hpp: fluid 0 for fluid
+// blocks and the wet bed, then the tank, then solid k). Returns false for an empty site.
+bool classify(const Case& c, const MaterialTable& M, const Sites& s, const int idx[3], std::uint8_t& kind) {
   const int d = c.dim;
   bool interior = true;
   for (int a = 0; a < d; ++a) interior = interior && idx[a] >= 0 && idx[a] < s.n[a];
   if (!interior) {
-    kind = kTankWall;
+    kind = M.tank();
     return true;
   }
   double x[3] = {0, 0, 0};
@@ -58,16 +59,16 @@ bool classify(const Case& c, const Sites& s, const int idx[3], std::uint8_t& kin
         if (f != 2 * (d - 1)) depth = std::min(depth, face_depth(solid.box, x, f));
       if (depth > c.wall_layers * c.dp) return false;
     }
-    kind = static_cast<std::uint8_t>(kSolidBase + k);
+    kind = M.solid(static_cast<int>(k));
     return true;
   }
   for (auto& b : c.fluid_blocks)
     if (in_box(b, x, d)) {
-      kind = kFluid;
+      kind = 0;
       return true;
     }
   if (x[d - 1] - c.tank_origin[d - 1] < c.wet_bed) {
-    kind = kFluid;
+    kind = 0;
     return true;
   }
   return false;
@@ -76,12 +77,13 @@ bool classify(const Case& c, const Sites& s, const int idx[3], std::uint8_t& kin
 template <class Visit>
 void for_each_site(const Case& c, Visit&& visit) {
   const Sites s(c);
+  const MaterialTable M = physics_params(c).materials;
   int idx[3];
   for (idx[0] = s.lo[0]; idx[0] < s.hi[0]; ++idx[0])
     for (idx[1] = s.lo[1]; idx[1] < s.hi[1]; ++idx[1])
       for (idx[2] = s.lo[2]; idx[2] < s.hi[2]; ++idx[2]) {
         std::uint8_t kind;
-        if (classify(c, s, idx, kind)) visit(s, idx, kind);
+        if (classify(c, M, s, idx, kind)) visit(s, idx, kind);
       }
 }
 
@@ -133,7 +135,8 @@ Lattice make_lattice(const Case& c) {
 
 ParticleCounts count_particles(const Case& c) {
   ParticleCounts n;
-  for_each_site(c, [&](const Sites&, const int*, std::uint8_t kind) { (kind == kFluid ? n.fluid : n.wall)++; });
+  const MaterialTable M = physics_params(c).materials;
+  for_each_site(c, [&](const Sites&, const int*, std::uint8_t kind) { (M.is_fluid(kind) ? n.fluid : n.wall)++; });
   return n;
 }
 
@@ -157,23 +160,24 @@ ParticleStore generate_particles(const Case& c) {
   ParticleStore p(c.dim);
   p.resize(static_cast<std::size_t>(n.total()));
   const PhysicsParams P = physics_params(c);
-  const float rho0 = P.rho0;
   double g = 0;
   for (int a = 0; a < c.dim; ++a) g += c.gravity[a] * c.gravity[a];
   g = std::sqrt(g);
   std::size_t i = 0;
   for_each_site(c, [&](const Sites& s, const int* idx, std::uint8_t kind) {
     for (int a = 0; a < c.dim; ++a) p.pos[a][i] = static_cast<float>(s.coord(a, idx[a]));
-    p.kind[i] = kind;
+    p.material[i] = kind;
     p.id[i] = static_cast<std::uint32_t>(i);
-    p.density[i] = rho0;
-    if (kind == kFluid) {
+    const FluidMaterial& fluid = P.materials.wall_fluid();
+    p.density[i] = fluid.rho0;
+    if (P.is_fluid(kind)) {
+      const FluidMaterial& m = P.materials.of(kind);
       // Start from hydrostatic balance (inverse of eq. 9) rather than from a uniform density that
       // would first have to collapse into it.
       float x[3] = {0, 0, 0};
       for (int a = 0; a < c.dim; ++a) x[a] = p.pos[a][i];
       const double depth = std::max(0.0, rest_surface(c, x) - x[c.dim - 1]);
-      p.density[i] = tait_density(static_cast<float>(rho0 * g * depth), rho0, P.tait_b);
+      p.density[i] = tait_density(static_cast<float>(m.rho0 * g * depth), m);
     }
     ++i;
   });

@@ -1,6 +1,5 @@
 #include "host_slab_arrays.hpp"
 
-#include "../physics/params.hpp"
 
 #include <algorithm>
 #include <cstring>
@@ -19,17 +18,24 @@ void copy_fields(ParticleStore& from, ParticleStore& to, FieldSet set, std::size
 }
 }  // namespace
 
+void HostSlabArrays::set_id_bound(std::uint32_t bound) {
+  require_ids_below(store_.id, bound);
+  id_bound_ = bound;
+}
+
 void HostSlabArrays::upload(const ParticleStore& host) {
+  require_ids_below(host.id, id_bound_);
   store_ = host;
   keys_.assign(store_.size(), 0);
 }
 
 void HostSlabArrays::download(ParticleStore& host, CellGrid& grid) {
+  if (host.dim() != store_.dim()) throw std::logic_error("HostSlabArrays::download: a store of another dimension");
+  if (!table_.empty()) grid.assign_starts(grid_.view(), table_);  // before anything changes: throws on a stale geometry
   host.resize(store_.size());
   host.set_owned(store_.owned());
   copy_fields(store_, host, FieldSet::All, 0, store_.owned());
   copy_fields(store_, host, FieldSet::Ghost, store_.owned(), store_.size());
-  if (!table_.empty()) grid.assign_starts(table_.data());
 }
 
 void HostSlabArrays::truncate(std::size_t n) {
@@ -68,10 +74,10 @@ void HostSlabArrays::build_table(const CellGrid& geometry) {
     grid_.configure(geometry.lattice(), geometry.owned_lo(), geometry.owned_hi());
   const KeyBins bins{geometry.cell_count()};
   // The first particle of every bin: a lower bound per bin over the non-decreasing keys.
-  table_.resize(bins.count() + 1);
-  for (std::uint32_t b = 0; b <= bins.count(); ++b)
+  table_.resize(bins.table_entries());
+  for (std::uint32_t b = 0; b < bins.table_entries(); ++b)
     table_[b] = static_cast<std::uint32_t>(std::lower_bound(keys_.begin(), keys_.end(), b) - keys_.begin());
-  grid_.assign_starts(table_.data());
+  grid_.assign_starts(geometry.view(), table_);
 }
 
 std::vector<std::uint32_t> HostSlabArrays::table_entries(const TableRead& read) {
@@ -114,9 +120,8 @@ void HostSlabArrays::make_images(const CellGrid& geometry, int axis) {
         if (L.cell_of(store_.pos[axis][i], axis) == layer &&
             geometry.owns_column(L.cell_of(store_.pos[0][i], 0)) == (part == ImagePart::Local))
           list.push_back(static_cast<std::uint32_t>(i));
-      const float offset = layer == 0 ? L.period[axis] : -L.period[axis];
       const std::size_t first = store_.size();
-      unpack_append(store_, pack_particles(store_, list, FieldSet::Ghost, Shift{axis, offset}), FieldSet::Ghost);
+      unpack_append(store_, pack_particles(store_, list, FieldSet::Ghost, periodic_shift(L, axis, layer == 0)), FieldSet::Ghost);
       for (std::size_t k = 0; k < list.size(); ++k) {
         im.source.push_back(list[k]);
         im.target.push_back(static_cast<std::uint32_t>(first + k));
@@ -171,10 +176,10 @@ std::uint32_t HostSlabArrays::find_unhealthy(const HealthLimits& h) {
   std::uint32_t lowest = kNoFault;
   const int d = store_.dim();
   for (std::size_t i = 0; i < store_.owned(); ++i) {
-    if (!is_fluid(store_.kind[i])) continue;
+    if (!h.checked(store_.material[i])) continue;
     float x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
     for (int a = 0; a < d; ++a) x[a] = store_.pos[a][i], v[a] = store_.vel[a][i];
-    if (!healthy(h, state_finite(d, x, v, store_.density[i]), store_.density[i])) lowest = std::min(lowest, store_.id[i]);
+    if (!healthy(h, state_finite(d, x, v, store_.density[i]), store_.density[i], store_.material[i])) lowest = std::min(lowest, store_.id[i]);
   }
   return lowest;
 }

@@ -20,6 +20,7 @@ class HostSlabArrays : public SlabArrays {
   void download(ParticleStore& host, CellGrid& grid) override;
   void truncate(std::size_t n) override;
   void set_owned(std::size_t n) override { store_.set_owned(n); }
+  void set_id_bound(std::uint32_t bound) override;
   void set_migration_hops(const std::vector<std::int8_t>& hops) override { hops_ = hops; }
   void compute_keys(const CellGrid& geometry, std::size_t first, std::size_t last, bool migrating) override;
   void sort_by_key(std::size_t first, std::size_t last) override;
@@ -48,7 +49,8 @@ class HostSlabArrays : public SlabArrays {
   ParticleStore store_;
   CellGrid grid_;                      // geometry of the last build_table, with its cell table
   std::vector<std::uint32_t> keys_;    // one per particle
-  std::vector<std::uint32_t> table_;   // KeyBins::count() + 1 starts
+  std::vector<std::uint32_t> table_;   // KeyBins::table_entries() starts, for the geometry of grid_
+  std::uint32_t id_bound_ = kNoFault;
   std::vector<std::uint32_t> perm_;    // of the last sort: new slot k held old first + perm_[k]
   std::size_t perm_first_ = 0;
   std::vector<std::int8_t> hops_;

@@ -7,6 +7,7 @@
 
 #include "../grid/lattice.hpp"
 #include "../physics/host_device.hpp"
+#include "../physics/params.hpp"
 
 namespace spate {
 
@@ -36,19 +37,26 @@ SPATE_HD PositionFault position_fault(const Lattice& L, float x, int axis) {
   return inside ? PositionFault::None : PositionFault::Outside;
 }
 
-// The health check of a fluid particle: finite state and density within [min, max] x rho0.
+// The health check of a fluid particle: finite state and density within [min, max] x rho0 of its
+// material.
 struct HealthLimits {
-  float rho0 = 1000.0f;
   float min_ratio = 0.0f;
   float max_ratio = 1e30f;
+  std::uint8_t fluids = 1;         // materials [0, fluids) are fluids (the others are not checked)
+  float rho0[kMaxFluids] = {1000.0f};
+  HealthLimits() = default;
+  HealthLimits(const MaterialTable& m, float min, float max) : min_ratio(min), max_ratio(max), fluids(m.fluids) {
+    for (int k = 0; k < m.fluids; ++k) rho0[k] = m.fluid[k].rho0;
+  }
+  SPATE_HD bool checked(std::uint8_t material) const { return material < fluids; }
 };
 SPATE_HD bool state_finite(int dim, const float pos[3], const float vel[3], float density) {
   bool finite = finite_value(density);
   for (int a = 0; a < dim; ++a) finite = finite && finite_value(pos[a]) && finite_value(vel[a]);
   return finite;
 }
-SPATE_HD bool healthy(const HealthLimits& h, bool finite, float density) {
-  const float ratio = density / h.rho0;
+SPATE_HD bool healthy(const HealthLimits& h, bool finite, float density, std::uint8_t material) {
+  const float ratio = density / h.rho0[material];
   return finite && ratio >= h.min_ratio && ratio <= h.max_ratio;
 }
 

@@ -32,13 +32,17 @@ class SlabArrays {
 
   // Host copies. `upload`: every field of every host particle (take_share, restarts).
   // `download`: the host mirror for output steps: every field of the owned particles, the Ghost
-  // fields of the ghosts, and the cell table into `grid` (probes interpolate over ghosts).
+  // fields of the ghosts, and the cell table of the last build_table into `grid`, which must
+  // still have that table's geometry (CellGrid::assign_starts; probes interpolate over ghosts).
   virtual void upload(const ParticleStore& host) = 0;
   virtual void download(ParticleStore& host, CellGrid& grid) = 0;
 
   // Every id of the run is below `bound` (the largest id + 1 over all slabs; ids never change), so
-  // a device sort may use a narrower (key, id) word. No-op where that does not matter.
-  virtual void set_id_bound(std::uint32_t bound) { (void)bound; }
+  // a device sort may use a narrower (key, id) word. Ids are checked where they enter (upload,
+  // and the particles already held when the bound changes): one that is not below the bound is
+  // an error (require_ids_below), never ORed into the key bits. Default: no bound but the
+  // reserved 0xffffffff (kNoFault).
+  virtual void set_id_bound(std::uint32_t bound) = 0;
   // Keeps particles [0, n); the owned count becomes min(owned, n).
   virtual void truncate(std::size_t n) = 0;
   // Particles [0, n) are owned (after immigrants were appended).
@@ -61,7 +65,8 @@ class SlabArrays {
   // buffer of `side`, adding shift.offset to pos[shift.axis]; `exchange` delivers both outgoing
   // buffers to the neighbours and receives theirs (collective with both; returns the particle
   // counts received from left and right); the received particles are then appended (new
-  // particles at the end) or scattered into the halo slots recorded by record_halo_slots.
+  // particles at the end; their fields outside `set` are zero) or scattered into the halo slots
+  // recorded by record_halo_slots.
   virtual void stage(Side side, FieldSet set, ParticleRange range, Shift shift) = 0;
   virtual std::array<std::size_t, 2> exchange(SlabTransport& t, FieldSet set) = 0;
   virtual void append_received(Side side, FieldSet set) = 0;
@@ -70,7 +75,8 @@ class SlabArrays {
   // Drops the record of the previous halo's images (a new halo is being built).
   virtual void forget_images() = 0;
   // Periodic images along `axis` of the particles there are now: every particle in the first cell
-  // layer gets a copy one period up, every particle in the last layer one period down, appended;
+  // layer gets a copy one period up, every particle in the last layer one period down, appended
+  // (its Ghost fields; the others are zero);
   // first the images of particles in owned x columns (ImagePart::Local), then those of particles
   // in the halo columns (ImagePart::Halo). The source of each image is remembered for
   // refresh_images. (The order of creation does not matter: the ghost sort follows.)

@@ -1,6 +1,7 @@
 #include "slab_plan.hpp"
 
 #include <stdexcept>
+#include <string>
 
 #include "../grid/cell_grid.hpp"
 #include "slab_layout.hpp"
@@ -22,6 +23,16 @@ std::vector<std::int8_t> migration_hops(const std::vector<int>& faces, int slab,
     hops[column] = left ? -1 : 1;
   }
   return hops;
+}
+
+void throw_id_not_below(std::uint32_t id, std::uint32_t bound) {
+  throw std::invalid_argument("particle id " + std::to_string(id) + " is not below the run's id bound " + std::to_string(bound) +
+                              " (the largest id + 1, for which the sort words were sized)");
+}
+
+void require_ids_below(std::span<const std::uint32_t> ids, std::uint32_t bound) {
+  for (const std::uint32_t id : ids)
+    if (id >= bound) throw_id_not_below(id, bound);
 }
 
 TableRead column_starts_read(const CellGrid& grid) {
@@ -47,8 +58,8 @@ HaloSends plan_halo_sends(const CellGrid& grid, std::span<const std::uint32_t> s
   if (has_right) h.range[kRight] = between(starts[n - 1], starts[n]);
   // Wrapping across the periodic x boundary shifts the copy by the period, computed by the owner
   // so that every split produces the same float.
-  if (has_left && grid.owned_lo() == 0) h.shift[kLeft] = Shift{0, L.period[0]};
-  if (has_right && grid.owned_hi() == L.cells[0]) h.shift[kRight] = Shift{0, -L.period[0]};
+  if (has_left && grid.owned_lo() == 0) h.shift[kLeft] = periodic_shift(L, 0, true);
+  if (has_right && grid.owned_hi() == L.cells[0]) h.shift[kRight] = periodic_shift(L, 0, false);
   return h;
 }
 

@@ -29,8 +29,18 @@ struct KeyBins {
   SPATE_HD std::uint32_t emigrant_left() const { return cells + kEmigrantLeft; }
   SPATE_HD std::uint32_t emigrant_right() const { return cells + kEmigrantRight; }
   SPATE_HD std::uint32_t lost() const { return cells + kLost; }
-  SPATE_HD std::uint32_t count() const { return cells + kExtra; }  // key values; the table has count() + 1 entries
+  SPATE_HD std::uint32_t count() const { return cells + kExtra; }  // key values
+  // The cell table of a slab: the first particle of every key bin and the end. Its first
+  // cells + 1 entries are a CellGrid's table for a grid of `cells` cells.
+  SPATE_HD std::uint32_t table_entries() const { return count() + 1; }
 };
+
+// Ids must be below the run's id bound (SlabArrays::set_id_bound): the device sort orders
+// (key, id) as one word, key << id_bits | id, with id_bits just wide enough for the bound, so a
+// larger id would spill into the key bits and corrupt the order. Throws std::invalid_argument
+// naming the first id that is not below `bound` (throw_id_not_below).
+void require_ids_below(std::span<const std::uint32_t> ids, std::uint32_t bound);
+[[noreturn]] void throw_id_not_below(std::uint32_t id, std::uint32_t bound);
 
 // The key of a particle at (x, y, z): its local cell, or, for owned particles (`hops` not null),
 // the emigrant bin of the direction its column migrates (hops[column]: -1 left, 0 here, +1 right).

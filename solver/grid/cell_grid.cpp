@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <numeric>
 #include <stdexcept>
+#include <string>
 
 namespace spate {
 
@@ -70,9 +71,18 @@ void CellGrid::global_coords(std::uint32_t c, int out[3]) const {
   out[0] = static_cast<int>(g / (box_[2] * box_[1])) + lo_[0];
 }
 
-void CellGrid::assign_starts(const std::uint32_t* starts) {
-  std::copy(starts, starts + start_.size(), start_.begin());
+void CellGrid::assign_starts(const CellGridView& built_for, std::span<const std::uint32_t> table) {
+  require_geometry(built_for, table.size());
+  std::copy(table.begin(), table.begin() + static_cast<std::ptrdiff_t>(start_.size()), start_.begin());
   ghost_perm_.clear();
+}
+
+void CellGrid::require_geometry(const CellGridView& built_for, std::size_t entries) const {
+  if (!same_geometry(built_for, view_) || entries < start_.size())
+    throw std::logic_error("CellGrid: a cell table of " + std::to_string(entries) + " entries built for a grid of " +
+                           std::to_string(built_for.cell_count()) + " cells (owned columns " + std::to_string(built_for.owned_lo) + "-" +
+                           std::to_string(built_for.owned_hi) + ") given to a grid of " + std::to_string(cell_count()) + " cells (owned columns " +
+                           std::to_string(owned_lo_) + "-" + std::to_string(owned_hi_) + ")");
 }
 
 void CellGrid::sort(ParticleStore& particles) {

@@ -46,9 +46,13 @@ class CellGrid {
   std::uint32_t begin(std::uint32_t c) const { return start_[c]; }
   std::uint32_t end(std::uint32_t c) const { return start_[c + 1]; }
   const std::vector<std::uint32_t>& starts() const { return start_; }
-  // Takes the table from elsewhere (a device-resident slab sorted its particles itself): the first
-  // cell_count() + 1 entries of `starts`.
-  void assign_starts(const std::uint32_t* starts);
+  // Takes the table from elsewhere (a device-resident slab sorted its particles itself): `table`
+  // was computed for a grid whose view was `built_for`, and its first cell_count() + 1 entries
+  // become this grid's. A table of another geometry (a grid reconfigured since, e.g. by a
+  // balancing pass) would number cells differently or end early: std::logic_error.
+  void assign_starts(const CellGridView& built_for, std::span<const std::uint32_t> table);
+  // The check of assign_starts alone, for a caller that wants it before it fetches the table.
+  void require_geometry(const CellGridView& built_for, std::size_t entries) const;
 
   // The global cell coordinates of local cell c.
   void global_coords(std::uint32_t c, int out[3]) const;

@@ -52,4 +52,12 @@ struct CellGridView {
   }
 };
 
+// Whether two views number the same cells the same way (their tables are interchangeable).
+inline bool same_geometry(const CellGridView& a, const CellGridView& b) {
+  if (a.dim != b.dim || a.owned_lo != b.owned_lo || a.owned_hi != b.owned_hi || a.owned_cells != b.owned_cells) return false;
+  for (int k = 0; k < 3; ++k)
+    if (a.cells[k] != b.cells[k] || a.lo[k] != b.lo[k] || a.box[k] != b.box[k]) return false;
+  return true;
+}
+
 }  // namespace spate

@@ -5,6 +5,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "provenance.hpp"
+#include "version.hpp"
+
 namespace spate {
 
 std::int64_t peak_rss_bytes() {
@@ -18,6 +21,16 @@ void write_summary(const std::filesystem::path& path, const Case& c, const Physi
   nlohmann::ordered_json j;
   j["case"] = c.name;
   j["case_file"] = c.file;
+  // Provenance: which program, from which sources, with which input, where and when.
+  const Provenance& run = invocation();
+  j["version"] = version();
+  j["commit"] = git_commit();
+  j["command_line"] = run.command_line;
+  j["case_file_sha256"] = sha256_of_file(c.file);
+  j["host"] = run.host;
+  j["start_time"] = run.start_time;
+  j["end_time"] = utc_timestamp();
+  j["warnings"] = x.warnings;
   j["dimensions"] = c.dim;
   j["particles"] = {{"fluid", r.particles.fluid}, {"wall", r.particles.wall}, {"total", r.particles.total()}};
   j["steps"] = r.steps;
@@ -33,7 +46,7 @@ void write_summary(const std::filesystem::path& path, const Case& c, const Physi
   j["backend"] = x.backend;
   j["dp"] = c.dp;
   j["smoothing_length"] = P.h;
-  j["sound_speed"] = P.c0;
+  j["sound_speed"] = P.materials.fluid[0].c0;
   j["device_particles"] = r.slab_particles;
   j["device_busy_seconds"] = r.slab_busy_seconds;
   j["imbalance"] = r.imbalance;

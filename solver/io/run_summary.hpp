@@ -3,6 +3,7 @@
 // (docs/cli.md lists them).
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "../case/case.hpp"
 #include "../sim/simulation.hpp"
@@ -14,6 +15,7 @@ struct SummaryExtras {
   int devices = 1;
   int ranks = 1;
   std::string backend = "cpu";
+  std::vector<std::string> warnings;  // what the run warned about before it started (thin features)
 };
 
 void write_summary(const std::filesystem::path& path, const Case& c, const PhysicsParams& P, const RunResult& r,

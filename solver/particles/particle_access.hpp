@@ -17,7 +17,7 @@ SPATE_HD Vec<Dim> load_vec(const Array (&a)[3], std::size_t i) {
 
 template <int Dim, class Fields>
 SPATE_HD ParticleState<Dim> load_state(const Fields& f, std::size_t i) {
-  return ParticleState<Dim>{load_vec<Dim>(f.pos, i), load_vec<Dim>(f.vel, i), f.density[i], f.pressure[i], f.kind[i]};
+  return ParticleState<Dim>{load_vec<Dim>(f.pos, i), load_vec<Dim>(f.vel, i), f.density[i], f.pressure[i], f.material[i]};
 }
 
 // |x_i - x_j|^2 with x_j read from structure-of-arrays positions: the support test of the pair

@@ -7,10 +7,9 @@ namespace spate {
 
 bool in_set(const FieldRef& f, FieldSet set) {
   switch (set) {
-    case FieldSet::All: return true;
-    case FieldSet::Ghost: return f.ghost;
-    case FieldSet::Refresh:
-      return f.ghost && f.name != "x" && f.name != "y" && f.name != "z" && f.name != "id" && f.name != "kind";
+    case FieldSet::All: return f.has(kMigrated);
+    case FieldSet::Ghost: return f.has(kGhost);
+    case FieldSet::Refresh: return f.has(kRefreshed);
   }
   return false;
 }
@@ -37,12 +36,12 @@ Bytes pack_particles(ParticleStore& p, std::span<const std::uint32_t> indices, F
     const char* src = f.bytes();
     const std::size_t s = f.elem_size;
     for (std::uint64_t k = 0; k < n; ++k) std::memcpy(w + k * s, src + indices[k] * s, s);
-    if (shift.axis >= 0 && f.data == &p.pos[shift.axis]) {
+    if (shift.axis >= 0 && f.data == static_cast<void*>(&p.pos[shift.axis])) {
       auto* x = reinterpret_cast<float*>(w);
       for (std::uint64_t k = 0; k < n; ++k) {
         float v;
         std::memcpy(&v, x + k, sizeof v);
-        v += shift.offset;
+        v = shift.apply(v);
         std::memcpy(x + k, &v, sizeof v);
       }
     }

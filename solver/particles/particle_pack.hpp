@@ -5,24 +5,21 @@
 #include <span>
 #include <vector>
 
+#include "../grid/lattice.hpp"
 #include "particle_store.hpp"
 
 namespace spate {
 
 using Bytes = std::vector<char>;
 
+// Which fields travel, by their registry flags (field_registry.hpp).
 enum class FieldSet {
-  All,       // everything: migration, checkpoints
-  Ghost,     // what a ghost needs to act as a neighbour
-  Refresh,   // ghost fields that change after the halo is built (not position, id, kind)
+  All,       // kMigrated: migration, the checkpoint gather
+  Ghost,     // kGhost: what a ghost needs to act as a neighbour
+  Refresh,   // kRefreshed: ghost fields that change after the halo is built (not position, id, material)
 };
 
 bool in_set(const FieldRef& f, FieldSet set);
-
-struct Shift {
-  int axis = -1;        // no shift
-  float offset = 0.0f;  // added to pos[axis] (periodic images)
-};
 
 Bytes pack_particles(ParticleStore& p, std::span<const std::uint32_t> indices, FieldSet set, Shift shift = {});
 // Appends the packed particles at the end of the store; returns how many.

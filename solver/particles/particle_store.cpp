@@ -3,7 +3,11 @@
 #include "../backend/cpu/parallel.hpp"
 
 #include <algorithm>
+#include <list>
 #include <cstring>
+#include <mutex>
+#include <stdexcept>
+#include <string>
 #include <type_traits>
 #include <utility>
 
@@ -12,58 +16,99 @@ namespace spate {
 namespace {
 template <class T>
 void resize_vector(void* v, std::size_t n) {
-  static_cast<std::vector<T>*>(v)->resize(n);
+  static_cast<FieldVector<T>*>(v)->resize(n);
 }
 template <class T>
 char* vector_storage(void* v) {
-  return reinterpret_cast<char*>(static_cast<std::vector<T>*>(v)->data());
+  return reinterpret_cast<char*>(static_cast<FieldVector<T>*>(v)->data());
 }
 template <class T>
-FieldRef ref(std::string_view name, std::vector<T>& v, bool ghost, bool checkpoint) {
-  return FieldRef{name, &v, sizeof(T), ghost, checkpoint, &resize_vector<T>, &vector_storage<T>};
+FieldRef ref(const FieldSpec& spec, int component, FieldVector<T>& v) {
+  return FieldRef{&spec, component, spec.names[component], &v, sizeof(T), &resize_vector<T>, &vector_storage<T>};
 }
-// Reorders only the runs of slots whose particle changes (perm[k] != k): between two steps walls
-// never move and most fluid stays in its cell, so most of a sorted slab keeps its place. The moved
-// slots map onto each other (the fixed ones are fixed points of a bijection), so gathering all
-// runs before writing any back is a complete permutation. One 32-bit scratch word per particle
-// serves every field type (bit copies), so the scratch costs 4 bytes per particle.
 template <class T>
-void permute_runs(std::vector<T>& v, std::size_t first, std::span<const std::uint32_t> perm,
+void add(std::vector<FieldRef>& out, const FieldSpec& spec, int, FieldVector<T>& v) {
+  out.push_back(ref(spec, 0, v));
+}
+template <class T>
+void add(std::vector<FieldRef>& out, const FieldSpec& spec, int dim, FieldVector<T> (&v)[3]) {
+  for (int k = 0; k < dim; ++k) out.push_back(ref(spec, k, v[k]));
+}
+
+std::mutex& extensions_mutex() {
+  static std::mutex m;
+  return m;
+}
+std::list<FieldSpec>& extension_list() {
+  static std::list<FieldSpec> list;  // stable addresses: FieldRefs point at the entries
+  return list;
+}
+
+// Reorders only the runs of slots whose particle changes (perm[k] != k): between two steps most
+// fluid stays in its cell and static walls never move, so most of a sorted slab keeps its place.
+// The moved slots map onto each other (the fixed ones are fixed points of a bijection), so
+// gathering all runs before writing any back is a complete permutation. One 32-bit scratch word
+// per particle serves every field type (bit copies), so the scratch costs 4 bytes per particle.
+template <std::size_t Size>
+void permute_runs(char* base, std::size_t first, std::span<const std::uint32_t> perm,
                   const std::vector<std::pair<std::uint32_t, std::uint32_t>>& runs, std::vector<std::uint32_t>& scratch) {
-  static_assert(sizeof(T) <= sizeof(std::uint32_t) && std::is_trivially_copyable_v<T>);
-  if (v.empty()) return;
-  T* data = v.data() + first;
+  static_assert(Size <= sizeof(std::uint32_t));
+  if (!base) return;
+  char* data = base + first * Size;
   for (const auto& [b, e] : runs) {
 #pragma omp parallel for schedule(static) if (e - b > cpu::kCheapGrain)
     for (std::uint32_t k = b; k < e; ++k) {
       std::uint32_t word = 0;
-      std::memcpy(&word, data + perm[k], sizeof(T));
+      std::memcpy(&word, data + std::size_t{perm[k]} * Size, Size);
       scratch[k] = word;
     }
   }
   for (const auto& [b, e] : runs) {
 #pragma omp parallel for schedule(static) if (e - b > cpu::kCheapGrain)
-    for (std::uint32_t k = b; k < e; ++k) std::memcpy(data + k, &scratch[k], sizeof(T));
+    for (std::uint32_t k = b; k < e; ++k) std::memcpy(data + std::size_t{k} * Size, &scratch[k], Size);
   }
 }
 }  // namespace
 
+bool FieldRef::builtin() const {
+  return spec >= std::begin(kParticleFields) && spec < std::end(kParticleFields);
+}
+
+FieldExtension::FieldExtension(const FieldSpec& spec) {
+  std::lock_guard lock(extensions_mutex());
+  for (const FieldSpec& f : kParticleFields)
+    if (f.member == spec.member) throw std::logic_error("FieldExtension: '" + std::string(spec.member) + "' is a registry field");
+  for (const FieldSpec& f : extension_list())
+    if (f.member == spec.member) throw std::logic_error("FieldExtension: '" + std::string(spec.member) + "' is registered twice");
+  extension_list().push_back(spec);
+}
+
+FieldExtension::~FieldExtension() {
+  std::lock_guard lock(extensions_mutex());
+  extension_list().pop_back();
+}
+
+std::vector<const FieldSpec*> field_extensions() {
+  std::lock_guard lock(extensions_mutex());
+  std::vector<const FieldSpec*> out;
+  for (const FieldSpec& f : extension_list()) out.push_back(&f);
+  return out;
+}
+
+ParticleStore::ParticleStore(int dim) : dim_(dim) {
+  for (const FieldSpec* spec : field_extensions()) extensions_.push_back(Extension{spec, {}, {}});
+}
+
 std::vector<FieldRef> ParticleStore::fields() {
-  static constexpr std::string_view pos_names[3] = {"x", "y", "z"};
-  static constexpr std::string_view vel_names[3] = {"vx", "vy", "vz"};
-  static constexpr std::string_view acc_names[3] = {"ax", "ay", "az"};
-  static constexpr std::string_view accp_names[3] = {"ax_prev", "ay_prev", "az_prev"};
   std::vector<FieldRef> f;
-  for (int k = 0; k < dim_; ++k) f.push_back(ref(pos_names[k], pos[k], true, true));
-  for (int k = 0; k < dim_; ++k) f.push_back(ref(vel_names[k], vel[k], true, true));
-  f.push_back(ref("density", density, true, true));
-  f.push_back(ref("pressure", pressure, true, false));
-  f.push_back(ref("id", id, true, true));
-  f.push_back(ref("kind", kind, true, true));
-  for (int k = 0; k < dim_; ++k) f.push_back(ref(acc_names[k], acc[k], false, true));
-  f.push_back(ref("density_rate", density_rate, false, true));
-  for (int k = 0; k < dim_; ++k) f.push_back(ref(accp_names[k], acc_prev[k], false, false));
-  f.push_back(ref("density_rate_prev", density_rate_prev, false, false));
+  f.reserve(3 * kBuiltinFieldCount + 3 * extensions_.size());
+#define SPATE_STORE_REF(member, ...) add(f, kParticleFields[kField_##member], dim_, member);
+  SPATE_PARTICLE_FIELDS(SPATE_STORE_REF)
+#undef SPATE_STORE_REF
+  for (Extension& e : extensions_) {
+    const int n = e.spec->components(dim_);
+    for (int k = 0; k < n; ++k) f.push_back(e.spec->elem_size() == 1 ? ref(*e.spec, k, e.bytes[k]) : ref(*e.spec, k, e.words[k]));
+  }
   return f;
 }
 
@@ -96,28 +141,18 @@ void ParticleStore::permute(std::size_t first, std::span<const std::uint32_t> pe
   }
   if (runs_.empty()) return;
   scratch_.resize(n);
-  for (int k = 0; k < 3; ++k) {
-    permute_runs(pos[k], first, perm, runs_, scratch_);
-    permute_runs(vel[k], first, perm, runs_, scratch_);
-    permute_runs(acc[k], first, perm, runs_, scratch_);
-    permute_runs(acc_prev[k], first, perm, runs_, scratch_);
+  for (const FieldRef& f : fields()) {
+    if (f.elem_size == 4) permute_runs<4>(f.bytes(), first, perm, runs_, scratch_);
+    else permute_runs<1>(f.bytes(), first, perm, runs_, scratch_);
   }
-  permute_runs(density, first, perm, runs_, scratch_);
-  permute_runs(pressure, first, perm, runs_, scratch_);
-  permute_runs(density_rate, first, perm, runs_, scratch_);
-  permute_runs(density_rate_prev, first, perm, runs_, scratch_);
-  permute_runs(id, first, perm, runs_, scratch_);
-  permute_runs(kind, first, perm, runs_, scratch_);
 }
 
 void ParticleStore::append_from(const ParticleStore& from, std::size_t src) {
-  auto& self = *this;
   auto& other = const_cast<ParticleStore&>(from);
-  auto dst_fields = self.fields();
   auto src_fields = other.fields();
   const std::size_t n = size();
   resize(n + 1);
-  dst_fields = self.fields();
+  auto dst_fields = fields();
   for (std::size_t f = 0; f < dst_fields.size(); ++f) {
     const std::size_t s = dst_fields[f].elem_size;
     std::memcpy(dst_fields[f].bytes() + n * s, src_fields[f].bytes() + src * s, s);
@@ -135,6 +170,17 @@ void ParticleStore::remove_owned_if(const std::vector<std::uint8_t>& flag) {
   }
   owned_ = keep;
   resize(keep);
+}
+
+std::vector<ExportedField> exported_fields(ParticleStore& p) {
+  std::vector<ExportedField> out;
+  for (const FieldRef& f : p.fields()) {
+    if (!f.has(kExported)) continue;
+    if (out.empty() || out.back().spec != f.spec) out.push_back(ExportedField{f.spec, 0, {nullptr, nullptr, nullptr}});
+    out.back().data[f.component] = f.bytes();
+    ++out.back().components;
+  }
+  return out;
 }
 
 void ParticleStore::swap_rates() {

@@ -1,32 +1,77 @@
 #pragma once
 // Structure-of-arrays particle storage on the host: float32 fields, one array per component.
 // Particles [0, owned) belong to this slab, [owned, size) are ghosts (halo copies and periodic
-// images). Every array is listed in `fields()` so that sorting, migration, halos and I/O treat all
-// of them alike; a new field is added in one place.
+// images). The fields are the registry's (field_registry.hpp): the members below are generated
+// from it, and fields() lists them all (plus any run-time extension) so that sorting, migration,
+// halos and I/O treat every field alike.
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <span>
 #include <string_view>
 #include <utility>
 #include <vector>
 
+#include "field_registry.hpp"
+
 namespace spate {
 
+// The one place the particle arrays' allocation is chosen (a shared-memory or pinned allocator for
+// in-situ consumers would go here).
+template <class T>
+using FieldVector = std::vector<T>;
+template <class T, FieldShape S>
+struct FieldColumns {
+  using type = FieldVector<T>;
+};
+template <class T>
+struct FieldColumns<T, FieldShape::Vector> {
+  using type = FieldVector<T>[3];  // components beyond dim stay empty
+};
+
+// One component of one field, type-erased: what the generic layers (packing, permutation, I/O,
+// device arrays) work with.
 struct FieldRef {
-  std::string_view name;
-  void* data;            // points at a std::vector<T>
-  std::size_t elem_size; // sizeof(T)
-  bool ghost;            // copied into halo ghosts
-  bool checkpoint;       // part of the restartable state
+  const FieldSpec* spec;   // the registry entry
+  int component;           // 0 for scalars, the axis for vector components
+  std::string_view name;   // checkpoint dataset name of this component
+  void* data;              // points at a FieldVector<T>
+  std::size_t elem_size;   // sizeof(T)
   void (*resize)(void*, std::size_t);
   char* (*storage)(void*);
   char* bytes() const { return storage(data); }  // start of the vector's storage
+  bool has(std::uint16_t flags) const { return spec->has(flags); }
+  bool builtin() const;    // a registry field (a ParticleStore member), not a run-time extension
 };
+
+// Fields registered at run time with the same FieldSpec: the store allocates them generically and
+// every layer that iterates fields() carries them (the registry test adds one this way; optional
+// features may too). Register before the stores that should have them are made, and keep the
+// registration alive while they exist (their FieldRefs point at it).
+class FieldExtension {
+ public:
+  explicit FieldExtension(const FieldSpec& spec);
+  ~FieldExtension();
+  FieldExtension(const FieldExtension&) = delete;
+  FieldExtension& operator=(const FieldExtension&) = delete;
+};
+// The registered extensions, in registration order (stable addresses).
+std::vector<const FieldSpec*> field_extensions();
+
+class ParticleStore;
+
+// A field as snapshots and in-situ consumers see it (kExported): the registry entry and its
+// component arrays (null beyond dim; vectors are shown with 3 components).
+struct ExportedField {
+  const FieldSpec* spec;
+  int components;          // dim for vectors, 1 for scalars
+  char* data[3];           // start of each component's array
+};
+// The exported fields of `p`, in registry order then the extensions.
+std::vector<ExportedField> exported_fields(ParticleStore& p);
 
 class ParticleStore {
  public:
-  explicit ParticleStore(int dim = 3) : dim_(dim) {}
+  explicit ParticleStore(int dim = 3);
 
   int dim() const { return dim_; }
   std::size_t size() const { return id.size(); }
@@ -35,7 +80,7 @@ class ParticleStore {
   void set_owned(std::size_t n) { owned_ = n; }
 
   void resize(std::size_t n);
-  // All fields, in a fixed order. Position/velocity/acceleration components beyond dim are empty.
+  // All fields, in registry order, then the extensions. Components beyond dim are not listed.
   std::vector<FieldRef> fields();
   // Bytes held per particle by the per-particle arrays (the headline memory figure).
   std::size_t bytes_per_particle() const;
@@ -49,21 +94,21 @@ class ParticleStore {
   // Swap old and new rates (the integrator keeps the previous step's rates).
   void swap_rates();
 
-  // Fields (public: the drivers in backend/ read them directly; names as SPH users say them).
-  std::vector<float> pos[3];
-  std::vector<float> vel[3];
-  std::vector<float> acc[3];
-  std::vector<float> acc_prev[3];
-  std::vector<float> density;
-  std::vector<float> pressure;
-  std::vector<float> density_rate;
-  std::vector<float> density_rate_prev;
-  std::vector<std::uint32_t> id;
-  std::vector<std::uint8_t> kind;
+  // The registry's fields (public: the drivers in backend/ read them directly), e.g.
+  // FieldVector<float> pos[3], vel[3], ...; density, pressure, ...; id (uint32); material (uint8).
+#define SPATE_STORE_MEMBER(member, ctype, shape, ...) typename FieldColumns<ctype, FieldShape::shape>::type member;
+  SPATE_PARTICLE_FIELDS(SPATE_STORE_MEMBER)
+#undef SPATE_STORE_MEMBER
 
  private:
+  struct Extension {
+    const FieldSpec* spec;
+    FieldVector<std::uint32_t> words[3];  // 4-byte fields (bit copies)
+    FieldVector<std::uint8_t> bytes[3];   // 1-byte fields
+  };
   int dim_;
   std::size_t owned_ = 0;
+  std::vector<Extension> extensions_;
   std::vector<std::uint32_t> scratch_;  // permute(): one word per particle for every field type
   std::vector<std::pair<std::uint32_t, std::uint32_t>> runs_;  // permute(): the slot ranges that change
 };

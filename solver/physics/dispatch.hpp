@@ -17,4 +17,22 @@ void dispatch_kernel_dim(const PhysicsParams& P, F&& f) {
   }
 }
 
+// Whether every fluid of the run has the Tait exponent 7 (the pair terms then use the exact
+// product instead of pow).
+inline bool all_fluids_gamma7(const PhysicsParams& P) {
+  for (int m = 0; m < P.materials.fluids; ++m)
+    if (P.materials.fluid[m].gamma != 7.0f) return false;
+  return true;
+}
+
+// As dispatch_kernel_dim, for the fluid pair loop: f.template operator()<Kernel, Dim, Gamma7>().
+template <class F>
+void dispatch_pair_loop(const PhysicsParams& P, F&& f) {
+  const bool gamma7 = all_fluids_gamma7(P);
+  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+    if (gamma7) f.template operator()<Kernel, Dim, true>();
+    else f.template operator()<Kernel, Dim, false>();
+  });
+}
+
 }  // namespace spate

@@ -1,8 +1,11 @@
 #pragma once
-// Tait equation of state, eq. 9 of the paper: p = c0^2 rho0 / gamma ((rho/rho0)^gamma - 1).
+// Tait equation of state, eq. 9 of the paper, per fluid material:
+//   p = c0^2 rho0 / gamma ((rho/rho0)^gamma - 1) + p_b
+// with p_b the material's background pressure (0 unless a light phase needs one).
 #include <cmath>
 
 #include "host_device.hpp"
+#include "materials.hpp"
 
 namespace spate {
 
@@ -13,13 +16,28 @@ SPATE_HD float pow7(float x) {
   return x3 * x3 * x;
 }
 
-SPATE_HD float tait_pressure(float rho, float rho0, float tait_b) {
-  return tait_b * (pow7(rho / rho0) - 1.0f);
+// x^gamma with the exact product for the usual gamma = 7.
+SPATE_HD float tait_power(float x, float gamma) { return gamma == 7.0f ? pow7(x) : powf(x, gamma); }
+
+SPATE_HD float tait_pressure(float rho, const FluidMaterial& m) {
+  return m.tait_b * (tait_power(rho / m.rho0, m.gamma) - 1.0f) + m.background_pressure;
 }
 
 // Inverse of eq. 9, used to give wall particles the density that matches their pressure.
-SPATE_HD float tait_density(float p, float rho0, float tait_b) {
-  return rho0 * powf(p / tait_b + 1.0f, 1.0f / 7.0f);
+SPATE_HD float tait_density(float p, const FluidMaterial& m) {
+  return m.rho0 * powf((p - m.background_pressure) / m.tait_b + 1.0f, m.inv_gamma);
+}
+
+// (c / c0)^2 = (rho / rho0)^(gamma - 1): the Tait sound speed at density ratio s, squared and
+// relative to c0. Gamma7 (a compile-time choice of the pair loops) keeps the exact product.
+template <bool Gamma7>
+SPATE_HD float tait_sound_speed_ratio2(float s, float gamma) {
+  if constexpr (Gamma7) {
+    const float s2 = s * s;
+    return s2 * s2 * s2;
+  } else {
+    return powf(s, gamma - 1.0f);
+  }
 }
 
 }  // namespace spate

@@ -8,7 +8,14 @@
 #endif
 
 // Loops over vector components (2 or 3) must disappear before the vectoriser looks at a pair loop.
-#if defined(__CUDACC__) || defined(__clang__)
+// nvcc compiles a .cu file twice: the device pass (__CUDA_ARCH__ defined) takes `#pragma unroll`;
+// in the host pass neither spelling is accepted by both its front end and GCC (each warns about
+// the other's), and no physics loop of a .cu file runs on the host, so the pragma is left out.
+#if defined(__CUDA_ARCH__)
+#define SPATE_UNROLL _Pragma("unroll")
+#elif defined(__CUDACC__)
+#define SPATE_UNROLL
+#elif defined(__clang__)
 #define SPATE_UNROLL _Pragma("unroll")
 #elif defined(__GNUC__)
 #define SPATE_UNROLL _Pragma("GCC unroll 4")

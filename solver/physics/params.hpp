@@ -4,15 +4,12 @@
 #include <cstdint>
 
 #include "kernels.hpp"
+#include "materials.hpp"
 
 namespace spate {
 
 enum class DensityMode : std::uint8_t { Continuity, Summation };
 enum class DensityDiffusion : std::uint8_t { None, MolteniColagrossi, Fourtakas };
-
-// Particle kinds; values >= kSolidBase name solid body (kind - kSolidBase) for force probes.
-enum : std::uint8_t { kFluid = 0, kTankWall = 1, kSolidBase = 2 };
-SPATE_HD bool is_fluid(std::uint8_t kind) { return kind == kFluid; }
 
 struct PhysicsParams {
   int dim = 3;
@@ -25,12 +22,6 @@ struct PhysicsParams {
   float kernel_norm = 0.0f;      // alpha_d / h^dim
   float gradient_norm = 0.0f;    // kernel_norm / lattice gradient moment (kernels.hpp)
   float eta2 = 0.01f * 0.013f * 0.013f;  // 0.01 h^2, keeps r_ij . gradW / (r^2 + eta^2) finite
-  float rho0 = 1000.0f;          // reference density [kg/m3]
-  float c0 = 20.0f;              // artificial sound speed [m/s]
-  float gamma = 7.0f;            // Tait exponent (eq. 9)
-  float tait_b = 0.0f;           // c0^2 rho0 / gamma [Pa]
-  float mass = 1.0f;             // particle mass rho0 dp^dim [kg]
-  float viscosity = 1.0e-3f;     // dynamic viscosity mu [Pa s]
   float artificial_viscosity = 0.0f;  // Monaghan alpha; 0 switches it off
   float delta = 0.1f;            // density diffusion coefficient
   DensityDiffusion diffusion = DensityDiffusion::Fourtakas;
@@ -38,6 +29,11 @@ struct PhysicsParams {
   // Only the first `dim` components are used; the last used axis is vertical (y in 2D, z in 3D).
   float gravity[3] = {0.0f, 0.0f, -9.81f};
   float body_force[3] = {0.0f, 0.0f, 0.0f};  // extra acceleration on fluid (Poiseuille driving)
+  // Rest density, mass, viscosity, sound speed, Tait exponent of every fluid; walls and solids
+  // (materials.hpp). The pair terms read fluid properties from here, never from scalars.
+  MaterialTable materials;
+
+  SPATE_HD bool is_fluid(std::uint8_t material) const { return materials.is_fluid(material); }
 };
 
 }  // namespace spate

@@ -50,13 +50,15 @@ SPATE_HD float adami_pressure(const PhysicsParams& P, const WallSums<Dim>& s) {
 }
 
 // Negative wall pressures would glue fluid to walls at a free surface; they are clipped to zero.
+// The density comes from the equation of state of the fluid the wall bounds (materials.hpp).
 template <int Dim>
 SPATE_HD WallState<Dim> finish_wall(const PhysicsParams& P, const WallSums<Dim>& s) {
-  WallState<Dim> out{0.0f, P.rho0, zero_vec<Dim>()};
+  const FluidMaterial& M = P.materials.wall_fluid();
+  WallState<Dim> out{0.0f, M.rho0, zero_vec<Dim>()};
   if (s.w <= 0.0f) return out;
   const float p = adami_pressure(P, s);
   out.p = p > 0.0f ? p : 0.0f;
-  out.rho = tait_density(out.p, P.rho0, P.tait_b);
+  out.rho = tait_density(out.p, M);
   for (int k = 0; k < Dim; ++k) out.v[k] = -s.v_w[k] / s.w;
   return out;
 }

@@ -4,22 +4,50 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
+#include "../case/case.hpp"
+#include "../particles/field_registry.hpp"
+
 namespace spate {
+
+// One exported field of the registry (kExported, field_registry.hpp) as consumers see it.
+struct SlabArray {
+  std::string_view name;     // the exported name ("velocity", "pressure", "density", "id", "kind", ...)
+  FieldType type;
+  int components = 1;        // 3 for vectors (components beyond dim are null), 1 for scalars
+  const void* data[3] = {nullptr, nullptr, nullptr};
+  template <class T>
+  const T* values(int component = 0) const {
+    return static_cast<const T*>(data[component]);
+  }
+};
 
 struct SlabView {
   int slab = 0;             // global slab (device) index
   int slab_count = 1;
   int dim = 3;
   std::size_t owned = 0;    // particles [0, owned) of every array
-  const float* pos[3] = {nullptr, nullptr, nullptr};  // pos[2] is null in 2D
-  const float* vel[3] = {nullptr, nullptr, nullptr};
-  const float* pressure = nullptr;
-  const float* density = nullptr;
-  const std::uint32_t* id = nullptr;
-  const std::uint8_t* kind = nullptr;
+  const float* pos[3] = {nullptr, nullptr, nullptr};  // the points; pos[2] is null in 2D
+  std::vector<SlabArray> arrays;  // every other exported field, in registry order
+  const SlabArray* array(std::string_view name) const {
+    for (const SlabArray& a : arrays)
+      if (a.name == name) return &a;
+    return nullptr;
+  }
 };
+
+class ParticleStore;
+// The view of a slab's owned particles [0, owned): every exported field of the registry, pointing
+// at the store's arrays (zero copy; valid until the store next changes).
+SlabView slab_view(ParticleStore& p, int slab, int slab_count);
+
+// Case constants that pipelines read from the dataset's field data (sprite sizes, interpolation
+// kernels): put there in situ by the Catalyst adaptor and into every snapshot's .vtm, so that a
+// pipeline finds them in both.
+std::vector<std::pair<std::string, double>> case_constants(const Case& c);
 
 class InSituSink {
  public:

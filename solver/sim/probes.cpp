@@ -1,5 +1,7 @@
 #include "probes.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -24,7 +26,7 @@ bool owns_point(SlabWorker& w, const Vec3d& at) {
 
 // Shepard sums of `field` (nullptr: weights only) around a point this slab owns.
 template <class Kernel, int Dim>
-ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const std::vector<float>* field) {
+ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const FieldVector<float>* field) {
   ParticleStore& p = w.particles();
   const Lattice& L = w.lattice();
   Vec<Dim> x;
@@ -36,8 +38,8 @@ ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const std::vector<float
   ShepardSums<Dim> s;
   w.grid().view().for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t j = b; j < e; ++j)
-      if (is_fluid(p.kind[j]))
-        accumulate_shepard<Kernel, Dim>(w.params(), x, load_vec<Dim>(p.pos, j), p.density[j], field ? (*field)[j] : 0.0f, s);
+      if (w.params().is_fluid(p.material[j]))
+        accumulate_shepard<Kernel, Dim>(w.params(), x, load_vec<Dim>(p.pos, j), p.density[j], p.material[j], field ? (*field)[j] : 0.0f, s);
   });
   return s;
 }
@@ -67,21 +69,56 @@ std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at) {
   return v;
 }
 
-// The highest point of the gauge's vertical line where the fluid fill fraction reaches 0.5,
-// sampled every dp/4 from the tank floor; 0 when dry.
-double sample_height(SlabWorker& w, const Vec3d& gauge, const Case& c) {
+// Fill fraction (the Shepard weight sum) sampled every dp/4 up the gauge's vertical line, from the
+// tank floor to the top of the domain; the surface is where it crosses 0.5, placed by linear
+// interpolation between the two samples around the crossing, so that the height follows the
+// particles continuously (no dp/4 steps). `connected`: the top of the water standing on the floor
+// (the first crossing above the lowest wet sample, which must lie within the kernel support 2h of
+// the floor), so that spray, an overtopping jet or drops above it are ignored; otherwise the
+// highest crossing. 0 when dry.
+double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c) {
   const int v = c.dim - 1;
-  Vec3d at = gauge;
+  Vec3d at = gauge.position;
   at[v] = 0;
   if (!owns_point(w, at)) return kNaN;
   const double floor = c.tank_origin[v];
   const double top = w.lattice().upper(v) - 1e-6;
   const double step = c.dp / 4;
+  const int last = static_cast<int>(std::ceil((top - floor) / step));  // samples 0..last
+  auto z = [&](int k) { return std::min(floor + k * step, top); };
   double height = 0.0;
   dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
-    for (double z = floor; z < top; z += step) {
-      at[v] = z;
-      if (shepard<Kernel, Dim>(w, at, nullptr).weight >= 0.5) height = z - floor;
+    auto fill = [&](int k) {
+      at[v] = z(k);
+      return shepard<Kernel, Dim>(w, at, nullptr).weight;
+    };
+    // Sample k is wet, k + 1 dry: where the straight line between them crosses 0.5.
+    auto crossing = [&](int k, double wet, double dry) { return z(k) + (wet - 0.5) / (wet - dry) * (z(k + 1) - z(k)) - floor; };
+    if (gauge.connected) {
+      const int reach = std::min(last, static_cast<int>(std::ceil(2.0 * w.params().h / step)));
+      int k = 0;
+      double wk = fill(0);
+      while (wk < 0.5 && k < reach) wk = fill(++k);
+      if (wk < 0.5) return;  // dry at the floor
+      for (; k < last; ++k) {
+        const double next = fill(k + 1);
+        if (next < 0.5) {
+          height = crossing(k, wk, next);
+          return;
+        }
+        wk = next;
+      }
+      height = z(last) - floor;
+      return;
+    }
+    double above = 0.0;
+    for (int k = last; k >= 0; --k) {
+      const double wk = fill(k);
+      if (wk >= 0.5) {
+        height = k == last ? z(last) - floor : crossing(k, wk, above);
+        return;
+      }
+      above = wk;
     }
   });
   return height;
@@ -136,7 +173,7 @@ std::vector<double> sample_wall_pressure(SlabWorker& w, const std::vector<Vec3d>
       WallSums<Dim> sums;
       w.grid().view().for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
         for (std::uint32_t j = b; j < e; ++j)
-          if (is_fluid(p.kind[j])) accumulate_wall_pair<Kernel, Dim>(P, x, load_state<Dim>(p, j), sums);
+          if (P.is_fluid(p.material[j])) accumulate_wall_pair<Kernel, Dim>(P, x, load_state<Dim>(p, j), sums);
       });
       out[k] = sums.w > 0.0f ? adami_pressure(P, sums) : 0.0;
     }
@@ -163,20 +200,27 @@ double MovingAverage::add(double t, double v) {
   return span > 0 ? integral / span : v;
 }
 
-double local_front(SlabWorker& w, int axis) {
+double front_level(const ProbeSpec& front, const Case& c) {
+  if (!(front.min_depth > 0)) return -std::numeric_limits<double>::infinity();
+  return c.tank_origin[c.dim - 1] + front.min_depth - 0.5 * c.dp;
+}
+
+double local_front(SlabWorker& w, int axis, double lowest) {
   const ParticleStore& p = w.particles();
+  const int v = p.dim() - 1;
   double front = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < p.owned(); ++i)
-    if (is_fluid(p.kind[i])) front = std::max(front, static_cast<double>(p.pos[axis][i]));
+    if (w.params().is_fluid(p.material[i]) && p.pos[v][i] >= lowest) front = std::max(front, static_cast<double>(p.pos[axis][i]));
   return front;
 }
 
 namespace {
 
-// Pressure force of the fluid on every owned particle of solid `kind`, as (id, fx, fy, fz) records.
-// For one face of its box (face >= 0): the component along the face's axis of the force on the
-// particles less than a kernel support below that face (the fluid beyond the face is all they can
-// reach through it); a particle near an edge gives each of its faces that face's component.
+// Pressure force of the fluid on every owned particle of material `kind` (a solid), as
+// (id, fx, fy, fz) records. For one face of its box (face >= 0): the component along the face's axis
+// of the force on the particles less than a kernel support below that face (the fluid beyond the
+// face is all they can reach through it); a particle near an edge gives each of its faces that
+// face's component.
 Bytes solid_force_records(SlabWorker& w, std::uint8_t kind, const Box& box, int face) {
   Bytes out;
   ParticleStore& p = w.particles();
@@ -187,7 +231,7 @@ Bytes solid_force_records(SlabWorker& w, std::uint8_t kind, const Box& box, int 
       int g[3];
       grid.global_coords(c, g);
       for (std::uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
-        if (p.kind[i] != kind) continue;
+        if (p.material[i] != kind) continue;
         if (face >= 0) {
           const double x[3] = {p.pos[0][i], p.pos[1][i], Dim == 3 ? p.pos[2][i] : 0.0};
           if (face_depth(box, x, face) >= 2.0 * w.params().h) continue;
@@ -196,7 +240,7 @@ Bytes solid_force_records(SlabWorker& w, std::uint8_t kind, const Box& box, int 
         Vec<Dim> f = zero_vec<Dim>();
         view.for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
           for (std::uint32_t j = b; j < e; ++j)
-            if (is_fluid(p.kind[j])) f += wall_pressure_force<Kernel, Dim>(w.params(), wi, load_state<Dim>(p, j));
+            if (w.params().is_fluid(p.material[j])) f += wall_pressure_force<Kernel, Dim>(w.params(), wi, load_state<Dim>(p, j));
         });
         float rec[4] = {0, 0, 0, 0};
         std::memcpy(&rec[0], &p.id[i], sizeof(float));
@@ -247,17 +291,54 @@ std::vector<double> sum_by_id(const std::vector<Bytes>& parts) {
 }  // namespace
 
 std::vector<std::string> probe_columns(const ProbeSpec& p, int dim) {
+  const char* axes[3] = {"x", "y", "z"};
+  std::vector<std::string> columns;
+  auto components = [&](const char* prefix, const char* unit) {
+    for (int k = 0; k < dim; ++k) columns.push_back(std::string(prefix) + axes[k] + "[" + unit + "]");
+  };
   switch (p.type) {
-    case ProbeType::Pressure: return {"pressure"};
+    case ProbeType::Pressure: columns.push_back("pressure[Pa]"); break;
     case ProbeType::WallPressure:
       // The sensor's reading first (averaged when it has a window), then the instantaneous value.
-      return p.window > 0 ? std::vector<std::string>{"pressure", "pressure_instant"} : std::vector<std::string>{"pressure"};
-    case ProbeType::Velocity: return dim == 2 ? std::vector<std::string>{"vx", "vy"} : std::vector<std::string>{"vx", "vy", "vz"};
-    case ProbeType::Height: return {"height"};
-    case ProbeType::Force: return dim == 2 ? std::vector<std::string>{"fx", "fy"} : std::vector<std::string>{"fx", "fy", "fz"};
-    case ProbeType::Front: return {"front"};
+      columns.push_back("pressure[Pa]");
+      if (p.window > 0) columns.push_back("pressure_instant[Pa]");
+      break;
+    case ProbeType::Velocity: components("v", "m/s"); break;
+    case ProbeType::Height: columns.push_back("height[m]"); break;
+    case ProbeType::Force: components("f", dim == 2 ? "N/m" : "N"); break;  // 2D: per metre of depth
+    case ProbeType::Front: columns.push_back("front[m]"); break;
   }
-  return {};
+  return columns;
+}
+
+std::string probe_description(const ProbeSpec& p, int dim) {
+  auto point = [&](int n) {
+    std::string s = "(";
+    for (int k = 0; k < n; ++k) s += fmt::format("{}{:g}", k ? ", " : "", p.position[k]);
+    return s + ") m";
+  };
+  const char* axes[3] = {"x", "y", "z"};
+  switch (p.type) {
+    case ProbeType::Pressure: return "pressure at " + point(dim);
+    case ProbeType::WallPressure:
+      return fmt::format("wall pressure on a sensor of diameter {:g} mm", 1e3 * p.diameter) + " at " + point(dim) +
+             (p.window > 0 ? fmt::format(", {:g} ms mean", 1e3 * p.window) : "");
+    case ProbeType::Velocity: return "velocity at " + point(dim);
+    case ProbeType::Height:
+      return (dim == 2 ? fmt::format("water height at x = {:g} m", p.position[0]) : "water height at (x, y) = " + point(2)) +
+             (p.connected ? " (connected column)" : "");
+    case ProbeType::Force:
+      return "pressure force on solid '" + p.solid + "'" + (p.face >= 0 ? fmt::format(" face {}{}", p.face % 2 ? "+" : "-", axes[p.face / 2]) : "");
+    case ProbeType::Front:
+      return fmt::format("front along {}", axes[p.axis]) + (p.min_depth > 0 ? fmt::format(" (water at least {:g} m deep)", p.min_depth) : "");
+  }
+  return "";
+}
+
+std::string probe_header(const ProbeSpec& p, int dim) {
+  std::string header = "time[s],step";
+  for (auto& c : probe_columns(p, dim)) header += "," + c;
+  return header;
 }
 
 namespace {
@@ -272,7 +353,7 @@ std::vector<std::pair<double, double>> instant_history(const std::filesystem::pa
   int column = -1, k = 0;
   for (std::size_t b = 0; b <= line.size(); ++k) {
     const std::size_t e = std::min(line.find(',', b), line.size());
-    if (line.substr(b, e - b) == "pressure_instant") column = k;
+    if (line.compare(b, e - b, "pressure_instant[Pa]") == 0) column = k;
     b = e + 1;
   }
   if (column < 0) return rows;
@@ -307,17 +388,15 @@ ProbeSet::ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool wri
       for (auto [t, v] : instant_history(path, resume_step)) p.average.add(t, v);
     auto f = std::make_unique<std::ofstream>(path, fresh ? std::ios::trunc : std::ios::app);
     f->precision(9);
-    if (fresh) {
-      *f << "time,step";
-      for (auto& name : probe_columns(p.spec, c.dim)) *f << ',' << name;
-      *f << '\n';
-    }
+    if (fresh) *f << probe_header(p.spec, c.dim) << '\n';
     files_.push_back(std::move(f));
   }
 }
 
 std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step, SlabWorker& w) {
   std::vector<std::vector<double>> rows;
+  // Near a slab face a probe sums over ghosts: they must hold the same values as their owners.
+  w.refresh_ghosts();
   SlabTransport& t = w.transport();
   for (auto& probe : probes_) {
     const ProbeSpec& p = probe.spec;
@@ -329,7 +408,7 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
         // Exactly one slab owns the point and has numbers; the others send NaN.
         std::vector<double> mine;
         if (p.type == ProbeType::Velocity) mine = sample_velocity(w, p.position);
-        else mine.push_back(p.type == ProbeType::Pressure ? sample_pressure(w, p.position) : sample_height(w, p.position, case_));
+        else mine.push_back(p.type == ProbeType::Pressure ? sample_pressure(w, p.position) : sample_height(w, p, case_));
         row = owners_values(t, mine);
         break;
       }
@@ -344,15 +423,15 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
         break;
       }
       case ProbeType::Force: {
-        std::uint8_t kind = kSolidBase;
+        std::uint8_t kind = w.params().materials.solid(0);
         Box box;
         for (std::size_t k = 0; k < case_.solids.size(); ++k)
-          if (case_.solids[k].name == p.solid) kind = static_cast<std::uint8_t>(kSolidBase + k), box = case_.solids[k].box;
+          if (case_.solids[k].name == p.solid) kind = w.params().materials.solid(static_cast<int>(k)), box = case_.solids[k].box;
         row = sum_by_id(t.allgather(solid_force_records(w, kind, box, p.face)));
         row.resize(case_.dim);
         break;
       }
-      case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis))); break;
+      case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis, front_level(p, case_)))); break;
     }
     rows.push_back(row);
   }

@@ -3,11 +3,17 @@
 // fluid), wall pressure on a sensor disc, water height at a gauge, pressure force on a named solid or
 // one of its faces, surge-front position. Sampling is collective; every value is independent of the
 // split (owner-computed or exact). What each probe measures: docs/cases.md, "probes".
+// The same code samples a run's saved snapshots and checkpoints afterwards (spate post).
+//
+// CSV format (docs/cases.md, scripts parse it): a header line `time[s],step,<column>[<unit>],...`,
+// then one row per sample; the first column is the simulated time in seconds.
 #include <cstdint>
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "../case/case.hpp"
@@ -51,15 +57,26 @@ class ProbeSet {
   std::vector<std::unique_ptr<std::ofstream>> files_;
 };
 
-// The CSV columns after `time,step` of a probe.
+// The probe's value columns with their units, as in its CSV header ("pressure[Pa]", "vx[m/s]", ...).
 std::vector<std::string> probe_columns(const ProbeSpec& p, int dim);
+// The CSV header line of a probe, without the line break: "time[s],step,pressure[Pa]".
+std::string probe_header(const ProbeSpec& p, int dim);
+// What and where, for plot titles: "pressure at (0.89, 0.305, 0.02) m", "force on solid 'column'".
+std::string probe_description(const ProbeSpec& p, int dim);
 
 // Single probe evaluations on one slab (exposed for tests). NaN when this slab does not own the point.
 double sample_pressure(SlabWorker& w, const Vec3d& at);
 // Shepard-averaged fluid velocity (dim components), NaN components when not owned.
 std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at);
-double sample_height(SlabWorker& w, const Vec3d& gauge, const Case& c);
-double local_front(SlabWorker& w, int axis);
+// Water height above the tank floor at a gauge (the probe's position and `connected`).
+double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c);
+// Furthest fluid particle along `axis` whose vertical coordinate is at least `lowest`; -infinity
+// when there is none on this slab.
+double local_front(SlabWorker& w, int axis, double lowest = -std::numeric_limits<double>::infinity());
+// A front probe's `lowest`: a particle stands for water from its centre - dp/2 to centre + dp/2, so
+// water at least min_depth deep has a particle centre at floor + min_depth - dp/2 or above
+// (-infinity for min_depth 0: every fluid particle).
+double front_level(const ProbeSpec& front, const Case& c);
 // Where a wall-pressure sensor samples the fluid: points on its disc (in 2D a segment of length
 // `diameter` along the face) on a square lattice of spacing at most dp/4, the centre alone for a
 // point sensor; the same order on every slab.

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <exception>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <mutex>
 #include <numeric>
 #include <fstream>
@@ -131,27 +132,12 @@ GatheredParticles gather_to_writer(SlabWorker& w, const std::vector<SlabWorker*>
   return g;
 }
 
-SlabView slab_view(SlabWorker& w, int slab, int slab_count) {
-  ParticleStore& p = w.particles();
-  SlabView v;
-  v.slab = slab;
-  v.slab_count = slab_count;
-  v.dim = p.dim();
-  v.owned = p.owned();
-  for (int k = 0; k < p.dim(); ++k) {
-    v.pos[k] = p.pos[k].data();
-    v.vel[k] = p.vel[k].data();
-  }
-  v.pressure = p.pressure.data();
-  v.density = p.density.data();
-  v.id = p.id.data();
-  v.kind = p.kind.data();
-  return v;
-}
-
+// The progress line: on a terminal one line rewritten in place every second; otherwise (a log
+// file) an info message every 5 s, timestamped by the log.
 class Progress {
  public:
-  Progress(bool enabled, std::int64_t particles) : enabled_(enabled), particles_(particles), tty_(isatty(STDOUT_FILENO)) {}
+  Progress(bool enabled, std::int64_t particles)
+      : enabled_(enabled && spdlog::should_log(spdlog::level::info)), particles_(particles), tty_(isatty(STDOUT_FILENO)) {}
   void update(std::int64_t steps, double time, double end_time, double start_time, bool force = false) {
     if (!enabled_) return;
     const auto now = Clock::now();
@@ -164,10 +150,13 @@ class Progress {
     const double eta = done > 0 ? wall * (1 - done) / done : 0.0;
     const std::string line = fmt::format("t = {:.5f} s  step {}  {:.2f} steps/s  {:.3g} particle-steps/s  ETA {:.0f} s",
                                          time, steps, sps, sps * particles_, eta);
-    if (tty_) std::printf("\r%s   ", line.c_str());
-    else std::printf("%s\n", line.c_str());
-    std::fflush(stdout);
-    wrote_tty_ = tty_;
+    if (tty_) {
+      std::printf("\r%s   ", line.c_str());
+      std::fflush(stdout);
+      wrote_tty_ = true;
+    } else {
+      spdlog::info("{}", line);
+    }
   }
   void finish() {
     if (enabled_ && wrote_tty_) std::printf("\n");
@@ -250,8 +239,10 @@ class Worker {
     auto output = [&](bool final_step) {
       if (!probes.empty() && (s_.c.probe_interval <= 0 || time >= next_probe - 1e-12 || final_step)) {
         probes.sample(time, step, w_);
-        // probe_interval 0 samples every step (stepping next_probe by a tiny amount would never end).
-        while (s_.c.probe_interval > 0 && next_probe <= time + 1e-12) next_probe += s_.c.probe_interval;
+        // (probe_interval 0 samples every step: no schedule to advance; stepping by a tiny interval
+        // instead would loop for ever.)
+        if (s_.c.probe_interval > 0)
+          while (next_probe <= time + 1e-12) next_probe += s_.c.probe_interval;
       }
       if (out_dt > 0 && (time >= next_output - 1e-9 * out_dt || (final_step && last_snapshot != step))) {
         write_snapshot(pvd, time, step, "snapshots");
@@ -288,8 +279,7 @@ class Worker {
         change.step = step;
         change.time = time;
         if (auto why = validate(change, s_.c.dim)) {
-          if (writer) std::fprintf(stderr, "spate: steering: rejected %s at step %lld: %s\n", change.name.c_str(),
-                                   static_cast<long long>(step), why->c_str());
+          if (writer) spdlog::warn("steering: rejected {} at step {}: {}", change.name, step, *why);
           if (writer) ++s_.result.steering_rejected;
           continue;
         }
@@ -300,7 +290,7 @@ class Worker {
           ++s_.result.steering_accepted;
           steering_log << to_log_line(change) << '\n';
           steering_log.flush();
-          if (!s_.opts.quiet) std::printf("\nspate: steering: %s applied from step %lld\n", to_log_line(change).c_str(), static_cast<long long>(step + 1));
+          spdlog::info("steering: {} applied from step {}", to_log_line(change), step + 1);
         }
       }
       w_.set_params(params);
@@ -404,7 +394,7 @@ class Worker {
     if (first != s_.workers.end() && *first == &w_) {
       std::vector<SlabView> views;
       for (std::size_t k = 0; k < s_.workers.size(); ++k)
-        if (s_.workers[k]) views.push_back(slab_view(*s_.workers[k], s_.workers_first_slab + static_cast<int>(k), t_.slab_count()));
+        if (s_.workers[k]) views.push_back(slab_view(s_.workers[k]->particles(), s_.workers_first_slab + static_cast<int>(k), t_.slab_count()));
       sink->execute(step, time, views);
     }
     t_.barrier();
@@ -429,8 +419,11 @@ class Worker {
     if (t_.slab() != 0) return;
     std::vector<std::string> pieces;
     for (int s = 0; s < t_.slab_count(); ++s) pieces.push_back(step_name(step) + "/slab_" + std::to_string(s) + ".vtp");
-    write_vtm(dir / (step_name(step) + ".vtm"), pieces);
+    FieldData field_data = case_constants(s_.c);
+    field_data.insert(field_data.end(), {{"time", time}, {"step", static_cast<double>(step)}, {"TimeValue", time}});
+    write_vtm(dir / (step_name(step) + ".vtm"), pieces, field_data);
     if (index) pvd.add(time, folder + "/" + step_name(step) + ".vtm");
+    spdlog::debug("snapshot of step {} (t = {:.6g} s): {}", step, time, (dir / (step_name(step) + ".vtm")).string());
   }
 
   std::filesystem::path write_checkpoint_now(double time, std::int64_t step, double dt) {
@@ -446,25 +439,38 @@ class Worker {
         const std::size_t size = fields[0][k].elem_size;
         for (const auto& e : all.by_id) std::memcpy(out, fields[e.slab][k].bytes() + e.index * size, size), out += size;
       });
-      prune_checkpoints(path);
+      spdlog::debug("checkpoint of step {} (t = {:.6g} s): {}", step, time, path.string());
+      prune_checkpoints(path, step);
     }
     t_.barrier();
     return path;
   }
 
-  // Keeps the newest keep_checkpoints files this run wrote. Files of earlier runs in a reused
-  // output folder are never touched (a restart may still need them, and their step numbers say
-  // nothing about which is newer).
-  void prune_checkpoints(const std::filesystem::path& just_written) {
-    if (written_.empty() || written_.back() != just_written) written_.push_back(just_written);
-    const std::size_t keep = static_cast<std::size_t>(std::max(1, s_.opts.keep_checkpoints));
-    while (written_.size() > keep) {
-      std::filesystem::remove(written_.front());
-      written_.erase(written_.begin());
+  // Retention (output.checkpoint_keep_last / keep_every, or the command line): of the checkpoints
+  // this run wrote, the newest keep_last stay (0: all), and so does, for good, every one at a step
+  // that is a multiple of keep_every x checkpoint_every; the others go, with their XDMF sidecars.
+  // Files of earlier runs in a reused output folder are never touched (a restart may still need
+  // them, and their step numbers say nothing about which is newer).
+  void prune_checkpoints(const std::filesystem::path& just_written, std::int64_t step) {
+    const int keep_last = s_.opts.checkpoint_keep_last.value_or(s_.c.checkpoint_keep_last);
+    const std::int64_t keep_every = s_.opts.checkpoint_keep_every.value_or(s_.c.checkpoint_keep_every);
+    const std::int64_t every = s_.opts.checkpoint_every.value_or(s_.c.checkpoint_every);
+    if (written_.empty() || written_.back().first != just_written)
+      written_.emplace_back(just_written, keep_every > 0 && every > 0 && step % (keep_every * every) == 0);
+    if (keep_last <= 0) return;
+    for (std::size_t k = 0; k + static_cast<std::size_t>(keep_last) < written_.size();) {
+      if (written_[k].second) {
+        ++k;
+        continue;
+      }
+      std::filesystem::remove(written_[k].first);
+      std::filesystem::remove(xdmf_sidecar(written_[k].first));
+      spdlog::debug("checkpoint {} removed (retention)", written_[k].first.string());
+      written_.erase(written_.begin() + static_cast<std::ptrdiff_t>(k));
     }
   }
 
-  std::vector<std::filesystem::path> written_;
+  std::vector<std::pair<std::filesystem::path, bool>> written_;  // this run's checkpoints, oldest first; kept for good
   Shared& s_;
   SlabTransport& t_;
   SlabWorker w_;
@@ -515,7 +521,7 @@ RunResult Simulation::run() {
   const int slabs = group.ranks * local_slabs;
   s.layout = SlabLayout::uniform(s.lattice.cells[0], slabs);
   if (s.layout.narrowest() >= kMinColumnsPerSlab && slabs > 1 && case_.balanced_start)
-    s.layout = balanced_layout(column_costs(s.initial, s.lattice), slabs, kMinColumnsPerSlab);  // start balanced
+    s.layout = balanced_layout(column_costs(s.initial, s.lattice, s.params.materials), slabs, kMinColumnsPerSlab);  // start balanced
   if (s.layout.narrowest() < kMinColumnsPerSlab) {
     const std::string split = group.ranks > 1 ? fmt::format("{} ranks x --devices {} = {} slabs", group.ranks, local_slabs, slabs)
                                               : fmt::format("--devices {}", slabs);
@@ -530,6 +536,13 @@ RunResult Simulation::run() {
   s.local_slabs = local_slabs;
   s.workers.assign(local_slabs, nullptr);
   std::filesystem::create_directories(options_.out_dir);
+  // The effective case (file plus --set), for spate post and for the record.
+  if (group.rank == 0) {
+    const auto path = options_.out_dir / "case.yaml", tmp = options_.out_dir / "case.yaml.tmp";
+    std::ofstream(tmp) << "# The effective case of the run in this folder (" << case_.file << " with --set applied), written by spate run.\n"
+                       << case_.source_yaml << "\n";
+    std::filesystem::rename(tmp, path);
+  }
 
   std::unique_ptr<LocalSlabs> local;
 #ifdef SPATE_WITH_MPI

@@ -26,7 +26,8 @@ struct RunOptions {
   std::optional<int> checkpoint_every;    // overrides the case's output.checkpoint_every
   std::optional<std::filesystem::path> restart;
   bool quiet = false;
-  int keep_checkpoints = 2;               // periodic checkpoints kept on disk (the newest)
+  std::optional<int> checkpoint_keep_last;   // overrides output.checkpoint_keep_last (the newest kept; 0: all)
+  std::optional<int> checkpoint_keep_every;  // overrides output.checkpoint_keep_every (every Nth kept for good)
   SteeringSource* steering = nullptr;     // live requests or a replayed log; polled every step
   InSituSink* insitu = nullptr;           // in-situ consumer (Catalyst), asked at the start and after every step
 };

@@ -163,6 +163,16 @@ void SlabWorker::prepare(bool rates) {
   if (!resident()) kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
 }
 
+void SlabWorker::refresh_ghosts() {
+  refresh_halo();
+  if (resident()) host_stale_ = true;  // the device's ghosts changed; the host mirror follows on demand
+}
+
+void SlabWorker::prepare_saved() {
+  rebuild();
+  if (!resident()) kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
+}
+
 std::optional<ParticleFault> SlabWorker::wrap_and_check_domain(bool wrap) {
   std::optional<ParticleFault> fault;
   for (int a = 0; a < lattice_.dim; ++a) {
@@ -220,26 +230,28 @@ std::optional<ParticleFault> SlabWorker::position_fault_message(std::uint32_t id
 
 std::optional<ParticleFault> SlabWorker::health(float min_ratio, float max_ratio) {
   if (auto* r = resident()) {
-    const std::uint32_t bad = r->find_unhealthy(HealthLimits{params_.rho0, min_ratio, max_ratio});
+    const std::uint32_t bad = r->find_unhealthy(HealthLimits(params_.materials, min_ratio, max_ratio));
     if (bad == SlabArrays::kNoFault) return std::nullopt;
     sync_host();  // the host check below writes the message for the same particle
   }
   std::optional<ParticleFault> fault;
   const auto& p = particles_;
+  const HealthLimits limits(params_.materials, min_ratio, max_ratio);
   for (std::size_t i = 0; i < p.owned(); ++i) {
-    if (!is_fluid(p.kind[i])) continue;
+    if (!limits.checked(p.material[i])) continue;
     if (fault && p.id[i] >= fault->id) continue;
     float x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
     for (int a = 0; a < lattice_.dim; ++a) x[a] = p.pos[a][i], v[a] = p.vel[a][i];
     const bool finite = state_finite(lattice_.dim, x, v, p.density[i]);
-    if (healthy(HealthLimits{params_.rho0, min_ratio, max_ratio}, finite, p.density[i])) continue;
+    if (healthy(limits, finite, p.density[i], p.material[i])) continue;
     // Only a faulty particle pays for building its message.
     std::ostringstream s;
     if (!finite) {
       s << "has a non-finite position, velocity or density";
     } else {
-      s << "has density " << p.density[i] << " kg/m3, outside [" << min_ratio * params_.rho0 << ", "
-        << max_ratio * params_.rho0 << "] (density.min_ratio/max_ratio)";
+      const float rho0 = params_.materials.of(p.material[i]).rho0;
+      s << "has density " << p.density[i] << " kg/m3, outside [" << min_ratio * rho0 << ", " << max_ratio * rho0
+        << "] (density.min_ratio/max_ratio)";
     }
     fault = ParticleFault{p.id[i], s.str()};
   }
@@ -255,7 +267,7 @@ std::vector<std::int64_t> SlabWorker::slab_particle_counts() {
   return counts;
 }
 
-PhaseCosts column_costs(const ParticleStore& p, const Lattice& lattice) {
+PhaseCosts column_costs(const ParticleStore& p, const Lattice& lattice, const MaterialTable& materials) {
   // Cost, not count: a fluid particle sums over all its neighbours with the full pair terms, a wall
   // particle only looks for fluid around it. A profile of the column case (perf: fluid loop 58%,
   // wall loop 18% of the time with 25k fluid and 51k wall particles) puts a fluid particle at about
@@ -265,19 +277,19 @@ PhaseCosts column_costs(const ParticleStore& p, const Lattice& lattice) {
   PhaseCosts c{std::vector<std::int64_t>(lattice.cells[0], 0), std::vector<std::int64_t>(lattice.cells[0], 0)};
   for (std::size_t i = 0; i < p.owned(); ++i) {
     const int column = lattice.cell_of(p.pos[0][i], 0);
-    if (is_fluid(p.kind[i])) c.fluid[column] += kFluidCost;
+    if (materials.is_fluid(p.material[i])) c.fluid[column] += kFluidCost;
     else c.wall[column] += kWallCost;
   }
   return c;
 }
 
-PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice, double wall_seconds, double fluid_seconds,
-                                 double sort_seconds) {
+PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice, const MaterialTable& materials,
+                                 double wall_seconds, double fluid_seconds, double sort_seconds) {
   const int columns = lattice.cells[0];
   std::vector<std::int64_t> fluid_count(columns, 0), wall_count(columns, 0);
   std::int64_t fluids = 0, walls = 0;
   for (std::size_t i = 0; i < p.owned(); ++i) {
-    const bool fluid = is_fluid(p.kind[i]);
+    const bool fluid = materials.is_fluid(p.material[i]);
     ++(fluid ? fluid_count : wall_count)[lattice.cell_of(p.pos[0][i], 0)];
     ++(fluid ? fluids : walls);
   }
@@ -302,7 +314,8 @@ double SlabWorker::rebalance(int min_columns) {
   // therefore the same faces, although the timings themselves differ from run to run. Faces do not
   // change the physics (neighbour order is (cell, id)), so results stay bit-identical.
   const int columns = lattice_.cells[0];
-  PhaseCosts mine = measured_column_costs(particles_, lattice_, window_wall_seconds_, window_fluid_seconds_, window_sort_seconds_);
+  PhaseCosts mine = measured_column_costs(particles_, lattice_, params_.materials, window_wall_seconds_, window_fluid_seconds_,
+                                          window_sort_seconds_);
   window_wall_seconds_ = window_fluid_seconds_ = window_sort_seconds_ = 0.0;
   std::vector<std::int64_t> both(mine.wall);
   both.insert(both.end(), mine.fluid.begin(), mine.fluid.end());
@@ -310,7 +323,7 @@ double SlabWorker::rebalance(int min_columns) {
   PhaseCosts costs{std::vector<std::int64_t>(both.begin(), both.begin() + columns), std::vector<std::int64_t>(both.begin() + columns, both.end())};
   if (std::accumulate(both.begin(), both.end(), std::int64_t{0}) <= 0) {
     // Nothing timed (no step since the last pass): the estimated cost.
-    costs = column_costs(particles_, lattice_);
+    costs = column_costs(particles_, lattice_, params_.materials);
     transport_.sum(costs.wall);
     transport_.sum(costs.fluid);
   }

@@ -38,6 +38,14 @@ class SlabWorker {
   // Sort, halos and everything the rates need; with `rates` also the accelerations and density
   // rates (a fresh start; a restart brings them from the checkpoint).
   void prepare(bool rates);
+  // Ghosts take their owners' current Refresh fields (velocity, density, pressure). Between steps
+  // the ghosts still hold the values of the step's force evaluation (the predicted velocity and
+  // density), the owners the corrected ones: what reads ghosts between steps (probes) refreshes
+  // them first, so that it sees the same values whatever the split. Collective.
+  void refresh_ghosts();
+  // Sort and halos only, for particles read back from a snapshot or checkpoint: they keep the
+  // pressures and wall states they were saved with, so probes sample them exactly as the run did.
+  void prepare_saved();
   // One full step of size dt. Returns a fault if a particle left the domain (before rates).
   std::optional<ParticleFault> step(float dt);
   // NaN/infinity or density outside [min, max] x rho0 among owned particles.
@@ -107,15 +115,15 @@ class SlabWorker {
 
 // Estimated work per x column of the owned particles (fluid 7 in the fluid phase, wall 1 in the wall
 // phase, per particle): the first faces, before anything was timed.
-PhaseCosts column_costs(const ParticleStore& p, const Lattice& lattice);
+PhaseCosts column_costs(const ParticleStore& p, const Lattice& lattice, const MaterialTable& materials);
 
 // This slab's measured seconds spread over its x columns, in nanoseconds: the wall phase in
 // proportion to the owned particles' wall-phase share, the fluid phase to the fluid particles (a
 // slab without fluid charges both phases to its walls and vice versa). Summed over slabs it is
 // the measured histogram the balancer evens out.
 // `sort_seconds` (the owned sort and the ghosts' arrival) are spread evenly over all particles.
-PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice, double wall_seconds, double fluid_seconds,
-                                 double sort_seconds = 0.0);
+PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice, const MaterialTable& materials,
+                                 double wall_seconds, double fluid_seconds, double sort_seconds = 0.0);
 
 // The fault with the lowest particle id over all slabs (collective), or none.
 std::optional<ParticleFault> first_fault(SlabTransport& t, const std::optional<ParticleFault>& mine);

@@ -11,7 +11,7 @@ namespace spate {
 const std::vector<SteeringParameter>& steering_parameters() {
   static const std::vector<SteeringParameter> p = {
       {"gravity", 3, 0.0, 100.0, "m/s2", "gravity vector (its magnitude at most 100 m/s2); tilt it to start sloshing"},
-      {"viscosity", 1, 0.0, 10.0, "Pa s", "dynamic viscosity mu of eq. 8"},
+      {"viscosity", 1, 0.0, 10.0, "Pa s", "dynamic viscosity mu of eq. 8 (of the fluid, material 0)"},
       {"artificial_viscosity", 1, 0.0, 1.0, "", "Monaghan alpha (0 switches it off)"},
       {"insitu_every", 1, 1.0, 1.0e6, "steps", "steps between in-situ pipeline executions"},
       {"write_checkpoint", 1, 0.0, 1.0, "", "1: write a checkpoint at the next step boundary"},
@@ -50,7 +50,7 @@ void apply(const SteeringChange& c, SteeringTarget& t) {
   if (c.name == "gravity") {
     for (int k = 0; k < 3; ++k) t.params->gravity[k] = static_cast<float>(c.value[k]);
   } else if (c.name == "viscosity") {
-    t.params->viscosity = static_cast<float>(c.value[0]);
+    t.params->materials.fluid[0].viscosity = static_cast<float>(c.value[0]);
   } else if (c.name == "artificial_viscosity") {
     t.params->artificial_viscosity = static_cast<float>(c.value[0]);
   } else if (c.name == "insitu_every") {

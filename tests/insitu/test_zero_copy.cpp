@@ -21,6 +21,8 @@
 
 #include "case/case.hpp"
 #include "catalyst_sink.hpp"
+#include "particle_dataset.hpp"
+#include "particles/particle_store.hpp"
 #include "sim/simulation.hpp"
 
 namespace fs = std::filesystem;
@@ -55,27 +57,31 @@ class CheckingSink : public InSituSink {
       auto* vel = vtkSOADataArrayTemplate<float>::SafeDownCast(block->GetPointData()->GetArray("velocity"));
       ASSERT_NE(xyz, nullptr);
       ASSERT_NE(vel, nullptr);
+      const SlabArray* velocity = v.array("velocity");
+      ASSERT_NE(velocity, nullptr);
       for (int k = 0; k < v.dim; ++k) {
         EXPECT_EQ(xyz->GetComponentArrayPointer(k), v.pos[k]) << "position component " << k << " is a copy";
-        EXPECT_EQ(vel->GetComponentArrayPointer(k), v.vel[k]) << "velocity component " << k << " is a copy";
+        EXPECT_EQ(vel->GetComponentArrayPointer(k), velocity->values<float>(k)) << "velocity component " << k << " is a copy";
       }
       auto buffer = [&](const char* name) { return address(block->GetPointData()->GetArray(name)->GetVoidPointer(0)); };
-      EXPECT_EQ(buffer("pressure"), address(v.pressure));
-      EXPECT_EQ(buffer("density"), address(v.density));
-      EXPECT_EQ(buffer("id"), address(v.id));
-      EXPECT_EQ(buffer("kind"), address(v.kind));
+      auto solver = [&](const char* name) { return address(v.array(name)->data[0]); };
+      for (const char* name : {"pressure", "density", "id", "kind"}) EXPECT_EQ(buffer(name), solver(name)) << name << " is a copy";
       objects[step][v.slab] = {address(xyz), address(vel), buffer("pressure"), buffer("density"), buffer("id"), buffer("kind")};
+      const float* pressure = v.array("pressure")->values<float>();
+      const float* density = v.array("density")->values<float>();
+      const std::uint8_t* kind = v.array("kind")->values<std::uint8_t>();
+      const std::uint32_t* ids = v.array("id")->values<std::uint32_t>();
       for (std::size_t i = 0; i < v.owned; ++i) {
         Particle q{};
         for (int k = 0; k < 3; ++k) {
           q.x[k] = v.pos[k] ? v.pos[k][i] : 0.0f;
-          q.v[k] = v.vel[k] ? v.vel[k][i] : 0.0f;
+          q.v[k] = velocity->data[k] ? velocity->values<float>(k)[i] : 0.0f;
         }
-        q.p = v.pressure[i];
-        q.rho = v.density[i];
-        q.kind = v.kind[i];
+        q.p = pressure[i];
+        q.rho = density[i];
+        q.kind = kind[i];
         q.device = v.slab;
-        seen[v.id[i]] = q;
+        seen[ids[i]] = q;
       }
     }
   }
@@ -158,3 +164,31 @@ void run_and_check(int devices, const std::string& tag) {
 // its own process; run the binary with --gtest_filter for one at a time.
 TEST(CatalystZeroCopy, PipelineReceivesSolverBuffersOneDevice) { run_and_check(1, "one_device"); }
 TEST(CatalystZeroCopy, PipelineReceivesSolverBuffersTwoDevices) { run_and_check(2, "two_devices"); }
+
+// The dataset's point arrays come from the field registry: a field registered as one FieldSpec
+// (here a test-only one) reaches the pipelines as a point array over the solver's own memory.
+TEST(ParticleDataset, ARegisteredFieldBecomesAPointArrayOnSolverMemory) {
+  static constexpr FieldSpec tracer{"tracer", FieldType::F32, FieldShape::Scalar, FieldRole::State,
+                                    kMigrated | kCheckpointed | kGhost | kExported, "tracer", {"tracer"}};
+  const FieldExtension registered(tracer);
+  ParticleStore p(2);
+  p.resize(7);
+  p.set_owned(7);
+  float* values = nullptr;
+  for (const FieldRef& f : p.fields())
+    if (f.spec->member == "tracer") values = reinterpret_cast<float*>(f.bytes());
+  ASSERT_NE(values, nullptr);
+  for (int i = 0; i < 7; ++i) values[i] = 0.5f * static_cast<float>(i) + 3.0f;
+  catalyst::ParticleDataset dataset;
+  vtkMultiBlockDataSet* data = dataset.update({slab_view(p, 0, 1)});
+  auto* block = vtkPolyData::SafeDownCast(data->GetBlock(0));
+  ASSERT_NE(block, nullptr);
+  vtkDataArray* array = block->GetPointData()->GetArray("tracer");
+  ASSERT_NE(array, nullptr) << "the registered field is not a point array";
+  EXPECT_EQ(array->GetVoidPointer(0), static_cast<void*>(values)) << "the point array is a copy";
+  ASSERT_EQ(array->GetNumberOfTuples(), 7);
+  for (int i = 0; i < 7; ++i) EXPECT_EQ(array->GetTuple1(i), values[i]);
+  // The built-in exported fields are there too, under their exported names.
+  for (const char* name : {"velocity", "density", "pressure", "id", "kind", "device"})
+    EXPECT_NE(block->GetPointData()->GetArray(name), nullptr) << name;
+}

@@ -269,6 +269,12 @@ def info_json(env):
     check(j["dt_adaptive"] is True and 0 < j["dt"] < 0.2 * 0.0065 / c0 * 1.0001, f"dt {j['dt']}")
     check(len(j["cells"]) == 3 and j["cells"][2] == 1, f"cells {j['cells']}")
     check(j["memory_bytes"] == j["bytes_per_particle"] * 198, "memory = bytes/particle x particles")
+    # Materials: the fluid (index 0) with its properties, then the tank.
+    m = j.get("materials", [])
+    check([e["kind"] for e in m] == ["fluid", "tank"] and m[0]["index"] == 0 and m[1]["index"] == 1, f"materials {m}")
+    check(m[0]["rest_density"] == 1000 and m[0]["tait_exponent"] == 7 and abs(m[0]["sound_speed"] - c0) < 1e-5 * c0,
+          f"fluid material {m[0]}")
+    check(abs(m[0]["particle_mass"] / (1000 * 0.005 ** 2) - 1) < 1e-6 and abs(m[0]["viscosity"] / 0.001 - 1) < 1e-6, f"fluid material {m[0]}")
     check(not os.listdir(env.work), "info wrote files")
 
     p = env.run("info", env.tiny, "--json", "--set", "fluid.sound_speed=30", "--set", "time.dt=1e-4",
@@ -280,6 +286,8 @@ def info_json(env):
 
     p = env.run("info", env.tiny)
     check(p.returncode == 0 and "60 fluid" in p.stdout and "138 wall" in p.stdout, "text info")
+    check(re.search(r"0\s+water\s+fluid: rho0 = 1000 kg/m3", p.stdout) and re.search(r"1\s+tank\s+tank walls", p.stdout),
+          f"text info lists the materials:\n{p.stdout}")
 
 
 @test
@@ -327,6 +335,13 @@ def compare_checkpoints(env):
     check(p.returncode == 0, f"within a huge tolerance: exit {p.returncode}")
     p = env.run("compare", runs["a"], runs["b"], "--tolerance", "-1")
     check(p.returncode == 2 and "--tolerance -1" in p.stderr, f"negative tolerance: exit {p.returncode}")
+    # Tolerances as fractions of each field's scale (dp, c0, rho0, ...; material exact), printed per field.
+    p = env.run("compare", runs["a"], runs["c"], "--scaled-tolerance", "1e-12")
+    check(p.returncode == 1 and "DIFFERENT" in p.stdout, f"one step apart, scaled 1e-12: exit {p.returncode}")
+    p = env.run("compare", runs["a"], runs["c"], "--scaled-tolerance", "10")
+    check(p.returncode == 0 and re.search(r"^material\s+0\s+\d+\s+0$", p.stdout, re.M), f"scaled 10: exit {p.returncode}\n{p.stdout}")
+    p = env.run("compare", runs["a"], runs["b"], "--scaled-tolerance", "-1")
+    check(p.returncode == 2 and "--scaled-tolerance -1" in p.stderr, f"negative scaled tolerance: exit {p.returncode}")
     p = env.run("compare", runs["a"], env.path("missing.h5"))
     check(p.returncode == 2 and "missing.h5" in p.stderr, f"missing checkpoint: exit {p.returncode}")
     not_h5 = env.write_case("not_a_checkpoint.yaml", "x: 1\n")
@@ -420,7 +435,8 @@ def unstable_kinds(env):
         check(any(n.endswith(".vtm") for n in os.listdir(os.path.join(out, "diagnostic"))), "no diagnostic snapshot")
 
 
-def main():
+def main(tests=TESTS):
+    """The command line of a test driver: this file's tests, or another driver's (post_tests.py)."""
     ap = argparse.ArgumentParser()
     ap.add_argument("--spate", required=True)
     ap.add_argument("--cases", required=True, help="tests/cases")
@@ -430,15 +446,15 @@ def main():
     ap.add_argument("names", nargs="*")
     args = ap.parse_args()
     if args.list:
-        print("\n".join(TESTS))
+        print("\n".join(tests))
         return 0
     failed = []
-    for name in args.names or list(TESTS):
-        if name not in TESTS:
+    for name in args.names or list(tests):
+        if name not in tests:
             print(f"unknown test {name}")
             return 2
         try:
-            TESTS[name](Env(args, name))
+            tests[name](Env(args, name))
             print(f"PASS {name}")
         except (Failure, subprocess.TimeoutExpired, json.JSONDecodeError) as e:
             print(f"FAIL {name}: {e}")

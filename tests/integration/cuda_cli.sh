@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # The program's CUDA behaviour that needs no GPU: `run --backend cuda` without a device exits 2
-# with a clear message, and `info --backend cuda` sizes the device memory per GPU.
+# with a clear message, `info --backend cuda` sizes the device memory per GPU, and
+# scripts/gpu-check says "no GPU" and exits 2 (never 0), leaving its summary under $OUT.
 # CUDA_VISIBLE_DEVICES=-1 hides every device, so this holds on GPU machines too.
 set -uo pipefail
 spate=$1
 case_file=$2
+source_dir=$3
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
@@ -29,4 +31,10 @@ assert len(j["device_memory"]) == 2
 assert sum(s["owned"] for s in j["device_memory"]) >= j["particles"]["total"]
 assert j["device_memory_max_bytes"] == max(s["bytes"] for s in j["device_memory"])
 PY
+CUDA_VISIBLE_DEVICES=-1 OUT=$out/check "$source_dir/scripts/gpu-check" --bin "$(dirname "$spate")" --budget 60 >"$out/check.txt" 2>&1
+code=$?
+cat "$out/check.txt"
+[ "$code" -eq 2 ] || fail "gpu-check without a GPU: exit $code, expected 2"
+tail -1 "$out/check.txt" | grep -q "^gpu-check: no GPU: " || fail "gpu-check's last line does not say 'gpu-check: no GPU: ...'"
+grep -q "no GPU" "$out/check/summary.txt" || fail "gpu-check left no summary.txt saying 'no GPU' under \$OUT"
 echo "PASS"

@@ -5,13 +5,14 @@
 #include <string>
 #include <vector>
 
+#include "../source_dir.hpp"
 #include "case/case.hpp"
 #include "io/checkpoint.hpp"
 #include "sim/simulation.hpp"
 
 namespace spate::test {
 
-inline std::string case_path(const std::string& name) { return std::string(SPATE_SOURCE_DIR) + "/cases/" + name; }
+inline std::string case_path(const std::string& name) { return test::source_dir() + "/cases/" + name; }
 
 inline std::filesystem::path scratch(const std::string& name) {
   auto p = std::filesystem::temp_directory_path() / ("spate-test-" + name);
@@ -37,7 +38,7 @@ inline bool identical_checkpoints(const std::filesystem::path& a, const std::fil
   }
   auto fa = pa.fields(), fb = pb.fields();
   for (std::size_t f = 0; f < fa.size(); ++f) {
-    if (!fa[f].checkpoint) continue;
+    if (!fa[f].has(kCheckpointed)) continue;
     if (std::memcmp(fa[f].bytes(), fb[f].bytes(), pa.size() * fa[f].elem_size) != 0) {
       if (why) *why = "field " + std::string(fa[f].name) + " differs";
       return false;

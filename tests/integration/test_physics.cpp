@@ -31,7 +31,7 @@ HydrostaticResult run_hydrostatic(const std::string& file, double end_time, doub
   SlabWorker w(L, physics_params(c), *t);
   ParticleStore all = generate_particles(c);
   HydrostaticResult r;
-  for (auto k : all.kind) r.fluid_before += k == kFluid;
+  for (auto k : all.material) r.fluid_before += k == 0;  // material 0: the fluid
   w.take_share(all, SlabLayout::uniform(L.cells[0], 1));
   w.prepare(true);
   TimeStepControl ctl;
@@ -40,7 +40,7 @@ HydrostaticResult run_hydrostatic(const std::string& file, double end_time, doub
   const double g = std::fabs(c.gravity[v]);
   std::vector<std::int64_t> samples(c.probes.size(), 0);
   r.mean_pressure.assign(c.probes.size(), 0.0);
-  for (auto& p : c.probes) r.expected.push_back(c.rho0 * g * (surface - p.position[v]));
+  for (auto& p : c.probes) r.expected.push_back(c.fluids[0].density * g * (surface - p.position[v]));
   double time = 0.0;
   for (std::int64_t step = 0; time < end_time; ++step) {
     const float dt = w.local_time_step(ctl);
@@ -48,7 +48,7 @@ HydrostaticResult run_hydrostatic(const std::string& file, double end_time, doub
     time += dt;
     const ParticleStore& p = w.particles();
     for (std::size_t i = 0; i < p.owned(); ++i) {
-      if (p.kind[i] != kFluid) continue;
+      if (p.material[i] != 0) continue;
       for (int a = 0; a < c.dim; ++a) {
         const double lo = c.tank_origin[a], hi = c.tank_origin[a] + c.tank_size[a] * (a == v ? 2.0 : 1.0);
         if (p.pos[a][i] < lo || p.pos[a][i] > hi) ++r.escapes;
@@ -63,7 +63,7 @@ HydrostaticResult run_hydrostatic(const std::string& file, double end_time, doub
   }
   for (std::size_t k = 0; k < samples.size(); ++k)
     if (samples[k]) r.mean_pressure[k] /= static_cast<double>(samples[k]);
-  for (auto k : w.particles().kind) r.fluid_after += k == kFluid;
+  for (auto k : w.particles().material) r.fluid_after += k == 0;
   return r;
 }
 
@@ -113,7 +113,7 @@ TEST(Hydrostatic, WallSensorsAndFaceForces2D) {
   const auto out = test::scratch("wall-sensors");
   const RunResult r = test::run_case(c, out);
   ASSERT_EQ(r.exit_code, 0) << r.message;
-  const double rho_g = c.rho0 * std::fabs(c.gravity[1]);
+  const double rho_g = c.fluids[0].density * std::fabs(c.gravity[1]);
   const auto dir = out / "probes";
   const double settled = 0.7;
   EXPECT_NEAR(mean_after(dir / "side.csv", 2, settled), rho_g * 0.25, 0.03 * rho_g * 0.25);
@@ -135,7 +135,7 @@ TEST(Poiseuille, SteadyCentrelineWithinThreePercent) {
   const auto out = test::scratch("poiseuille");
   const RunResult r = test::run_case(c, out);
   ASSERT_EQ(r.exit_code, 0) << r.message;
-  const double nu = c.viscosity / c.rho0, F = c.body_force[0], L = c.tank_size[1];
+  const double nu = c.fluids[0].viscosity / c.fluids[0].density, F = c.body_force[0], L = c.tank_size[1];
   const auto centre = test::read_probe(out / "probes" / "centreline.csv", 2);
   const auto quarter = test::read_probe(out / "probes" / "quarter.csv", 2);
   const double u_max = F * L * L / (8 * nu);

@@ -244,7 +244,7 @@ try:
         # "Connection reset by peer" (timing decides which).
         # ParaView's harmless note at the first in-situ step (docs/insitu.md) is allowed too.
         socket_gone = "vtkSocket" in l and ("Broken pipe" in l or "Connection reset by peer" in l)
-        if ("vtkSocketCommunicator" in l or "Could not receive tag" in l or "spate: steering: rejected" in l
+        if ("vtkSocketCommunicator" in l or "Could not receive tag" in l or "steering: rejected" in l
                 or "New time step is not after last time step" in l or socket_gone):
             continue
         unknown.append(l)

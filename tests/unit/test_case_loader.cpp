@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "../source_dir.hpp"
 #include "case/case.hpp"
 
 namespace spate {
@@ -102,9 +103,9 @@ TEST(CaseLoader, MinimalCaseGetsDefaults) {
   EXPECT_EQ(c.kernel, KernelType::WendlandC2);
   EXPECT_DOUBLE_EQ(c.gravity[0], 0.0);
   EXPECT_DOUBLE_EQ(c.gravity[1], -9.81);  // the last axis is vertical
-  EXPECT_DOUBLE_EQ(c.rho0, 1000.0);
-  EXPECT_DOUBLE_EQ(c.viscosity, 1e-3);
-  EXPECT_FALSE(c.sound_speed.has_value());
+  EXPECT_DOUBLE_EQ(c.fluids[0].density, 1000.0);
+  EXPECT_DOUBLE_EQ(c.fluids[0].viscosity, 1e-3);
+  EXPECT_FALSE(c.fluids[0].sound_speed.has_value());
   EXPECT_FALSE(c.fixed_dt.has_value());
   EXPECT_DOUBLE_EQ(c.cfl, 0.2);
   EXPECT_EQ(c.density_mode, DensityMode::Continuity);
@@ -120,8 +121,8 @@ TEST(CaseLoader, MinimalCaseGetsDefaults) {
   const PhysicsParams P = physics_params(c);
   EXPECT_FLOAT_EQ(P.h, 0.013f);
   EXPECT_FLOAT_EQ(P.support2, 4.0f * 0.013f * 0.013f);
-  EXPECT_FLOAT_EQ(P.mass, 1000.0f * 0.01f * 0.01f);
-  EXPECT_FLOAT_EQ(P.tait_b, P.c0 * P.c0 * 1000.0f / 7.0f);
+  EXPECT_FLOAT_EQ(P.materials.fluid[0].mass, 1000.0f * 0.01f * 0.01f);
+  EXPECT_FLOAT_EQ(P.materials.fluid[0].tait_b, P.materials.fluid[0].c0 * P.materials.fluid[0].c0 * 1000.0f / 7.0f);
 }
 
 TEST(CaseLoader, EveryKeyIsRead) {
@@ -129,8 +130,8 @@ TEST(CaseLoader, EveryKeyIsRead) {
   EXPECT_EQ(c.kernel, KernelType::CubicSpline);
   EXPECT_DOUBLE_EQ(c.smoothing_ratio, 1.5);
   EXPECT_DOUBLE_EQ(c.gravity[2], -10.0);
-  EXPECT_DOUBLE_EQ(c.rho0, 998.0);
-  EXPECT_DOUBLE_EQ(c.viscosity, 0.002);
+  EXPECT_DOUBLE_EQ(c.fluids[0].density, 998.0);
+  EXPECT_DOUBLE_EQ(c.fluids[0].viscosity, 0.002);
   EXPECT_DOUBLE_EQ(sound_speed(c), 30.0);
   EXPECT_DOUBLE_EQ(c.artificial_viscosity, 0.05);
   EXPECT_DOUBLE_EQ(c.body_force[0], 0.1);
@@ -169,7 +170,7 @@ TEST(CaseLoader, SetOverridesTopLevelNestedAndNewKeys) {
                             {"dp=0.005", "fluid.viscosity=0.01", "time.dt=2.5e-5", "tank.size=[0.3, 0.2]",
                              "output.interval=0.02", "kernel=cubic_spline", "fluid_blocks=[{min: [0, 0], max: [0.1, 0.1]}]"});
   EXPECT_DOUBLE_EQ(c.dp, 0.005);
-  EXPECT_DOUBLE_EQ(c.viscosity, 0.01);  // `fluid` did not exist: created
+  EXPECT_DOUBLE_EQ(c.fluids[0].viscosity, 0.01);  // `fluid` did not exist: created
   ASSERT_TRUE(c.fixed_dt.has_value());
   EXPECT_DOUBLE_EQ(*c.fixed_dt, 2.5e-5);
   EXPECT_DOUBLE_EQ(c.end_time, 0.1);    // a sibling of the overridden key is kept
@@ -181,18 +182,18 @@ TEST(CaseLoader, SetOverridesTopLevelNestedAndNewKeys) {
   // The effective case (stored in checkpoints) holds the overrides and parses to the same case.
   const Case again = parse_case(c.source_yaml, "again.yaml");
   EXPECT_DOUBLE_EQ(again.dp, 0.005);
-  EXPECT_DOUBLE_EQ(again.viscosity, 0.01);
+  EXPECT_DOUBLE_EQ(again.fluids[0].viscosity, 0.01);
 }
 
 TEST(CaseLoader, SetAutoRestoresAdaptiveValues) {
   const Case c = parse_case(kFull3D, "full.yaml", {"time.dt=auto", "fluid.sound_speed=auto"});
   EXPECT_FALSE(c.fixed_dt.has_value());
-  EXPECT_FALSE(c.sound_speed.has_value());
+  EXPECT_FALSE(c.fluids[0].sound_speed.has_value());
 }
 
 TEST(CaseLoader, LoadCaseReadsShippedCases) {
   for (const char* name : {"dam_break_2d.yaml", "dam_break_column_3d.yaml"}) {
-    const Case c = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/" + name);
+    const Case c = load_case(test::source_dir() + "/cases/" + name);
     EXPECT_FALSE(c.name.empty()) << name;
     EXPECT_FALSE(c.fluid_blocks.empty()) << name;
   }

@@ -53,7 +53,7 @@ ParticleStore random_particles(const Lattice& L, std::size_t n, unsigned seed, f
   }
   for (std::size_t i = 0; i < n; ++i) {
     p.id[i] = ids[i];
-    p.kind[i] = kFluid;
+    p.material[i] = 0;  // fluid
     p.density[i] = 1000.0f;
   }
   p.set_owned(n);

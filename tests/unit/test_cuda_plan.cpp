@@ -2,8 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <map>
+#include <memory>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "backend/cuda/device_plan.hpp"
 #include "particles/particle_store.hpp"
@@ -35,6 +39,88 @@ TEST(CudaCapacity, GrowsWithHeadroomInQuantaAndNeverShrinks) {
   EXPECT_EQ(grown_capacity(100000, c), c);       // fits: no reallocation
   EXPECT_EQ(grown_capacity(10, c), c);           // never shrinks
   EXPECT_GT(grown_capacity(c + 1, c), c + 1);    // grows past the request
+}
+
+namespace {
+// Host memory standing in for the device's in the growth tests: every block counted, and the
+// n-th allocation fails (as cudaMalloc does when the GPU is full).
+struct Ledger {
+  int live = 0, allocations = 0, fail_at = -1;
+};
+Ledger* ledger = nullptr;
+struct LedgerFree {
+  void operator()(char* p) const noexcept {
+    delete[] p;
+    --ledger->live;
+  }
+};
+using Block = std::unique_ptr<char, LedgerFree>;
+Block allocate(std::size_t bytes) {
+  if (ledger->allocations++ == ledger->fail_at) throw std::runtime_error("out of memory");
+  ++ledger->live;
+  return Block(new char[bytes]);
+}
+}  // namespace
+
+TEST(CudaGrowth, AFailedGrowthLeavesEveryArrayAsItWasAndLeaksNothing) {
+  // DeviceSlabArrays::reserve: the fields and keys grow together, keeping their particles.
+  Ledger l;
+  ledger = &l;
+  {
+    std::vector<Block> arrays;
+    for (int k = 0; k < 3; ++k) {
+      arrays.push_back(allocate(8));
+      std::memset(arrays.back().get(), 'a' + k, 8);
+    }
+    std::vector<Block*> blocks{&arrays[0], &arrays[1], &arrays[2]};
+    const std::vector<std::size_t> bytes{16, 16, 16}, keep{8, 8, 8};
+    auto copy = [](char* to, const char* from, std::size_t n) { std::memcpy(to, from, n); };
+    int waits = 0;
+    for (int fail : {0, 1, 2}) {  // the first, second or third new block cannot be had
+      l.allocations = 0;
+      l.fail_at = fail;
+      const std::vector<char*> old{arrays[0].get(), arrays[1].get(), arrays[2].get()};
+      EXPECT_THROW(grow_all_or_nothing<Block>(blocks, bytes, keep, allocate, copy, [&] { ++waits; }), std::runtime_error);
+      EXPECT_EQ(l.live, 3) << "the new blocks allocated before the failure are freed";
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(arrays[k].get(), old[k]) << "untouched";
+        EXPECT_EQ(arrays[k].get()[7], 'a' + k);
+      }
+    }
+    EXPECT_EQ(waits, 0);
+    l.fail_at = -1;
+    grow_all_or_nothing<Block>(blocks, bytes, keep, allocate, copy, [&] { ++waits; });
+    EXPECT_EQ(waits, 1);
+    EXPECT_EQ(l.live, 3) << "the old blocks are freed once replaced";
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(std::string(arrays[k].get(), 8), std::string(8, static_cast<char>('a' + k))) << "kept";
+  }
+  EXPECT_EQ(l.live, 0);
+}
+
+TEST(CudaGrowth, ABufferWhoseGrowthFailedIsEmptyNotASizeWithoutMemory) {
+  // DeviceBuffer, StreamOrderedBuffer, PinnedBuffer: the old block goes first; if the new one
+  // cannot be had, `bytes` must not promise the old size (a later reserve would return early and
+  // hand out a null pointer).
+  Ledger l;
+  ledger = &l;
+  {
+    Growable<Block> b;
+    b.reserve_discarding(100, allocate);
+    EXPECT_GE(b.bytes, 100u);
+    EXPECT_NE(b.data(), nullptr);
+    b.reserve_discarding(50, allocate);  // fits: nothing happens
+    EXPECT_EQ(l.allocations, 1);
+    l.fail_at = l.allocations;
+    EXPECT_THROW(b.reserve_discarding(1 << 20, allocate), std::runtime_error);
+    EXPECT_EQ(b.bytes, 0u);
+    EXPECT_EQ(b.data(), nullptr);
+    EXPECT_EQ(l.live, 0);
+    l.fail_at = -1;
+    b.reserve_discarding(10, allocate);  // and it recovers
+    EXPECT_GE(b.bytes, 10u);
+    EXPECT_EQ(l.live, 1);
+  }
+  EXPECT_EQ(l.live, 0);
 }
 
 TEST(CudaFootprint, DeviceFieldsMatchTheHostStoreAndStayUnderBudget) {

@@ -45,7 +45,7 @@ ParticleStore random_store(const Lattice& L, std::size_t n, unsigned seed, std::
   }
   for (std::size_t i = 0; i < n; ++i) {
     p.id[i] = first_id + static_cast<std::uint32_t>(i);
-    p.kind[i] = kFluid;
+    p.material[i] = 0;  // fluid
     p.density[i] = 1000.0f;
   }
   p.set_owned(n);
@@ -215,28 +215,29 @@ TEST(Transport, CollectDoesNotHangWhenANeighbourFails) {
 TEST(MeasuredCosts, SpreadTheTimedSecondsOverTheColumns) {
   const Lattice L = periodic_lattice(2);
   ParticleStore p = random_store(L, 90, 7);
-  for (std::size_t i = 0; i < p.owned(); ++i) p.kind[i] = i % 3 == 0 ? kTankWall : kFluid;
-  const PhaseCosts c = measured_column_costs(p, L, 0.3, 1.2);
+  const MaterialTable M;  // one fluid (material 0), the tank
+  for (std::size_t i = 0; i < p.owned(); ++i) p.material[i] = i % 3 == 0 ? M.tank() : 0;
+  const PhaseCosts c = measured_column_costs(p, L, M, 0.3, 1.2);
   std::int64_t wall = 0, fluid = 0;
   for (int k = 0; k < L.cells[0]; ++k) wall += c.wall[k], fluid += c.fluid[k];
   EXPECT_NEAR(static_cast<double>(wall), 0.3e9, L.cells[0]);  // nanoseconds, rounded per column
   EXPECT_NEAR(static_cast<double>(fluid), 1.2e9, L.cells[0]);
   // Per column: its walls times the slab's seconds per wall, its fluid times seconds per fluid.
   std::vector<int> walls(L.cells[0], 0), fluids(L.cells[0], 0);
-  for (std::size_t i = 0; i < p.owned(); ++i) ++(is_fluid(p.kind[i]) ? fluids : walls)[L.cell_of(p.pos[0][i], 0)];
+  for (std::size_t i = 0; i < p.owned(); ++i) ++(M.is_fluid(p.material[i]) ? fluids : walls)[L.cell_of(p.pos[0][i], 0)];
   for (int k = 0; k < L.cells[0]; ++k) {
     EXPECT_NEAR(static_cast<double>(c.wall[k]), 0.3e9 * walls[k] / 30.0, 1.0) << "column " << k;
     EXPECT_NEAR(static_cast<double>(c.fluid[k]), 1.2e9 * fluids[k] / 60.0, 1.0) << "column " << k;
   }
   // The sort's seconds are shared evenly by all particles of both kinds.
-  const PhaseCosts sorted = measured_column_costs(p, L, 0.3, 1.2, 0.9);
+  const PhaseCosts sorted = measured_column_costs(p, L, M, 0.3, 1.2, 0.9);
   for (int k = 0; k < L.cells[0]; ++k) {
     EXPECT_NEAR(static_cast<double>(sorted.wall[k]), (0.3e9 / 30.0 + 0.9e9 / 90.0) * walls[k], 1.0) << "column " << k;
     EXPECT_NEAR(static_cast<double>(sorted.fluid[k]), (1.2e9 / 60.0 + 0.9e9 / 90.0) * fluids[k], 1.0) << "column " << k;
   }
   // A slab without fluid charges all its time to its walls (its fluid loop still ran over cells).
-  for (std::size_t i = 0; i < p.owned(); ++i) p.kind[i] = kTankWall;
-  const PhaseCosts dry = measured_column_costs(p, L, 0.3, 0.1);
+  for (std::size_t i = 0; i < p.owned(); ++i) p.material[i] = M.tank();
+  const PhaseCosts dry = measured_column_costs(p, L, M, 0.3, 0.1);
   std::int64_t dry_wall = 0, dry_fluid = 0;
   for (int k = 0; k < L.cells[0]; ++k) dry_wall += dry.wall[k], dry_fluid += dry.fluid[k];
   EXPECT_NEAR(static_cast<double>(dry_wall), 0.4e9, L.cells[0]);

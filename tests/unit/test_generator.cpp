@@ -14,6 +14,9 @@
 namespace spate {
 namespace {
 
+// One fluid: the material numbering of physics/materials.hpp.
+constexpr std::uint8_t kFluidMaterial = 0, kTankMaterial = 1, kFirstSolidMaterial = 2;
+
 // 2D tank 0.1 x 0.05 at dp = 0.01: 10 x 5 interior sites.
 const char* kSmallTank = R"(name: small
 dimensions: 2
@@ -44,7 +47,7 @@ solids:
 
 std::map<std::uint8_t, std::int64_t> kinds(const ParticleStore& p) {
   std::map<std::uint8_t, std::int64_t> n;
-  for (auto k : p.kind) ++n[k];
+  for (auto k : p.material) ++n[k];
   return n;
 }
 
@@ -72,8 +75,8 @@ TEST(Generator, SmallTankCountsOpenTop) {
   ASSERT_EQ(static_cast<std::int64_t>(p.size()), n.total());
   EXPECT_EQ(p.owned(), p.size());
   auto k = kinds(p);
-  EXPECT_EQ(k[kFluid], n.fluid);
-  EXPECT_EQ(k[kTankWall], n.wall);
+  EXPECT_EQ(k[kFluidMaterial], n.fluid);
+  EXPECT_EQ(k[kTankMaterial], n.wall);
   for (std::size_t i = 0; i < p.size(); ++i) EXPECT_EQ(p.id[i], i);
   expect_distinct_sites(p, c.dp, c.tank_origin);
 }
@@ -103,7 +106,7 @@ TEST(Generator, WallParticlesSurroundTheInteriorOnly) {
   const ParticleStore p = generate_particles(c);
   for (std::size_t i = 0; i < p.size(); ++i) {
     const bool inside = p.pos[0][i] > 0 && p.pos[0][i] < 0.1f && p.pos[1][i] > 0;
-    if (p.kind[i] == kFluid) {
+    if (p.material[i] == kFluidMaterial) {
       EXPECT_TRUE(inside) << "fluid particle " << i << " in the wall";
       EXPECT_LE(p.pos[0][i], 0.05f);
       EXPECT_LE(p.pos[1][i], 0.03f);
@@ -130,13 +133,13 @@ TEST(Generator, HollowSolidKeepsWallLayersUnderItsFluidFaces) {
   auto k = kinds(p);
   // 6 x 6 sites in the box; the 2 x 4 sites deeper than 2 dp from the sides and top (the floor face
   // does not count) are left empty.
-  EXPECT_EQ(k[kSolidBase], 36 - 8);
+  EXPECT_EQ(k[kFirstSolidMaterial], 36 - 8);
   // Wet bed: 3 rows of 20 sites, minus the 6 x 3 sites inside the solid (filled or hollow).
-  EXPECT_EQ(k[kFluid], 60 - 18);
-  EXPECT_EQ(k[kTankWall], 24 * 12 - 20 * 10);
+  EXPECT_EQ(k[kFluidMaterial], 60 - 18);
+  EXPECT_EQ(k[kTankMaterial], 24 * 12 - 20 * 10);
   expect_distinct_sites(p, c.dp, c.tank_origin);
   for (std::size_t i = 0; i < p.size(); ++i) {
-    if (p.kind[i] != kFluid) continue;
+    if (p.material[i] != kFluidMaterial) continue;
     const bool in_solid = p.pos[0][i] > 0.10f && p.pos[0][i] < 0.16f && p.pos[1][i] < 0.06f;
     EXPECT_FALSE(in_solid) << "wet-bed particle " << i << " inside the solid";
   }
@@ -144,7 +147,7 @@ TEST(Generator, HollowSolidKeepsWallLayersUnderItsFluidFaces) {
 
 TEST(Generator, FilledSolid) {
   const Case c = parse_case(kSolidTank, "solid.yaml", {"solids=[{name: block, min: [0.10, 0.0], max: [0.16, 0.06], hollow: false}]"});
-  EXPECT_EQ(kinds(generate_particles(c))[kSolidBase], 36);
+  EXPECT_EQ(kinds(generate_particles(c))[kFirstSolidMaterial], 36);
 }
 
 TEST(Generator, HydrostaticInitialDensity) {
@@ -152,12 +155,12 @@ TEST(Generator, HydrostaticInitialDensity) {
   const ParticleStore p = generate_particles(c);
   const PhysicsParams P = physics_params(c);
   for (std::size_t i = 0; i < p.size(); ++i) {
-    if (p.kind[i] != kFluid) {
-      EXPECT_EQ(p.density[i], P.rho0);
+    if (p.material[i] != kFluidMaterial) {
+      EXPECT_EQ(p.density[i], P.materials.fluid[0].rho0);
       continue;
     }
     const double depth = 0.03 - p.pos[1][i];
-    const double pressure = tait_pressure(p.density[i], P.rho0, P.tait_b);
+    const double pressure = tait_pressure(p.density[i], P.materials.fluid[0]);
     EXPECT_NEAR(pressure, 1000.0 * 9.81 * depth, 0.02 * 1000.0 * 9.81 * 0.03) << "particle " << i;
   }
 }

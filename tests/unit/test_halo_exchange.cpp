@@ -50,11 +50,12 @@ struct SlabResult {
   std::array<HaloLink, 2> links;
   int to_host = 0, from_host = 0, peer = 0;
   std::vector<int> peer_from;
+  std::size_t received_bytes = 0;
 };
 
 // `slabs` workers with devices[s], three rounds of exchanges; checks every delivery.
 std::vector<SlabResult> run(int slabs, bool periodic, const std::vector<int>& devices, const std::function<bool(int, int)>& reach,
-                            int remote_face = -1) {
+                            int remote_face = -1, bool force_staged = false) {
   InProcessHub hub(slabs);
   std::vector<SlabResult> results(slabs);
   auto body = [&](int s) {
@@ -63,7 +64,8 @@ std::vector<SlabResult> run(int slabs, bool periodic, const std::vector<int>& de
     if (remote_face >= 0 && (s == remote_face || s == (remote_face + 1) % slabs))
       t = std::make_unique<RemoteNeighbour>(std::move(t), s == remote_face ? (s + 1) % slabs : remote_face);
     HostCopies copies(devices[s], reach);
-    HaloExchange halo;
+    HaloExchange halo(false, force_staged);
+    std::size_t received = 0;
     for (int k = 0; k < 3; ++k) {
       std::vector<char> out[2] = {payload(s, kLeft, k), payload(s, kRight, k)};
       const std::array<Outgoing, 2> o{Outgoing{out[0].data(), out[0].size() / 8, out[0].size()},
@@ -74,13 +76,16 @@ std::vector<SlabResult> run(int slabs, bool periodic, const std::vector<int>& de
       EXPECT_EQ(counts[kLeft], l < 0 ? 0u : payload(l, kRight, k).size() / 8) << "slab " << s;
       EXPECT_EQ(counts[kRight], r < 0 ? 0u : payload(r, kLeft, k).size() / 8) << "slab " << s;
       if (l >= 0) {
+        received += payload(l, kRight, k).size();
         EXPECT_EQ(copies.in[kLeft], payload(l, kRight, k)) << "slab " << s << " round " << k;
       }
       if (r >= 0) {
+        received += payload(r, kLeft, k).size();
         EXPECT_EQ(copies.in[kRight], payload(r, kLeft, k)) << "slab " << s << " round " << k;
       }
     }
-    results[s] = {halo.links(), copies.to_host, copies.from_host, copies.peer, copies.peer_from};
+    EXPECT_EQ(copies.unfenced_incoming, 0) << "slab " << s << ": an incoming buffer asked for before its readers were waited for";
+    results[s] = {halo.links(), copies.to_host, copies.from_host, copies.peer, copies.peer_from, received};
   };
   std::vector<std::thread> pool;
   for (int s = 0; s < slabs; ++s) pool.emplace_back(body, s);
@@ -124,6 +129,37 @@ TEST(HaloExchange, SharedGpuAndEdgesWithoutNeighbours) {
   EXPECT_EQ(r[0].links[kRight], HaloLink::Peer);
   EXPECT_EQ(r[2].links[kRight], HaloLink::None);
   EXPECT_EQ(r[1].to_host + r[1].from_host, 0);
+}
+
+TEST(HaloExchange, StagedLinksCanBeForcedOnOneGpu) {
+  // SPATE_CUDA_HALO_LINK=staged: three workers sharing GPU 0 in a periodic ring, every halo
+  // through pinned host memory (the path of GPUs without peer access, and of other ranks), and the
+  // process's traffic counters say so.
+  EXPECT_FALSE(staged_links_forced(nullptr));
+  EXPECT_FALSE(staged_links_forced(""));
+  EXPECT_FALSE(staged_links_forced("auto"));
+  EXPECT_TRUE(staged_links_forced("staged"));
+  EXPECT_THROW(staged_links_forced("peer"), std::invalid_argument);
+  EXPECT_EQ(choose_halo_link(true, true, 0, 0, true, false, true), HaloLink::Staged);
+  EXPECT_EQ(choose_halo_link(true, false, 0, 1, true, true, true), HaloLink::DeviceMpi);  // other ranks keep theirs
+  const HaloTraffic before = halo_traffic();
+  const auto r = run(3, true, {0, 0, 0}, [](int, int) { return true; }, -1, true);
+  const HaloTraffic after = halo_traffic();
+  std::size_t received = 0;
+  for (const auto& s : r) {
+    EXPECT_EQ(s.links[kLeft], HaloLink::Staged);
+    EXPECT_EQ(s.links[kRight], HaloLink::Staged);
+    EXPECT_EQ(s.peer, 0);
+    EXPECT_EQ(s.from_host, 6);  // both sides, three rounds
+    received += s.received_bytes;
+  }
+  EXPECT_EQ(after.staged_bytes - before.staged_bytes, received);
+  EXPECT_EQ(after.peer_bytes, before.peer_bytes);
+  // Unforced, the same ring is all same-device copies.
+  run(3, true, {0, 0, 0}, [](int, int) { return true; });
+  const HaloTraffic unforced = halo_traffic();
+  EXPECT_EQ(unforced.peer_bytes - after.peer_bytes, received);
+  EXPECT_EQ(unforced.staged_bytes, after.staged_bytes);
 }
 
 TEST(HaloExchange, NeighboursInAnotherProcessGoThroughHostMemory) {

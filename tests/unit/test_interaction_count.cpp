@@ -8,6 +8,7 @@
 #include <thread>
 #include <vector>
 
+#include "../source_dir.hpp"
 #include "backend/cpu/interaction_count.hpp"
 #include "case/case.hpp"
 #include "case/generator.hpp"
@@ -19,7 +20,7 @@ namespace spate {
 namespace {
 
 Case load_case_file(const std::string& name, const std::vector<std::string>& overrides = {}) {
-  return load_case(std::string(SPATE_SOURCE_DIR) + "/cases/" + name, overrides);
+  return load_case(test::source_dir() + "/cases/" + name, overrides);
 }
 
 // Sum of the per-slab counts after prepare() on `slabs` in-process slabs.
@@ -64,8 +65,8 @@ cpu::InteractionCounts brute_force(const Case& c) {
     const Vec<Dim> xi = load_vec<Dim>(p.pos, i);
     for (std::size_t j = 0; j < p.size(); ++j) {
       if (j == i || distance_squared<Dim>(xi, p.pos, j) >= P.support2) continue;
-      if (is_fluid(p.kind[i])) ++n.fluid;
-      else if (is_fluid(p.kind[j])) ++n.wall;
+      if (P.is_fluid(p.material[i])) ++n.fluid;
+      else if (P.is_fluid(p.material[j])) ++n.wall;
     }
   }
   if (P.density_mode == DensityMode::Summation) n.summation = n.fluid;

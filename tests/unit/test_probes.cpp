@@ -1,13 +1,120 @@
-// Probe pieces that need no simulation (sim/probes.cpp): the sensor's moving average and the points
-// on which a wall-pressure sensor samples the fluid.
+// Probes (solver/sim/probes.cpp): CSV headers with units, height gauges that follow the surface
+// continuously and can ignore spray, a front that follows a bore over a wet bed, the sensor's moving
+// average and the points on which a wall-pressure sensor samples the fluid.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
+#include "case/case.hpp"
+#include "case/generator.hpp"
+#include "comm/in_process_transport.hpp"
 #include "sim/probes.hpp"
+#include "sim/slab_worker.hpp"
 
 namespace spate {
 namespace {
+
+// A 2D tank 0.2 x 0.1 at dp = 0.005, a 0.05 x 0.03 block of water at the left wall.
+const char* kTank = R"(name: probes
+dimensions: 2
+dp: 0.005
+time: {end: 0.1}
+tank:
+  size: [0.2, 0.1]
+fluid_blocks:
+  - min: [0, 0]
+    max: [0.05, 0.03]
+probes:
+  - {name: level, type: height, position: [0.025]}
+  - {name: column, type: height, position: [0.025], connected: true}
+  - {name: front, type: front}
+  - {name: bore, type: front, min_depth: 0.02}
+)";
+
+// One slab holding `particles`, with pressures and wall states computed as at the start of a run.
+struct Slab {
+  Slab(const Case& c, const ParticleStore& particles) : lattice(make_lattice(c)), hub(1), t(hub.endpoint(0, false)),
+                                                        w(lattice, physics_params(c), *t) {
+    w.take_share(particles, SlabLayout::uniform(lattice.cells[0], 1));
+    w.prepare(false);
+  }
+  Lattice lattice;
+  InProcessHub hub;
+  std::unique_ptr<SlabTransport> t;
+  SlabWorker w;
+};
+
+TEST(ProbeFiles, HeadersCarryUnits) {
+  ProbeSpec p;
+  p.type = ProbeType::Pressure;
+  EXPECT_EQ(probe_header(p, 2), "time[s],step,pressure[Pa]");
+  p.type = ProbeType::Velocity;
+  EXPECT_EQ(probe_header(p, 3), "time[s],step,vx[m/s],vy[m/s],vz[m/s]");
+  p.type = ProbeType::Height;
+  EXPECT_EQ(probe_header(p, 2), "time[s],step,height[m]");
+  p.type = ProbeType::Force;
+  EXPECT_EQ(probe_header(p, 2), "time[s],step,fx[N/m],fy[N/m]");  // 2D: per metre of depth
+  EXPECT_EQ(probe_header(p, 3), "time[s],step,fx[N],fy[N],fz[N]");
+  p.type = ProbeType::Front;
+  EXPECT_EQ(probe_header(p, 3), "time[s],step,front[m]");
+  p.type = ProbeType::WallPressure;
+  EXPECT_EQ(probe_header(p, 2), "time[s],step,pressure[Pa]");
+  p.window = 0.01;  // the averaged reading, then the instantaneous one
+  EXPECT_EQ(probe_header(p, 3), "time[s],step,pressure[Pa],pressure_instant[Pa]");
+}
+
+// Lifting the water by a fraction of the dp/4 sampling step lifts the reading by as much: the
+// surface is interpolated between samples, not read off them (no staircase).
+TEST(HeightGauge, FollowsTheSurfaceContinuously) {
+  const Case c = parse_case(kTank, "probes.yaml");
+  const ParticleStore initial = generate_particles(c);
+  const double lift = c.dp / 40;  // a tenth of the sampling step
+  const PhysicsParams P = physics_params(c);
+  std::vector<double> heights;
+  for (int k = 0; k <= 10; ++k) {
+    ParticleStore p = initial;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (P.is_fluid(p.material[i])) p.pos[1][i] += static_cast<float>(k * lift);
+    Slab s(c, p);
+    heights.push_back(sample_height(s.w, c.probes[0], c));
+  }
+  EXPECT_NEAR(heights[0], 0.03, c.dp / 2) << "the block is 0.03 m deep";
+  for (int k = 1; k <= 10; ++k)
+    EXPECT_NEAR(heights[k] - heights[k - 1], lift, 0.3 * lift) << "lift " << k;
+}
+
+// Drops of spray above the water: the highest surface reads them, the connected column does not.
+TEST(HeightGauge, ConnectedColumnIgnoresSpray) {
+  const Case c = parse_case(kTank, "probes.yaml");
+  ParticleStore p = generate_particles(c);
+  // A 3 x 3 blob of fluid 3 cm above the surface, over the gauge.
+  std::size_t donor = 0;
+  while (!physics_params(c).is_fluid(p.material[donor])) ++donor;
+  std::uint32_t id = static_cast<std::uint32_t>(p.size());
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) {
+      p.append_from(p, donor);
+      p.pos[0].back() = static_cast<float>(0.02 + a * c.dp);
+      p.pos[1].back() = static_cast<float>(0.06 + b * c.dp);
+      p.id.back() = id++;
+    }
+  p.set_owned(p.size());
+  Slab s(c, p);
+  EXPECT_NEAR(sample_height(s.w, c.probes[1], c), 0.03, c.dp / 2) << "connected: the water on the floor";
+  EXPECT_GT(sample_height(s.w, c.probes[0], c), 0.07) << "highest: the top of the spray";
+}
+
+// With a wet bed the fluid reaches the far wall from t = 0; a minimum depth puts the front at the
+// edge of the deep water instead.
+TEST(FrontProbe, MinimumDepthSkipsTheWetBed) {
+  const Case c = parse_case(kTank, "probes.yaml", {"wet_bed=0.01"});
+  Slab s(c, generate_particles(c));
+  const double far_wall = c.tank_origin[0] + c.tank_size[0];
+  EXPECT_NEAR(local_front(s.w, 0, front_level(c.probes[2], c)), far_wall, c.dp) << "no minimum depth: the bed's end";
+  EXPECT_NEAR(local_front(s.w, 0, front_level(c.probes[3], c)), 0.05, c.dp) << "min_depth 0.02: the block's edge";
+  EXPECT_EQ(front_level(c.probes[2], c), -std::numeric_limits<double>::infinity());
+}
 
 TEST(MovingAverage, ZeroWindowPassesSamplesThrough) {
   MovingAverage a(0.0);
@@ -23,8 +130,12 @@ TEST(MovingAverage, RampLagsByHalfTheWindow) {
   for (int k = 0; k <= 100; ++k) {
     const double t = 1e-3 * k + 0.37e-3 * (k % 3);  // uneven sampling
     last = a.add(t, t);
-    if (t > 0.0105) EXPECT_NEAR(last, t - 0.005, 1e-12) << t;
-    if (k == 2) EXPECT_NEAR(last, 0.5 * (t - 0.0), 1e-12);
+    if (t > 0.0105) {
+      EXPECT_NEAR(last, t - 0.005, 1e-12) << t;
+    }
+    if (k == 2) {
+      EXPECT_NEAR(last, 0.5 * t, 1e-12);
+    }
   }
   MovingAverage c(0.002);
   for (int k = 0; k < 50; ++k) EXPECT_DOUBLE_EQ(c.add(1e-4 * k, 7.5), 7.5);

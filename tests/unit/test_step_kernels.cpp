@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <memory>
@@ -14,12 +16,18 @@
 #include <thread>
 #include <utility>
 
+#include "../source_dir.hpp"
 #include "backend/cpu/cpu_backend.hpp"
+#include "backend/cuda/device_plan.hpp"
+#include "backend/particle_updates.hpp"
 #include "backend/cuda/device_runtime.hpp"
+#include "backend/cuda/halo_exchange.hpp"
 #include "case/case.hpp"
 #include "case/generator.hpp"
 #include "comm/in_process_transport.hpp"
 #include "domain/host_slab_arrays.hpp"
+#include "io/field_scale.hpp"
+#include "physics/dispatch.hpp"
 #include "sim/slab_worker.hpp"
 
 namespace spate {
@@ -102,7 +110,7 @@ class ResidentKernels : public StepKernels {
   ParticleStore& device_store() { return arrays_.store(); }
   int ranges = 0;
 
- private:
+ protected:
   // Poisons the Refresh fields of the halo ghosts and of their images as soon as a refresh is
   // staged: whatever the interior pass reads of them is NaN, which then shows in the results.
   class PoisoningArrays final : public HostSlabArrays {
@@ -126,6 +134,30 @@ class ResidentKernels : public StepKernels {
   };
   ParticleStore& store() { return arrays_.store(); }
   PoisoningArrays arrays_;
+};
+
+// The GPU's arithmetic on the CPU: the resident path with the per-particle fluid body of
+// backend/particle_updates.hpp, particle after particle, each summing its neighbours in one
+// sequence as a CUDA thread does (cuda_kernels.cu), where the CPU backend's fluid loop sums them
+// into 16 lanes. Everything else is the same code in the same order (the wall and summation
+// passes are the same bodies; sqrt and division are IEEE-rounded on both; only powf in
+// tait_density may round differently on a GPU), so its distance to the CPU backend is what the
+// GPU check's comparison with the CPU must allow (GpuOrder.*).
+class GpuOrderKernels final : public ResidentKernels {
+ public:
+  explicit GpuOrderKernels(int dim) : ResidentKernels(dim, true) {}
+  void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
+    ParticleStore& p = store();
+    const CellGridView v = arrays_.grid().view();
+    const Lattice& L = arrays_.grid().lattice();
+    dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7>() {
+      for (std::size_t i = range.first; i < range.end(); ++i) {
+        int g[3] = {0, 0, 0};
+        for (int a = 0; a < Dim; ++a) g[a] = L.cell_of(p.pos[a][i], a);
+        update_fluid_rates<Kernel, Dim, Gamma7>(P, v, p, static_cast<std::uint32_t>(i), g);
+      }
+    });
+  }
 };
 
 // The CPU backend's loops on the host store, except that the halo ghosts (and their periodic
@@ -206,13 +238,66 @@ std::vector<std::vector<char>> run(const Case& c, int slabs, int steps, const st
   all.permute(0, order);
   std::vector<std::vector<char>> out;
   for (auto& f : all.fields())
-    if (f.checkpoint) out.emplace_back(f.bytes(), f.bytes() + all.size() * f.elem_size);
+    if (f.has(kCheckpointed)) out.emplace_back(f.bytes(), f.bytes() + all.size() * f.elem_size);
   return out;
 }
 
 Case small_dam_break() {
   // The 2D dam break, shortened so that a few steps take milliseconds.
-  return load_case(std::string(SPATE_SOURCE_DIR) + "/cases/dam_break_2d.yaml", {"tank.size=[0.16, 0.12]"});
+  return load_case(test::source_dir() + "/cases/dam_break_2d.yaml", {"tank.size=[0.16, 0.12]"});
+}
+
+// The cases scripts/gpu-check compares between GPU and CPU (the same files, overrides and steps):
+// walls and a free surface, periodic x (halo copies that wrap), periodic y (images, and images of
+// halo ghosts), summation density (a second refresh per step).
+struct CheckedCase {
+  std::string name;
+  Case c;
+  int steps;
+};
+std::vector<CheckedCase> gpu_checked_cases() {
+  auto load = [](const std::string& file, const std::vector<std::string>& overrides) {
+    return load_case(test::source_dir() + "/cases/" + file, overrides);
+  };
+  return {
+      {"dam_break", load("dam_break_2d.yaml", {}), 300},
+      {"periodic_x", load("poiseuille_2d.yaml", {"tank.size=[1.8e-3, 1.0e-3]", "fluid_blocks=[{min: [0, 0], max: [1.8e-3, 1.0e-3]}]"}), 100},
+      {"periodic_y",
+       load("hydrostatic_3d.yaml",
+            {"tank.size=[0.3, 0.2, 0.3]", "fluid_blocks=[{min: [0, 0, 0], max: [0.3, 0.2, 0.1]}]", "tank.periodic=[y]"}),
+       50},
+      {"summation", load("dam_break_2d.yaml", {"density.mode=summation"}), 100},
+  };
+}
+
+// The largest difference of two run() results over every checkpoint field, as a fraction of the
+// field's scale (io/field_scale.hpp); a material that differs counts as infinite.
+struct ScaledDifference {
+  double worst = 0.0;
+  std::string field;
+};
+ScaledDifference scaled_difference(const Case& c, const std::vector<std::vector<char>>& a, const std::vector<std::vector<char>>& b) {
+  const PhysicsParams P = physics_params(c);
+  ScaledDifference d;
+  ParticleStore layout(c.dim);
+  std::size_t k = 0;
+  for (auto& f : layout.fields()) {
+    if (!f.has(kCheckpointed)) continue;
+    const double scale = field_scale(f.name, P);
+    double worst = a[k] == b[k] ? 0.0 : INFINITY;
+    if (f.elem_size == 4 && scale > 0) {
+      worst = 0.0;
+      const auto* x = reinterpret_cast<const float*>(a[k].data());
+      const auto* y = reinterpret_cast<const float*>(b[k].data());
+      for (std::size_t i = 0; i < a[k].size() / sizeof(float); ++i) {
+        const double e = std::isnan(x[i]) || std::isnan(y[i]) ? INFINITY : std::fabs(double{x[i]} - double{y[i]}) / scale;
+        worst = std::max(worst, e);
+      }
+    }
+    if (worst > d.worst) d = {worst, std::string(f.name)};
+    ++k;
+  }
+  return d;
 }
 
 }  // namespace
@@ -237,7 +322,7 @@ TEST(StepKernels, SplitDoesNotChangeTheResultThroughTheInterface) {
 }
 
 TEST(StepKernels, SummationDensityRefreshesGhostsThroughTheInterface) {
-  const Case c = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/dam_break_2d.yaml",
+  const Case c = load_case(test::source_dir() + "/cases/dam_break_2d.yaml",
                            {"tank.size=[0.16, 0.12]", "density.mode=summation"});
   const auto cpu = run(c, 3, 6, nullptr);
   const auto mirror = run(c, 3, 6, [] { return std::make_unique<MirrorKernels>(); });
@@ -258,7 +343,7 @@ TEST(HostPath, TheInteriorFluidPassNeedsNoHaloGhost) {
   // columns are refreshed before the interior pass, images of halo ghosts after it).
   const Case dam = small_dam_break();
   expect_same(run(dam, 3, 8, nullptr), run(dam, 3, 8, [] { return std::make_unique<PoisonedInteriorKernels>(); }));
-  const Case periodic = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/hydrostatic_3d.yaml",
+  const Case periodic = load_case(test::source_dir() + "/cases/hydrostatic_3d.yaml",
                                   {"tank.size=[0.3, 0.2, 0.3]", "fluid_blocks=[{min: [0, 0, 0], max: [0.3, 0.2, 0.1]}]",
                                    "tank.periodic=[y]"});
   expect_same(run(periodic, 3, 4, nullptr), run(periodic, 3, 4, [] { return std::make_unique<PoisonedInteriorKernels>(); }));
@@ -282,11 +367,11 @@ TEST(ResidentTopology, ReproducesTheCpuBackendOnOneTwoAndThreeSlabs) {
 }
 
 TEST(ResidentTopology, SummationDensityAndPeriodicXMatchTheCpuBackend) {
-  const Case summation = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/dam_break_2d.yaml",
+  const Case summation = load_case(test::source_dir() + "/cases/dam_break_2d.yaml",
                                    {"tank.size=[0.16, 0.12]", "density.mode=summation"});
   expect_same(run(summation, 3, 6, nullptr), run(summation, 3, 6, [&] { return std::make_unique<ResidentKernels>(2, true); }));
   // Periodic x: halo copies wrap with the period; one slab is its own neighbour.
-  const Case channel = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/poiseuille_2d.yaml", {});
+  const Case channel = load_case(test::source_dir() + "/cases/poiseuille_2d.yaml", {});
   for (int slabs : {1, 2, 3}) {
     SCOPED_TRACE(std::to_string(slabs) + " slabs, periodic x");
     expect_same(run(channel, slabs, 6, nullptr), run(channel, slabs, 6, [&] { return std::make_unique<ResidentKernels>(2, true); }));
@@ -296,7 +381,7 @@ TEST(ResidentTopology, SummationDensityAndPeriodicXMatchTheCpuBackend) {
 TEST(ResidentTopology, PeriodicImagesIn3dMatchTheCpuBackend) {
   // Periodic y makes images of owned particles (refreshed before the interior pass) and of halo
   // ghosts (poisoned until the halo arrives).
-  const Case c = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/hydrostatic_3d.yaml",
+  const Case c = load_case(test::source_dir() + "/cases/hydrostatic_3d.yaml",
                            {"tank.size=[0.3, 0.2, 0.3]", "fluid_blocks=[{min: [0, 0, 0], max: [0.3, 0.2, 0.1]}]", "tank.periodic=[y]"});
   for (int slabs : {1, 3}) {
     SCOPED_TRACE(std::to_string(slabs) + " slabs");
@@ -354,7 +439,7 @@ TEST(ResidentTopology, DeviceHealthAndDomainChecksFindTheHostsFault) {
   };
   std::vector<std::uint32_t> fluid;
   for (std::size_t i = 0; i < device.owned(); ++i)
-    if (is_fluid(device.kind[i])) fluid.push_back(device.id[i]);
+    if (MaterialTable{}.is_fluid(device.material[i])) fluid.push_back(device.id[i]);
   ASSERT_GE(fluid.size(), 2u);
   std::sort(fluid.begin(), fluid.end());
   for (ParticleStore* p : {&host.particles(), &device}) {
@@ -368,34 +453,130 @@ TEST(ResidentTopology, DeviceHealthAndDomainChecksFindTheHostsFault) {
   EXPECT_EQ(fa->what, fb->what);
 }
 
-// The real thing: the CUDA kernels against the CPU loops. Skips, visibly, on machines without a GPU
-// (the CI machine has none; see docs/gpu.md for what is therefore untested).
-TEST(CudaBackend, MatchesTheCpuBackendOnTheDamBreak) {
-  if (gpu::device_count() == 0) GTEST_SKIP() << "no CUDA device (" << (gpu::built_with_cuda() ? "built with CUDA" : "built without CUDA") << ")";
+TEST(TimeStep, ANanParticleAllowsZeroWhereverItSits) {
+  // A minimum built on `<` keeps or drops a NaN depending on where it meets it (OpenMP's partial
+  // minima, CUB's reduction tree): a particle with a NaN speed allows 0 instead, so every order
+  // gives 0 and the run stops with "the time step collapsed". A NaN acceleration gives a number
+  // already (the sound-speed limit).
   const Case c = small_dam_break();
-  std::vector<float> dt_cpu, dt_gpu;
-  const auto cpu = run(c, 3, 12, nullptr, &dt_cpu);
-  int next = 0;
-  const auto gpu = run(c, 3, 12, [&] { return gpu::make_cuda_kernels(next++ % gpu::device_count(), c.dim); }, &dt_gpu);
-  // Same sums in the same order, no FMA (--fmad=false); only powf (tait_density) may round differently.
-  ASSERT_EQ(dt_cpu.size(), dt_gpu.size());
-  for (std::size_t k = 0; k < dt_cpu.size(); ++k) EXPECT_NEAR(dt_cpu[k], dt_gpu[k], 1e-6f * dt_cpu[k]);
-  ASSERT_EQ(cpu.size(), gpu.size());
-  for (std::size_t f = 0; f < cpu.size(); ++f) ASSERT_EQ(cpu[f].size(), gpu[f].size());
-  // Positions (field 0 = x, 1 = y) agree to far below a particle spacing.
-  for (int axis = 0; axis < 2; ++axis) {
-    const auto* a = reinterpret_cast<const float*>(cpu[axis].data());
-    const auto* b = reinterpret_cast<const float*>(gpu[axis].data());
-    for (std::size_t i = 0; i < cpu[axis].size() / sizeof(float); ++i) EXPECT_NEAR(a[i], b[i], 1e-4f * c.dp);
+  const PhysicsParams P = physics_params(c);
+  const TimeStepControl ctl;
+  EXPECT_EQ(particle_time_step(P, P.materials.fluid[0], ctl, NAN, 1.0f), 0.0f);
+  EXPECT_EQ(particle_time_step(P, P.materials.fluid[0], ctl, 1.0f, NAN), particle_time_step(P, P.materials.fluid[0], ctl, 1.0f, 0.0f));
+  EXPECT_GT(particle_time_step(P, P.materials.fluid[0], ctl, 1.0f, 1.0f), 0.0f);
+  const ParticleStore p = generate_particles(c);
+  EXPECT_GT(cpu::min_time_step(p, P, ctl), 0.0f);
+  for (std::size_t i = 0; i < p.owned(); i += p.owned() / 7) {
+    if (!P.is_fluid(p.material[i])) continue;
+    ParticleStore q = p;
+    q.vel[0][i] = NAN;
+    EXPECT_EQ(cpu::min_time_step(q, P, ctl), 0.0f) << "NaN velocity at " << i;
+  }
+}
+
+TEST(GpuOrder, TheGpusSummationOrderStaysWellWithinTheGpuCheckTolerance) {
+  // What the GPU-against-CPU comparisons must allow, measured on the CPU: the CPU backend against
+  // the same run with the fluid loop summed as a CUDA thread sums (GpuOrderKernels), on the cases
+  // and step counts of the GPU check. Within a quarter of kGpuCpuScaledTolerance, leaving room
+  // for the device's powf; not zero, or the two orders would not differ and this measured nothing.
+  for (const auto& k : gpu_checked_cases()) {
+    SCOPED_TRACE(k.name);
+    std::vector<float> dt_cpu, dt_gpu_order;
+    const auto cpu = run(k.c, 1, k.steps, nullptr, &dt_cpu);
+    const auto gpu_order = run(k.c, 1, k.steps, [&] { return std::make_unique<GpuOrderKernels>(k.c.dim); }, &dt_gpu_order);
+    const ScaledDifference d = scaled_difference(k.c, cpu, gpu_order);
+    EXPECT_LE(d.worst, gpu::kGpuCpuScaledTolerance / 4) << d.field;
+    EXPECT_GT(d.worst, 0.0);
+    ASSERT_EQ(dt_cpu.size(), dt_gpu_order.size());
+    for (std::size_t n = 0; n < dt_cpu.size(); ++n) EXPECT_NEAR(dt_gpu_order[n], dt_cpu[n], gpu::kGpuCpuScaledTolerance / 4 * dt_cpu[n]);
+  }
+}
+
+// The real thing: the CUDA kernels against the CPU loops. Skips, visibly, on machines without a GPU
+// (the CI machine has none; scripts/gpu-check runs them on one and fails if any is skipped).
+namespace {
+bool no_gpu() { return gpu::device_count() == 0; }
+std::string why_no_gpu() { return std::string("no CUDA device (") + (gpu::built_with_cuda() ? "built with CUDA" : "built without CUDA") + ")"; }
+auto cuda_kernels(int dim) {
+  return [dim] { return gpu::make_cuda_kernels(0, dim); };
+}
+}  // namespace
+
+TEST(CudaBackend, MatchesTheCpuBackendWithinTheGpuCheckTolerance) {
+  if (no_gpu()) GTEST_SKIP() << why_no_gpu();
+  for (const auto& k : gpu_checked_cases()) {
+    SCOPED_TRACE(k.name);
+    std::vector<float> dt_cpu, dt_gpu;
+    const auto cpu = run(k.c, 1, k.steps, nullptr, &dt_cpu);
+    const auto gpu = run(k.c, 1, k.steps, cuda_kernels(k.c.dim), &dt_gpu);
+    const ScaledDifference d = scaled_difference(k.c, cpu, gpu);
+    EXPECT_LE(d.worst, gpu::kGpuCpuScaledTolerance) << d.field;
+    ASSERT_EQ(dt_cpu.size(), dt_gpu.size());
+    for (std::size_t n = 0; n < dt_cpu.size(); ++n) EXPECT_NEAR(dt_gpu[n], dt_cpu[n], gpu::kGpuCpuScaledTolerance * dt_cpu[n]);
   }
 }
 
 TEST(CudaBackend, ThreeSlabsGiveTheSameAnswerAsOneOnTheGpu) {
-  if (gpu::device_count() == 0) GTEST_SKIP() << "no CUDA device";
+  // Every checked case on three workers sharing GPU 0 (same-device links) against one worker: bit
+  // for bit, time steps included. Fewer steps than the CPU comparison: any difference is a bug.
+  if (no_gpu()) GTEST_SKIP() << why_no_gpu();
+  for (const auto& k : gpu_checked_cases()) {
+    SCOPED_TRACE(k.name);
+    const int steps = std::min(k.steps, 60);
+    std::vector<float> dt1, dt3;
+    const auto one = run(k.c, 1, steps, cuda_kernels(k.c.dim), &dt1), three = run(k.c, 3, steps, cuda_kernels(k.c.dim), &dt3);
+    EXPECT_EQ(dt1, dt3);
+    expect_same(one, three);
+  }
+  // Faces moved by the balancer hand particles over between GPU slabs.
   const Case c = small_dam_break();
-  auto make = [&] { return gpu::make_cuda_kernels(0, c.dim); };
-  const auto one = run(c, 1, 10, make), three = run(c, 3, 10, make);
-  for (std::size_t f = 0; f < one.size(); ++f) EXPECT_TRUE(one[f] == three[f]) << "checkpoint field " << f;
+  expect_same(run(c, 3, 12, cuda_kernels(c.dim)), run(c, 3, 12, cuda_kernels(c.dim), nullptr, 3));
+}
+
+TEST(CudaBackend, StagedHaloLinksGiveTheSameAnswerAndAreTaken) {
+  // SPATE_CUDA_HALO_LINK=staged sends every halo of one process through pinned host memory, the
+  // path that slabs on GPUs without peer access (or on other ranks) take; on one GPU every link is
+  // otherwise a same-device copy. Bit for bit the same, and the bytes show which path was taken.
+  if (no_gpu()) GTEST_SKIP() << why_no_gpu();
+  const Case c = small_dam_break();
+  const auto one = run(c, 1, 12, cuda_kernels(c.dim));
+  const gpu::HaloTraffic before = gpu::halo_traffic();
+  const auto peer = run(c, 3, 12, cuda_kernels(c.dim));
+  const gpu::HaloTraffic between = gpu::halo_traffic();
+  ::setenv("SPATE_CUDA_HALO_LINK", "staged", 1);
+  const auto staged = run(c, 3, 12, cuda_kernels(c.dim));
+  ::unsetenv("SPATE_CUDA_HALO_LINK");
+  const gpu::HaloTraffic after = gpu::halo_traffic();
+  expect_same(one, peer);
+  expect_same(one, staged);
+  EXPECT_GT(between.peer_bytes, before.peer_bytes);
+  EXPECT_EQ(between.staged_bytes, before.staged_bytes);
+  EXPECT_GT(after.staged_bytes, between.staged_bytes);
+  EXPECT_EQ(after.peer_bytes, between.peer_bytes);
+}
+
+TEST(CudaBackend, ANanTimeStepIsZeroWhereverThatParticleSits) {
+  // The CUB minimum over the particles' steps would keep or drop a NaN depending on where its
+  // reduction tree meets it; particle_time_step gives 0 instead, as on the CPU.
+  if (no_gpu()) GTEST_SKIP() << why_no_gpu();
+  const Case c = small_dam_break();
+  const PhysicsParams P = physics_params(c);
+  ParticleStore p = generate_particles(c);
+  auto kernels = gpu::make_cuda_kernels(0, c.dim);
+  std::size_t first_fluid = 0;
+  while (!P.is_fluid(p.material[first_fluid])) ++first_fluid;
+  kernels->resident()->upload(p);
+  const float healthy = kernels->min_time_step(p, P, TimeStepControl{});
+  EXPECT_EQ(healthy, cpu::min_time_step(p, P, TimeStepControl{}));
+  EXPECT_GT(healthy, 0.0f);
+  for (std::size_t i : {first_fluid, p.owned() / 2, p.owned() - 1}) {
+    if (!P.is_fluid(p.material[i])) continue;
+    ParticleStore q = p;
+    q.vel[0][i] = NAN;
+    kernels->resident()->upload(q);
+    EXPECT_EQ(kernels->min_time_step(q, P, TimeStepControl{}), 0.0f) << "NaN at " << i;
+  }
 }
 
 }  // namespace spate
+

@@ -46,7 +46,7 @@ void predict(ParticleStore& p, const PhysicsParams& P, float dt) {
   const bool continuity = P.density_mode == DensityMode::Continuity;
 #pragma omp parallel for schedule(static) if (n > kCheapGrain)
   for (std::int64_t i = 0; i < n; ++i) {
-    if (!is_fluid(p.kind[i])) continue;
+    if (!P.is_fluid(p.material[i])) continue;
     for (int k = 0; k < d; ++k) predict_component(p.pos[k][i], p.vel[k][i], p.acc_prev[k][i], dt);
     if (continuity) predict_density(p.density[i], p.density_rate_prev[i], dt);
   }
@@ -58,7 +58,7 @@ void correct(ParticleStore& p, const PhysicsParams& P, float dt) {
   const bool continuity = P.density_mode == DensityMode::Continuity;
 #pragma omp parallel for schedule(static) if (n > kCheapGrain)
   for (std::int64_t i = 0; i < n; ++i) {
-    if (!is_fluid(p.kind[i])) continue;
+    if (!P.is_fluid(p.material[i])) continue;
     for (int k = 0; k < d; ++k) spate::correct(p.vel[k][i], p.acc[k][i], p.acc_prev[k][i], dt);
     if (continuity) spate::correct(p.density[i], p.density_rate[i], p.density_rate_prev[i], dt);
   }
@@ -68,7 +68,7 @@ void equation_of_state(ParticleStore& p, const PhysicsParams& P) {
   const auto n = static_cast<std::int64_t>(p.size());
 #pragma omp parallel for schedule(static) if (n > kCheapGrain)
   for (std::int64_t i = 0; i < n; ++i)
-    if (is_fluid(p.kind[i])) p.pressure[i] = tait_pressure(p.density[i], P.rho0, P.tait_b);
+    if (P.is_fluid(p.material[i])) p.pressure[i] = tait_pressure(p.density[i], P.materials.of(p.material[i]));
 }
 
 void summation_density(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
@@ -101,7 +101,7 @@ template <int Dim>
 struct NeighbourBatch {
   // Candidates of the current cell.
   std::vector<float> x[Dim], v[Dim], rho, p, r2;
-  std::vector<std::uint8_t> kind;
+  std::vector<std::uint8_t> material;
   // Neighbours of the current particle: candidate numbers, then the pair terms per neighbour.
   std::vector<std::uint32_t> index;
   std::vector<NeighbourRecord> record;
@@ -111,11 +111,11 @@ struct NeighbourBatch {
     record.resize(n);
     for (int k = 0; k < Dim; ++k) x[k].resize(n), v[k].resize(n);
     rho.resize(n), p.resize(n), r2.resize(n), index.resize(n);
-    kind.resize(n);
+    material.resize(n);
   }
 };
 
-template <class Kernel, int Dim>
+template <class Kernel, int Dim, bool Gamma7>
 void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params, std::uint32_t first_cell,
                          std::uint32_t last_cell) {
   const PhysicsParams P = params;  // a local copy: the vectoriser must see that nothing aliases it
@@ -132,7 +132,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
       if (b == e) continue;
       bool any_fluid = false;
       for (std::uint32_t i = b; i < e; ++i) {
-        if (is_fluid(ps.kind[i])) {
+        if (P.is_fluid(ps.material[i])) {
           any_fluid = true;
           continue;
         }
@@ -148,28 +148,21 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
       float* cx[Dim];
       SPATE_UNROLL for (int k = 0; k < Dim; ++k) cx[k] = batch.x[k].data();
       float* cr2 = batch.r2.data();
-      std::uint8_t* ckind = batch.kind.data();
+      std::uint8_t* ckind = batch.material.data();
       std::uint32_t* index = batch.index.data();
       NeighbourRecord* record = batch.record.data();
       int m = 0;
       v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
         const int len = static_cast<int>(je - jb);
         SPATE_UNROLL for (int k = 0; k < Dim; ++k) std::copy_n(ps.pos[k].data() + jb, len, cx[k] + m);
-        std::copy_n(ps.kind.data() + jb, len, ckind + m);
-        for (int q = 0; q < len; ++q) {
-          float* f = record[m + q].f;
-          for (int k = 0; k < 3; ++k) {
-            f[kRecX + k] = k < Dim ? ps.pos[k][jb + q] : 0.0f;
-            f[kRecV + k] = k < Dim ? ps.vel[k][jb + q] : 0.0f;
-          }
-          f[kRecRho] = ps.density[jb + q];
-          f[kRecP] = ps.pressure[jb + q];
-        }
+        std::copy_n(ps.material.data() + jb, len, ckind + m);
+        for (int q = 0; q < len; ++q) fill_record<Dim>(ps, jb + q, record[m + q]);
         m += len;
       });
       for (std::uint32_t i = b; i < e; ++i) {
-        if (!is_fluid(ps.kind[i])) continue;
+        if (!P.is_fluid(ps.material[i])) continue;
         const ParticleState<Dim> si = load_state<Dim>(ps, i);
+        const FluidMaterial& M = P.materials.of(si.material);  // into the local P (a copy of M stops GCC vectorising)
         // 1. Squared distances, summed in the order of distance_squared() and dot().
         candidate_distances<Dim>(si.x, cx, candidates, cr2);
         // 2. In-support candidates, in order.
@@ -193,8 +186,8 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
             SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.x[k] = jf[kRecX + k][n], sj.v[k] = jf[kRecV + k][n];
             sj.rho = jf[kRecRho][n];
             sj.p = jf[kRecP][n];
-            sj.kind = jkind[n];
-            const FluidRates<Dim> t = fluid_pair_terms<Kernel, Dim>(P, si, sj);
+            sj.material = jkind[n];
+            const FluidRates<Dim> t = fluid_pair_terms<Kernel, Dim, Gamma7>(P, M, si, sj);
             SPATE_UNROLL for (int k = 0; k < Dim; ++k) tacc[k][n] = t.acc[k];
             tdrho[n] = t.density_rate;
           }
@@ -242,7 +235,7 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
     for (std::int64_t c = 0; c < cells; ++c) {
       const std::uint32_t b = v.start[c], e = v.start[c + 1];
       bool any_wall = false;
-      for (std::uint32_t i = b; i < e && !any_wall; ++i) any_wall = !is_fluid(ps.kind[i]);
+      for (std::uint32_t i = b; i < e && !any_wall; ++i) any_wall = !P.is_fluid(ps.material[i]);
       if (!any_wall) continue;
       int g[3];
       grid.global_coords(static_cast<std::uint32_t>(c), g);
@@ -254,7 +247,7 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
       v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
         for (std::uint32_t j = jb; j < je; ++j) {
           fluid[m] = j;
-          m += is_fluid(ps.kind[j]);
+          m += P.is_fluid(ps.material[j]);
         }
       });
       if (m + kSelectSlack > batch.capacity) batch.reserve(m + kSelectSlack);
@@ -272,7 +265,7 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
       gather(ps.density.data(), fluid.data(), m, crho);
       gather(ps.pressure.data(), fluid.data(), m, cp);
       for (std::uint32_t w = b; w < e; ++w) {
-        if (is_fluid(ps.kind[w])) continue;
+        if (P.is_fluid(ps.material[w])) continue;
         const Vec<Dim> xw = load_vec<Dim>(ps.pos, w);
         candidate_distances<Dim>(xw, cx, m, cr2);
         const int count = select_inside(cr2, m, P.support2, index);
@@ -283,7 +276,7 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
           SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.x[k] = cx[k][q], sj.v[k] = cv[k][q];
           sj.rho = crho[q];
           sj.p = cp[q];
-          sj.kind = kFluid;
+          sj.material = 0;  // a fluid (the wall sums do not look at it)
           accumulate_wall_pair<Kernel, Dim>(P, xw, sj, sums);
         }
         const WallState<Dim> st = finish_wall(P, sums);
@@ -299,7 +292,9 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
 
 void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P, std::uint32_t first_cell,
                  std::uint32_t last_cell) {
-  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() { fluid_rates_batched<Kernel, Dim>(p, grid, P, first_cell, last_cell); });
+  dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7>() {
+    fluid_rates_batched<Kernel, Dim, Gamma7>(p, grid, P, first_cell, last_cell);
+  });
 }
 
 void wall_state(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
@@ -312,13 +307,13 @@ float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeSt
   const int d = P.dim;
 #pragma omp parallel for schedule(static) reduction(min : dt) if (n > kCheapGrain)
   for (std::int64_t i = 0; i < n; ++i) {
-    if (!is_fluid(p.kind[i])) continue;
+    if (!P.is_fluid(p.material[i])) continue;
     float v2 = 0.0f, a2 = 0.0f;
     for (int k = 0; k < d; ++k) {
       v2 += p.vel[k][i] * p.vel[k][i];
       a2 += p.acc[k][i] * p.acc[k][i];
     }
-    dt = std::min(dt, particle_time_step(P, c, std::sqrt(v2), std::sqrt(a2)));
+    dt = std::min(dt, particle_time_step(P, P.materials.of(p.material[i]), c, std::sqrt(v2), std::sqrt(a2)));
   }
   return std::min(dt, viscous_time_step(P, c));
 }

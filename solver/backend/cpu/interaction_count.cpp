@@ -18,12 +18,12 @@ InteractionCounts count_interactions(const ParticleStore& p, const CellGrid& gri
       int g[3];
       grid.global_coords(static_cast<std::uint32_t>(c), g);
       for (std::uint32_t i = v.start[c]; i < v.start[c + 1]; ++i) {
-        const bool i_fluid = is_fluid(p.kind[i]);
+        const bool i_fluid = P.is_fluid(p.material[i]);
         const Vec<Dim> xi = load_vec<Dim>(p.pos, i);
         std::int64_t inside = 0;
         v.for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
           for (std::uint32_t j = b; j < e; ++j)
-            inside += j != i && (i_fluid || is_fluid(p.kind[j])) && distance_squared<Dim>(xi, p.pos, j) < P.support2;
+            inside += j != i && (i_fluid || P.is_fluid(p.material[j])) && distance_squared<Dim>(xi, p.pos, j) < P.support2;
         });
         (i_fluid ? fluid : wall) += inside;
       }

@@ -6,6 +6,7 @@
 // never changes a result.
 #include <cstdint>
 
+#include "../../particles/particle_store.hpp"
 #include "../../physics/host_device.hpp"
 
 #if defined(__AVX512F__) || defined(__AVX2__)
@@ -77,14 +78,40 @@ void gather(const T* __restrict from, const std::uint32_t* __restrict index, int
   for (int n = 0; n < count; ++n) to[n] = from[index[n]];
 }
 
-// A candidate's fields for the fluid pair terms as one 32-byte record: position, velocity (3
-// components each, the unused third 0 in 2D), density, pressure. Copying one record per selected
-// neighbour (then transposing to the arrays the vectorised pair terms read) costs a fraction of
-// gathering eight separate arrays element by element.
+// A candidate's fields for the fluid pair terms as one 32-byte record: the registry's kNeighbour
+// fields (field_registry.hpp: position, velocity, density, pressure), vectors with 3 components
+// (the unused third 0 in 2D). Copying one record per selected neighbour (then transposing to the
+// arrays the vectorised pair terms read) costs a fraction of gathering eight separate arrays
+// element by element.
 struct alignas(32) NeighbourRecord {
   float f[8];
 };
-enum NeighbourField { kRecX = 0, kRecV = 3, kRecRho = 6, kRecP = 7 };
+constexpr int kRecX = neighbour_record_offset(kField_pos);
+constexpr int kRecV = neighbour_record_offset(kField_vel);
+constexpr int kRecRho = neighbour_record_offset(kField_density);
+constexpr int kRecP = neighbour_record_offset(kField_pressure);
+
+namespace detail {
+template <int Dim>
+inline void to_record(const FieldVector<float>& v, std::size_t j, float* out) {
+  out[0] = v[j];
+}
+template <int Dim>
+inline void to_record(const FieldVector<float> (&v)[3], std::size_t j, float* out) {
+  SPATE_UNROLL for (int k = 0; k < 3; ++k) out[k] = k < Dim ? v[k][j] : 0.0f;
+}
+template <int Dim, class T>
+inline void to_record(const T&, std::size_t, float*) {}  // never called: only float fields are packed
+}  // namespace detail
+
+// The record of particle j: every kNeighbour field at its registry offset.
+template <int Dim>
+inline void fill_record(const ParticleStore& ps, std::size_t j, NeighbourRecord& r) {
+#define SPATE_RECORD_FIELD(member, ...) \
+  if constexpr (kParticleFields[kField_##member].has(kNeighbour)) detail::to_record<Dim>(ps.member, j, r.f + neighbour_record_offset(kField_##member));
+  SPATE_PARTICLE_FIELDS(SPATE_RECORD_FIELD)
+#undef SPATE_RECORD_FIELD
+}
 
 // out[f][n] = records[index[n]].f[f] for n in [0, count), f in [0, 8).
 inline void gather_records(const NeighbourRecord* __restrict records, const std::uint32_t* __restrict index, int count,

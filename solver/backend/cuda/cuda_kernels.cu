@@ -35,23 +35,23 @@ __device__ void cell_coords(const Lattice& L, const DeviceFields& d, std::uint32
 
 __device__ std::uint32_t thread_index() { return blockIdx.x * blockDim.x + threadIdx.x; }
 
-__global__ void predict_kernel(DeviceFields d, int dim, std::uint32_t n, float dt, bool continuity) {
+__global__ void predict_kernel(DeviceFields d, int dim, std::uint32_t n, float dt, bool continuity, std::uint8_t fluids) {
   const std::uint32_t i = thread_index();
-  if (i >= n || !is_fluid(d.kind[i])) return;
+  if (i >= n || d.material[i] >= fluids) return;
   for (int k = 0; k < dim; ++k) predict_component(d.pos[k][i], d.vel[k][i], d.acc_prev[k][i], dt);
   if (continuity) predict_density(d.density[i], d.density_rate_prev[i], dt);
 }
 
-__global__ void correct_kernel(DeviceFields d, int dim, std::uint32_t n, float dt, bool continuity) {
+__global__ void correct_kernel(DeviceFields d, int dim, std::uint32_t n, float dt, bool continuity, std::uint8_t fluids) {
   const std::uint32_t i = thread_index();
-  if (i >= n || !is_fluid(d.kind[i])) return;
+  if (i >= n || d.material[i] >= fluids) return;
   for (int k = 0; k < dim; ++k) correct(d.vel[k][i], d.acc[k][i], d.acc_prev[k][i], dt);
   if (continuity) correct(d.density[i], d.density_rate[i], d.density_rate_prev[i], dt);
 }
 
 __global__ void eos_kernel(DeviceFields d, std::uint32_t n, PhysicsParams P) {
   const std::uint32_t i = thread_index();
-  if (i < n && is_fluid(d.kind[i])) d.pressure[i] = tait_pressure(d.density[i], P.rho0, P.tait_b);
+  if (i < n && P.is_fluid(d.material[i])) d.pressure[i] = tait_pressure(d.density[i], P.materials.of(d.material[i]));
 }
 
 // One thread per owned particle running one of the shared per-particle bodies
@@ -68,10 +68,11 @@ struct WallStatePass {
     update_wall_state<Kernel, Dim>(P, v, d, i, g);
   }
 };
+template <bool Gamma7>
 struct FluidRatesPass {
   template <class Kernel, int Dim>
   __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
-    update_fluid_rates<Kernel, Dim>(P, v, d, i, g);
+    update_fluid_rates<Kernel, Dim, Gamma7>(P, v, d, i, g);
   }
 };
 
@@ -90,7 +91,7 @@ __global__ void neighbour_kernel(DeviceFields d, std::uint32_t first, std::uint3
 __global__ void time_step_kernel(DeviceFields d, int dim, std::uint32_t n, PhysicsParams P, TimeStepControl c, float* out) {
   const std::uint32_t i = thread_index();
   if (i >= n) return;
-  if (!is_fluid(d.kind[i])) {
+  if (!P.is_fluid(d.material[i])) {
     out[i] = INFINITY;
     return;
   }
@@ -99,7 +100,7 @@ __global__ void time_step_kernel(DeviceFields d, int dim, std::uint32_t n, Physi
     v2 += d.vel[k][i] * d.vel[k][i];
     a2 += d.acc[k][i] * d.acc[k][i];
   }
-  out[i] = particle_time_step(P, c, sqrtf(v2), sqrtf(a2));
+  out[i] = particle_time_step(P, P.materials.of(d.material[i]), c, sqrtf(v2), sqrtf(a2));
 }
 
 // The physics loops over the resident DeviceSlabArrays, on its compute stream. Kernels are queued
@@ -115,11 +116,13 @@ class CudaKernels final : public StepKernels {
   void predict(ParticleStore&, const PhysicsParams& P, float dt) override {
     arrays_.select();
     arrays_.swap_rates();
-    launch(owned(), predict_kernel, arrays_.fields(), arrays_.dim(), owned32(), dt, P.density_mode == DensityMode::Continuity);
+    launch(owned(), predict_kernel, arrays_.fields(), arrays_.dim(), owned32(), dt, P.density_mode == DensityMode::Continuity,
+           P.materials.fluids);
   }
   void correct(ParticleStore&, const PhysicsParams& P, float dt) override {
     arrays_.select();
-    launch(owned(), correct_kernel, arrays_.fields(), arrays_.dim(), owned32(), dt, P.density_mode == DensityMode::Continuity);
+    launch(owned(), correct_kernel, arrays_.fields(), arrays_.dim(), owned32(), dt, P.density_mode == DensityMode::Continuity,
+           P.materials.fluids);
   }
   void equation_of_state(ParticleStore&, const PhysicsParams& P) override {
     arrays_.select();
@@ -132,7 +135,8 @@ class CudaKernels final : public StepKernels {
     neighbour_pass<WallStatePass>(P, ParticleRange{0, owned()});
   }
   void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
-    neighbour_pass<FluidRatesPass>(P, range);
+    if (all_fluids_gamma7(P)) neighbour_pass<FluidRatesPass<true>>(P, range);
+    else neighbour_pass<FluidRatesPass<false>>(P, range);
   }
   float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
     arrays_.select();

@@ -9,6 +9,7 @@
 #include <cub/device/device_reduce.cuh>
 #include <cub/device/device_scan.cuh>
 
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -23,32 +24,32 @@ void check(cudaError_t e, const char* what) {
   if (e != cudaSuccess) throw std::runtime_error(std::string("CUDA: ") + what + ": " + cudaGetErrorString(e));
 }
 
+namespace {
+DeviceMemory device_alloc(std::size_t bytes) {
+  void* p = nullptr;
+  check(cudaMalloc(&p, bytes), "cudaMalloc");
+  return DeviceMemory(static_cast<char*>(p));
+}
+}  // namespace
+
 void DeviceBuffer::reserve(std::size_t n, cudaStream_t in_use) {
   if (n <= bytes) return;
-  const std::size_t grown = grown_capacity(n, bytes);
-  check(cudaStreamSynchronize(in_use), "buffer growth");  // nothing may still read the old one
-  cudaFree(data);
-  data = nullptr;
-  check(cudaMalloc(&data, grown), "cudaMalloc(buffer)");
-  bytes = grown;
+  check(cudaStreamSynchronize(in_use), "buffer growth");  // nothing may still read the old block
+  reserve_discarding(n, device_alloc);
 }
-void DeviceBuffer::release() {
-  cudaFree(data);
-  data = nullptr;
-  bytes = 0;
+void StreamOrderedBuffer::reserve(std::size_t n, cudaStream_t stream) {
+  reserve_discarding(n, [stream](std::size_t b) {
+    void* p = nullptr;
+    check(cudaMallocAsync(&p, b, stream), "cudaMallocAsync");
+    return StreamOrderedMemory(static_cast<char*>(p), StreamOrderedFree{stream});
+  });
 }
 void PinnedBuffer::reserve(std::size_t n) {
-  if (n <= bytes) return;
-  const std::size_t grown = grown_capacity(n, bytes);
-  cudaFreeHost(data);
-  data = nullptr;
-  check(cudaMallocHost(&data, grown), "cudaMallocHost");
-  bytes = grown;
-}
-void PinnedBuffer::release() {
-  cudaFreeHost(data);
-  data = nullptr;
-  bytes = 0;
+  reserve_discarding(n, [](std::size_t b) {
+    void* p = nullptr;
+    check(cudaMallocHost(&p, b), "cudaMallocHost");
+    return PinnedMemory(static_cast<char*>(p));
+  });
 }
 
 namespace {
@@ -107,9 +108,9 @@ __global__ void table_kernel(const std::uint32_t* keys, std::uint32_t n, std::ui
   table[b] = lo;
 }
 
-__global__ void shift_kernel(float* x, std::uint32_t n, float offset) {
+__global__ void shift_kernel(float* x, std::uint32_t n, Shift shift) {
   const std::uint32_t k = thread_index();
-  if (k < n) x[k] += offset;
+  if (k < n) x[k] = shift.apply(x[k]);
 }
 
 __global__ void scatter_kernel(const float* src, const std::uint32_t* slots, float* dst, std::uint32_t n) {
@@ -164,12 +165,18 @@ __global__ void position_fault_kernel(DeviceFields d, Lattice L, std::uint32_t n
   out[i] = bad ? d.id[i] : kNone;
 }
 
+// Per particle: its id if it is not below `bound`, else kNoFault.
+__global__ void id_not_below_kernel(const std::uint32_t* id, std::uint32_t bound, std::uint32_t n, std::uint32_t* out) {
+  const std::uint32_t i = thread_index();
+  if (i < n) out[i] = id[i] >= bound ? id[i] : kNone;
+}
+
 __global__ void health_kernel(DeviceFields d, int dim, HealthLimits h, std::uint32_t n, std::uint32_t* out) {
   const std::uint32_t i = thread_index();
   if (i >= n) return;
   float x[3] = {0, 0, 0}, v[3] = {0, 0, 0};
   for (int a = 0; a < dim; ++a) x[a] = d.pos[a][i], v[a] = d.vel[a][i];
-  const bool ok = !is_fluid(d.kind[i]) || healthy(h, state_finite(dim, x, v, d.density[i]), d.density[i]);
+  const bool ok = !h.checked(d.material[i]) || healthy(h, state_finite(dim, x, v, d.density[i]), d.density[i], d.material[i]);
   out[i] = ok ? kNone : d.id[i];
 }
 
@@ -183,118 +190,117 @@ constexpr bool kCudaAwareMpi = true;
 constexpr bool kCudaAwareMpi = false;
 #endif
 
-DeviceSlabArrays::DeviceSlabArrays(int device, int dim) : device_(device), dim_(dim), halo_(kCudaAwareMpi) {
+DeviceSlabArrays::DeviceSlabArrays(int device, int dim)
+    : device_(device), dim_(dim), halo_(kCudaAwareMpi, staged_links_forced(std::getenv("SPATE_CUDA_HALO_LINK"))) {
+  // Every resource goes into an owning member as soon as it exists: a failure further down
+  // releases what was made (the destructor does not run for a constructor that throws).
   select();
-  check(cudaStreamCreateWithFlags(&compute_, cudaStreamNonBlocking), "cudaStreamCreate(compute)");
-  check(cudaStreamCreateWithFlags(&copy_, cudaStreamNonBlocking), "cudaStreamCreate(copy)");
-  check(cudaEventCreateWithFlags(&staged_, cudaEventDisableTiming), "cudaEventCreate");
-  check(cudaEventCreateWithFlags(&consumed_, cudaEventDisableTiming), "cudaEventCreate");
-  check(cudaEventRecord(consumed_, compute_), "cudaEventRecord");
-  check(cudaMalloc(&result_, 2 * sizeof(std::uint32_t)), "cudaMalloc(result)");
+  cudaStream_t s = nullptr;
+  check(cudaStreamCreateWithFlags(&s, cudaStreamNonBlocking), "cudaStreamCreate(compute)");
+  compute_.reset(s);
+  check(cudaStreamCreateWithFlags(&s, cudaStreamNonBlocking), "cudaStreamCreate(copy)");
+  copy_.reset(s);
+  cudaEvent_t e = nullptr;
+  check(cudaEventCreateWithFlags(&e, cudaEventDisableTiming), "cudaEventCreate");
+  staged_.reset(e);
+  check(cudaEventCreateWithFlags(&e, cudaEventDisableTiming), "cudaEventCreate");
+  consumed_.reset(e);
+  check(cudaEventRecord(consumed_.get(), compute_.get()), "cudaEventRecord");
+  result_ = device_alloc(2 * sizeof(std::uint32_t));
   result_host_.reserve(64);
   ParticleStore layout(dim);
   for (auto& f : layout.fields()) arrays_.push_back({f, nullptr});
-  static constexpr std::string_view pos[3] = {"x", "y", "z"}, vel[3] = {"vx", "vy", "vz"}, acc[3] = {"ax", "ay", "az"},
-                                    prev[3] = {"ax_prev", "ay_prev", "az_prev"};
-  for (int k = 0; k < dim; ++k) {
-    pos_[k] = field(pos[k]);
-    vel_[k] = field(vel[k]);
-    acc_[k] = field(acc[k]);
-    acc_prev_[k] = field(prev[k]);
-  }
-  density_ = field("density");
-  pressure_ = field("pressure");
-  rate_ = field("density_rate");
-  rate_prev_ = field("density_rate_prev");
-  id_ = field("id");
-  kind_ = field("kind");
 }
 
+// The members free the memory and then the events and streams; first nothing may still run.
 DeviceSlabArrays::~DeviceSlabArrays() {
   cudaSetDevice(device_);
-  cudaStreamSynchronize(compute_);
-  cudaStreamSynchronize(copy_);
-  for (auto& a : arrays_) cudaFree(a.data);
-  for (DeviceBuffer* b : {&keys_, &sort_keys_[0], &sort_keys_[1], &sort_values_[0], &sort_values_[1], &scratch_, &cub_, &table_,
-                          &hops_, &outbox_[0], &outbox_[1], &inbox_[0], &inbox_[1], &slots_[0], &slots_[1]})
-    b->release();
-  for (auto& b : image_source_) b.release();
-  for (auto& b : image_target_) b.release();
-  for (auto& b : pinned_) b.release();
-  for (PinnedBuffer* b : {&mirror_, &result_host_}) b->release();
-  cudaFree(result_);
-  cudaEventDestroy(staged_);
-  cudaEventDestroy(consumed_);
-  cudaStreamDestroy(compute_);
-  cudaStreamDestroy(copy_);
+  cudaStreamSynchronize(compute_.get());
+  cudaStreamSynchronize(copy_.get());
 }
 
 void DeviceSlabArrays::select() const { check(cudaSetDevice(device_), "cudaSetDevice"); }
 
-int DeviceSlabArrays::field(std::string_view name) const {
+int DeviceSlabArrays::index_of(int field, int component) const {
   for (std::size_t f = 0; f < arrays_.size(); ++f)
-    if (arrays_[f].meta.name == name) return static_cast<int>(f);
-  throw std::logic_error("DeviceSlabArrays: the host store has no field " + std::string(name));
+    if (arrays_[f].meta.spec == &kParticleFields[field] && arrays_[f].meta.component == component) return static_cast<int>(f);
+  throw std::logic_error("DeviceSlabArrays: no array for component " + std::to_string(component) + " of field " +
+                         std::string(kParticleFields[field].member));
 }
 
+namespace {
+// Binds a DeviceFields member to the next array(s) of ParticleStore::fields() order.
+template <class T>
+void bind(T*& p, const char* const* data, std::size_t& at, int) {
+  p = reinterpret_cast<T*>(const_cast<char*>(data[at++]));
+}
+template <class T>
+void bind(T* (&p)[3], const char* const* data, std::size_t& at, int dim) {
+  for (int k = 0; k < 3; ++k) p[k] = k < dim ? reinterpret_cast<T*>(const_cast<char*>(data[at++])) : nullptr;
+}
+}  // namespace
+
+// The registry's fields come first in arrays_, in registry order, dim components per vector
+// (ParticleStore::fields()); run-time extensions follow and have no DeviceFields member.
 DeviceFields DeviceSlabArrays::fields() const {
+  std::vector<const char*> data(arrays_.size());
+  for (std::size_t f = 0; f < arrays_.size(); ++f) data[f] = arrays_[f].data.get();
   DeviceFields d{};
-  auto f32 = [&](int f) { return reinterpret_cast<float*>(arrays_[f].data); };
-  for (int k = 0; k < dim_; ++k) {
-    d.pos[k] = f32(pos_[k]);
-    d.vel[k] = f32(vel_[k]);
-    d.acc[k] = f32(acc_[k]);
-    d.acc_prev[k] = f32(acc_prev_[k]);
-  }
-  d.density = f32(density_);
-  d.pressure = f32(pressure_);
-  d.density_rate = f32(rate_);
-  d.density_rate_prev = f32(rate_prev_);
-  d.id = reinterpret_cast<const std::uint32_t*>(arrays_[id_].data);
-  d.kind = reinterpret_cast<const std::uint8_t*>(arrays_[kind_].data);
+  std::size_t at = 0;
+#define SPATE_BIND_FIELD(member, ...) bind(d.member, data.data(), at, dim_);
+  SPATE_PARTICLE_FIELDS(SPATE_BIND_FIELD)
+#undef SPATE_BIND_FIELD
   return d;
 }
 
 void DeviceSlabArrays::swap_rates() {
-  for (int k = 0; k < dim_; ++k) std::swap(arrays_[acc_[k]].data, arrays_[acc_prev_[k]].data);
-  std::swap(arrays_[rate_].data, arrays_[rate_prev_].data);
+  for (int k = 0; k < dim_; ++k) std::swap(arrays_[index_of(kField_acc, k)].data, arrays_[index_of(kField_acc_prev, k)].data);
+  std::swap(arrays_[index_of(kField_density_rate, 0)].data, arrays_[index_of(kField_density_rate_prev, 0)].data);
 }
 
 // Grows every per-slot array, keeping the fields and keys of [0, size_); the sort buffers and the
-// scratch word are rewritten by every use.
+// scratch word are rewritten by every use. The buffers that keep nothing go first; then the
+// fields and keys all or nothing (grow_all_or_nothing): a failed allocation leaves the slab as it
+// was, with its old capacity.
 void DeviceSlabArrays::reserve(std::size_t n) {
   const std::size_t cap = grown_capacity(n, capacity_);
   if (cap == capacity_) return;
-  check(cudaStreamSynchronize(compute_), "growth");
-  auto grow = [&](char*& data, std::size_t elem) {
-    char* fresh = nullptr;
-    check(cudaMalloc(&fresh, cap * elem), "cudaMalloc(particles)");
-    if (data && size_ > 0) check(cudaMemcpyAsync(fresh, data, size_ * elem, cudaMemcpyDeviceToDevice, compute_), "grow");
-    check(cudaStreamSynchronize(compute_), "grow");
-    cudaFree(data);
-    data = fresh;
-  };
-  for (auto& a : arrays_) grow(a.data, a.meta.elem_size);
-  keys_.bytes = capacity_ * sizeof(std::uint32_t);
-  grow(keys_.data, sizeof(std::uint32_t));
-  keys_.bytes = cap * sizeof(std::uint32_t);
-  for (auto& b : sort_keys_) b.reserve(cap * sizeof(std::uint64_t), compute_);
-  for (auto& b : sort_values_) b.reserve(cap * sizeof(std::uint32_t), compute_);
-  scratch_.reserve(cap * sizeof(std::uint32_t), compute_);
+  for (auto& b : sort_keys_) b.reserve(cap * sizeof(std::uint64_t), compute_.get());
+  for (auto& b : sort_values_) b.reserve(cap * sizeof(std::uint32_t), compute_.get());
+  scratch_.reserve(cap * sizeof(std::uint32_t), compute_.get());
+  std::vector<DeviceMemory*> blocks;
+  std::vector<std::size_t> bytes, keep;
+  for (auto& a : arrays_) {
+    blocks.push_back(&a.data);
+    bytes.push_back(cap * a.meta.elem_size);
+    keep.push_back(size_ * a.meta.elem_size);
+  }
+  blocks.push_back(&keys_);
+  bytes.push_back(cap * sizeof(std::uint32_t));
+  keep.push_back(size_ * sizeof(std::uint32_t));
+  check(cudaStreamSynchronize(compute_.get()), "growth");
+  grow_all_or_nothing<DeviceMemory>(
+      blocks, bytes, keep, device_alloc,
+      [&](char* to, const char* from, std::size_t b) {
+        check(cudaMemcpyAsync(to, from, b, cudaMemcpyDeviceToDevice, compute_.get()), "grow");
+      },
+      [&] { check(cudaStreamSynchronize(compute_.get()), "grow"); });
   capacity_ = cap;
 }
 
 void* DeviceSlabArrays::cub_scratch(std::size_t bytes) {
-  cub_.reserve(bytes, compute_);
-  return cub_.data;
+  cub_.reserve(bytes, compute_.get());
+  return cub_.data();
 }
 
 std::size_t DeviceSlabArrays::bytes() const {
   std::size_t b = 0;
   for (auto& a : arrays_) b += capacity_ * a.meta.elem_size;
-  for (const DeviceBuffer* x : {&keys_, &sort_keys_[0], &sort_keys_[1], &sort_values_[0], &sort_values_[1], &scratch_, &cub_, &table_,
-                                &hops_, &outbox_[0], &outbox_[1], &inbox_[0], &inbox_[1], &slots_[0], &slots_[1]})
+  b += capacity_ * sizeof(std::uint32_t);  // keys
+  for (const DeviceBuffer* x : {&sort_keys_[0], &sort_keys_[1], &sort_values_[0], &sort_values_[1], &scratch_, &cub_, &table_, &hops_,
+                                &outbox_[0], &outbox_[1], &slots_[0], &slots_[1]})
     b += x->bytes;
+  for (auto& x : inbox_) b += x.bytes;
   for (auto& x : image_source_) b += x.bytes;
   for (auto& x : image_target_) b += x.bytes;
   return b;
@@ -303,31 +309,43 @@ std::size_t DeviceSlabArrays::bytes() const {
 std::uint32_t DeviceSlabArrays::min_u32(const std::uint32_t* in, std::size_t n) {
   if (n == 0) return kNoFault;
   std::size_t bytes = 0;
-  check(cub::DeviceReduce::Min(nullptr, bytes, in, result_, static_cast<int>(n), compute_), "cub::DeviceReduce::Min");
-  check(cub::DeviceReduce::Min(cub_scratch(bytes), bytes, in, result_, static_cast<int>(n), compute_), "cub::DeviceReduce::Min");
-  check(cudaMemcpyAsync(result_host_.data, result_, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_), "copy minimum");
-  check(cudaStreamSynchronize(compute_), "minimum");
+  check(cub::DeviceReduce::Min(nullptr, bytes, in, result(), static_cast<int>(n), compute_.get()), "cub::DeviceReduce::Min");
+  check(cub::DeviceReduce::Min(cub_scratch(bytes), bytes, in, result(), static_cast<int>(n), compute_.get()), "cub::DeviceReduce::Min");
+  check(cudaMemcpyAsync(result_host_.data(), result(), sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_.get()), "copy minimum");
+  check(cudaStreamSynchronize(compute_.get()), "minimum");
   std::uint32_t v;
-  std::memcpy(&v, result_host_.data, sizeof v);
+  std::memcpy(&v, result_host_.data(), sizeof v);
   return v;
 }
 
 float DeviceSlabArrays::min_f32(const float* in, std::size_t n) {
-  float* out = reinterpret_cast<float*>(result_);
+  float* out = reinterpret_cast<float*>(result());
   std::size_t bytes = 0;
-  check(cub::DeviceReduce::Min(nullptr, bytes, in, out, static_cast<int>(n), compute_), "cub::DeviceReduce::Min");
-  check(cub::DeviceReduce::Min(cub_scratch(bytes), bytes, in, out, static_cast<int>(n), compute_), "cub::DeviceReduce::Min");
-  check(cudaMemcpyAsync(result_host_.data, out, sizeof(float), cudaMemcpyDeviceToHost, compute_), "copy minimum");
-  check(cudaStreamSynchronize(compute_), "minimum");
+  check(cub::DeviceReduce::Min(nullptr, bytes, in, out, static_cast<int>(n), compute_.get()), "cub::DeviceReduce::Min");
+  check(cub::DeviceReduce::Min(cub_scratch(bytes), bytes, in, out, static_cast<int>(n), compute_.get()), "cub::DeviceReduce::Min");
+  check(cudaMemcpyAsync(result_host_.data(), out, sizeof(float), cudaMemcpyDeviceToHost, compute_.get()), "copy minimum");
+  check(cudaStreamSynchronize(compute_.get()), "minimum");
   float v;
-  std::memcpy(&v, result_host_.data, sizeof v);
+  std::memcpy(&v, result_host_.data(), sizeof v);
   return v;
 }
 
 // ---- host copies --------------------------------------------------------------------------------
 
+void DeviceSlabArrays::set_id_bound(std::uint32_t bound) {
+  select();
+  if (size_ > 0) {  // the particles already here must fit the new bound too
+    launch(compute_.get(), size_, id_not_below_kernel, static_cast<const std::uint32_t*>(fields().id), bound, u32(size_),
+           scratch_.as<std::uint32_t>());
+    const std::uint32_t lowest = min_u32(scratch_.as<const std::uint32_t>(), size_);
+    if (lowest != kNoFault) throw_id_not_below(lowest, bound);
+  }
+  id_bound_ = bound;
+}
+
 void DeviceSlabArrays::upload(const ParticleStore& host) {
   select();
+  require_ids_below(host.id, id_bound_);  // ids enter the device only here; they never change
   auto& p = const_cast<ParticleStore&>(host);
   auto refs = p.fields();
   reserve(p.size());
@@ -340,41 +358,45 @@ void DeviceSlabArrays::upload(const ParticleStore& host) {
   for (std::size_t f = 0; f < refs.size(); ++f) {
     const std::size_t b = size_ * refs[f].elem_size;
     if (b == 0) continue;
-    std::memcpy(mirror_.data + at, refs[f].bytes(), b);
-    check(cudaMemcpyAsync(arrays_[f].data, mirror_.data + at, b, cudaMemcpyHostToDevice, compute_), "upload particles");
+    std::memcpy(mirror_.data() + at, refs[f].bytes(), b);
+    check(cudaMemcpyAsync(arrays_[f].data.get(), mirror_.data() + at, b, cudaMemcpyHostToDevice, compute_.get()), "upload particles");
     at += b;
   }
-  check(cudaStreamSynchronize(compute_), "upload");
+  check(cudaStreamSynchronize(compute_.get()), "upload");
 }
 
 // The pinned mirror: every copy queued at once on the copy stream after the compute stream's work,
 // one wait, then into the host store.
 void DeviceSlabArrays::download(ParticleStore& host, CellGrid& grid) {
   select();
+  if (host.dim() != dim_) throw std::logic_error("DeviceSlabArrays::download: a store of another dimension");
+  // The host grid's part of the table of the last build_table; `grid` must still have its
+  // geometry (checked before anything is copied).
+  const std::size_t cells = table_entries_ > 0 ? view_.cell_count() + 1 : 0;
+  if (cells > 0) grid.require_geometry(view_, cells);
   host.resize(size_);
   host.set_owned(owned_);
   auto refs = host.fields();
-  const std::size_t cells = table_entries_ > 0 ? view_.cell_count() + 1 : 0;
   std::size_t total = cells * sizeof(std::uint32_t);
   for (auto& r : refs) total += (in_set(r, FieldSet::Ghost) ? size_ : owned_) * r.elem_size;
   mirror_.reserve(total);
-  check(cudaEventRecord(staged_, compute_), "cudaEventRecord");
-  check(cudaStreamWaitEvent(copy_, staged_, 0), "cudaStreamWaitEvent");
+  check(cudaEventRecord(staged_.get(), compute_.get()), "cudaEventRecord");
+  check(cudaStreamWaitEvent(copy_.get(), staged_.get(), 0), "cudaStreamWaitEvent");
   std::size_t at = 0;
   std::vector<std::size_t> offset(refs.size());
   for (std::size_t f = 0; f < refs.size(); ++f) {
     offset[f] = at;
     const std::size_t b = (in_set(refs[f], FieldSet::Ghost) ? size_ : owned_) * refs[f].elem_size;
-    if (b > 0) check(cudaMemcpyAsync(mirror_.data + at, arrays_[f].data, b, cudaMemcpyDeviceToHost, copy_), "download particles");
+    if (b > 0) check(cudaMemcpyAsync(mirror_.data() + at, arrays_[f].data.get(), b, cudaMemcpyDeviceToHost, copy_.get()), "download particles");
     at += b;
   }
-  if (cells > 0) check(cudaMemcpyAsync(mirror_.data + at, table_.data, cells * sizeof(std::uint32_t), cudaMemcpyDeviceToHost, copy_), "download table");
-  check(cudaStreamSynchronize(copy_), "download");
+  if (cells > 0) check(cudaMemcpyAsync(mirror_.data() + at, table_.data(), cells * sizeof(std::uint32_t), cudaMemcpyDeviceToHost, copy_.get()), "download table");
+  check(cudaStreamSynchronize(copy_.get()), "download");
   for (std::size_t f = 0; f < refs.size(); ++f) {
     const std::size_t b = (in_set(refs[f], FieldSet::Ghost) ? size_ : owned_) * refs[f].elem_size;
-    if (b > 0) std::memcpy(refs[f].bytes(), mirror_.data + offset[f], b);
+    if (b > 0) std::memcpy(refs[f].bytes(), mirror_.data() + offset[f], b);
   }
-  if (cells > 0) grid.assign_starts(reinterpret_cast<const std::uint32_t*>(mirror_.data + at));
+  if (cells > 0) grid.assign_starts(view_, std::span(reinterpret_cast<const std::uint32_t*>(mirror_.data() + at), cells));
 }
 
 // ---- keys, sort, table --------------------------------------------------------------------------
@@ -386,9 +408,9 @@ void DeviceSlabArrays::truncate(std::size_t n) {
 
 void DeviceSlabArrays::set_migration_hops(const std::vector<std::int8_t>& hops) {
   select();
-  hops_.reserve(hops.size(), compute_);
-  check(cudaMemcpyAsync(hops_.data, hops.data(), hops.size(), cudaMemcpyHostToDevice, compute_), "upload hops");
-  check(cudaStreamSynchronize(compute_), "upload hops");  // `hops` is pageable and may go away
+  hops_.reserve(hops.size(), compute_.get());
+  check(cudaMemcpyAsync(hops_.data(), hops.data(), hops.size(), cudaMemcpyHostToDevice, compute_.get()), "upload hops");
+  check(cudaStreamSynchronize(compute_.get()), "upload hops");  // `hops` is pageable and may go away
 }
 
 void DeviceSlabArrays::compute_keys(const CellGrid& geometry, std::size_t first, std::size_t last, bool migrating) {
@@ -398,7 +420,7 @@ void DeviceSlabArrays::compute_keys(const CellGrid& geometry, std::size_t first,
   lattice_ = geometry.lattice();
   key_count_ = KeyBins{g.cell_count()}.count();
   const DeviceFields d = fields();
-  launch(compute_, last - first, key_kernel, keys_.as<std::uint32_t>(), d.pos[0], dim_ >= 2 ? d.pos[1] : nullptr,
+  launch(compute_.get(), last - first, key_kernel, keys(), d.pos[0], dim_ >= 2 ? d.pos[1] : nullptr,
          dim_ >= 3 ? d.pos[2] : nullptr, g, lattice_, migrating ? hops_.as<const std::int8_t>() : nullptr, u32(first),
          u32(last - first));
 }
@@ -410,40 +432,40 @@ void DeviceSlabArrays::sort_by_key(std::size_t first, std::size_t last) {
   sort_count_ = n;
   if (n == 0) return;
   const SortWord word = sort_word(key_count_, id_bound_);
-  launch(compute_, n, compose_kernel, keys_.as<const std::uint32_t>(), reinterpret_cast<const std::uint32_t*>(arrays_[id_].data),
+  launch(compute_.get(), n, compose_kernel, static_cast<const std::uint32_t*>(keys()), static_cast<const std::uint32_t*>(fields().id),
          word.id_bits, sort_keys_[0].as<std::uint64_t>(), sort_values_[0].as<std::uint32_t>(), u32(first), u32(n));
   cub::DoubleBuffer<std::uint64_t> words(sort_keys_[0].as<std::uint64_t>(), sort_keys_[1].as<std::uint64_t>());
   cub::DoubleBuffer<std::uint32_t> perm(sort_values_[0].as<std::uint32_t>(), sort_values_[1].as<std::uint32_t>());
   const int end_bit = word.end_bit;
   std::size_t bytes = 0;
-  check(cub::DeviceRadixSort::SortPairs(nullptr, bytes, words, perm, static_cast<int>(n), 0, end_bit, compute_), "cub::DeviceRadixSort");
-  check(cub::DeviceRadixSort::SortPairs(cub_scratch(bytes), bytes, words, perm, static_cast<int>(n), 0, end_bit, compute_),
+  check(cub::DeviceRadixSort::SortPairs(nullptr, bytes, words, perm, static_cast<int>(n), 0, end_bit, compute_.get()), "cub::DeviceRadixSort");
+  check(cub::DeviceRadixSort::SortPairs(cub_scratch(bytes), bytes, words, perm, static_cast<int>(n), 0, end_bit, compute_.get()),
         "cub::DeviceRadixSort");
   sorted_values_ = perm.selector;
   // Every field follows the permutation: gathered into the scratch word, copied back.
   for (auto& a : arrays_) {
-    char* at = a.data + first * a.meta.elem_size;
+    char* at = a.data.get() + first * a.meta.elem_size;
     if (a.meta.elem_size == 4)
-      launch(compute_, n, gather_kernel<std::uint32_t>, reinterpret_cast<const std::uint32_t*>(at), perm.Current(),
+      launch(compute_.get(), n, gather_kernel<std::uint32_t>, reinterpret_cast<const std::uint32_t*>(at), perm.Current(),
              scratch_.as<std::uint32_t>(), u32(n));
     else if (a.meta.elem_size == 1)
-      launch(compute_, n, gather_kernel<std::uint8_t>, reinterpret_cast<const std::uint8_t*>(at), perm.Current(),
+      launch(compute_.get(), n, gather_kernel<std::uint8_t>, reinterpret_cast<const std::uint8_t*>(at), perm.Current(),
              scratch_.as<std::uint8_t>(), u32(n));
     else
       throw std::logic_error("DeviceSlabArrays: fields are 4 or 1 bytes wide");
-    check(cudaMemcpyAsync(at, scratch_.data, n * a.meta.elem_size, cudaMemcpyDeviceToDevice, compute_), "permute");
+    check(cudaMemcpyAsync(at, scratch_.data(), n * a.meta.elem_size, cudaMemcpyDeviceToDevice, compute_.get()), "permute");
   }
-  launch(compute_, n, key_of_word_kernel, static_cast<const std::uint64_t*>(words.Current()), word.id_bits,
-         keys_.as<std::uint32_t>() + first, u32(n));
+  launch(compute_.get(), n, key_of_word_kernel, static_cast<const std::uint64_t*>(words.Current()), word.id_bits,
+         keys() + first, u32(n));
 }
 
 void DeviceSlabArrays::build_table(const CellGrid& geometry) {
   select();
   view_ = geometry.view();
   lattice_ = geometry.lattice();
-  const std::uint32_t entries = KeyBins{view_.cell_count()}.count() + 1;
-  table_.reserve(entries * sizeof(std::uint32_t), compute_);
-  launch(compute_, entries, table_kernel, keys_.as<const std::uint32_t>(), u32(size_), table_.as<std::uint32_t>(), entries);
+  const std::uint32_t entries = KeyBins{view_.cell_count()}.table_entries();
+  table_.reserve(entries * sizeof(std::uint32_t), compute_.get());
+  launch(compute_.get(), entries, table_kernel, static_cast<const std::uint32_t*>(keys()), u32(size_), table_.as<std::uint32_t>(), entries);
   view_.start = table_.as<const std::uint32_t>();
   table_entries_ = entries;
 }
@@ -456,11 +478,11 @@ std::vector<std::uint32_t> DeviceSlabArrays::table_entries(const TableRead& read
     throw std::logic_error("DeviceSlabArrays: table read past the end");
   result_host_.reserve(read.count * sizeof(std::uint32_t));
   // A strided read of the table: one 4-byte column of a pitched 2D copy.
-  check(cudaMemcpy2DAsync(result_host_.data, sizeof(std::uint32_t), table_.as<std::uint32_t>() + read.first,
-                          read.stride * sizeof(std::uint32_t), sizeof(std::uint32_t), read.count, cudaMemcpyDeviceToHost, compute_),
+  check(cudaMemcpy2DAsync(result_host_.data(), sizeof(std::uint32_t), table_.as<std::uint32_t>() + read.first,
+                          read.stride * sizeof(std::uint32_t), sizeof(std::uint32_t), read.count, cudaMemcpyDeviceToHost, compute_.get()),
         "read table");
-  check(cudaStreamSynchronize(compute_), "read table");
-  std::memcpy(out.data(), result_host_.data, read.count * sizeof(std::uint32_t));
+  check(cudaStreamSynchronize(compute_.get()), "read table");
+  std::memcpy(out.data(), result_host_.data(), read.count * sizeof(std::uint32_t));
   return out;
 }
 
@@ -471,16 +493,23 @@ void DeviceSlabArrays::gather_fields(FieldSet set, const std::uint32_t* from, st
   for (std::size_t f = 0; f < arrays_.size(); ++f) {
     Array& a = arrays_[f];
     if (!in_set(a.meta, set)) continue;
-    char* dst = a.data + to * a.meta.elem_size;
+    char* dst = a.data.get() + to * a.meta.elem_size;
     if (a.meta.elem_size == 4)
-      launch(compute_, count, gather_kernel<std::uint32_t>, reinterpret_cast<const std::uint32_t*>(a.data), from,
+      launch(compute_.get(), count, gather_kernel<std::uint32_t>, reinterpret_cast<const std::uint32_t*>(a.data.get()), from,
              reinterpret_cast<std::uint32_t*>(dst), u32(count));
     else
-      launch(compute_, count, gather_kernel<std::uint8_t>, reinterpret_cast<const std::uint8_t*>(a.data), from,
+      launch(compute_.get(), count, gather_kernel<std::uint8_t>, reinterpret_cast<const std::uint8_t*>(a.data.get()), from,
              reinterpret_cast<std::uint8_t*>(dst), u32(count));
-    if (shift.axis >= 0 && static_cast<int>(f) == pos_[shift.axis])
-      launch(compute_, count, shift_kernel, reinterpret_cast<float*>(dst), u32(count), shift.offset);
+    if (shift.axis >= 0 && a.meta.spec == &kParticleFields[kField_pos] && a.meta.component == shift.axis)
+      launch(compute_.get(), count, shift_kernel, reinterpret_cast<float*>(dst), u32(count), shift);
   }
+}
+
+void DeviceSlabArrays::zero_fields_outside(FieldSet set, std::size_t first, std::size_t count) {
+  if (count == 0) return;
+  for (auto& a : arrays_)
+    if (!in_set(a.meta, set))
+      check(cudaMemsetAsync(a.data.get() + first * a.meta.elem_size, 0, count * a.meta.elem_size, compute_.get()), "zero fields");
 }
 
 void DeviceSlabArrays::stage(Side side, FieldSet set, ParticleRange range, Shift shift) {
@@ -488,21 +517,21 @@ void DeviceSlabArrays::stage(Side side, FieldSet set, ParticleRange range, Shift
   std::size_t bytes = 0;
   for (auto& a : arrays_)
     if (in_set(a.meta, set)) bytes += range.count * a.meta.elem_size;
-  outbox_[side].reserve(bytes, compute_);
+  outbox_[side].reserve(bytes, compute_.get());
   std::size_t at = 0;
   for (std::size_t f = 0; f < arrays_.size(); ++f) {
     const Array& a = arrays_[f];
     if (!in_set(a.meta, set) || range.count == 0) continue;
     const std::size_t b = range.count * a.meta.elem_size;
-    check(cudaMemcpyAsync(outbox_[side].data + at, a.data + range.first * a.meta.elem_size, b, cudaMemcpyDeviceToDevice, compute_),
+    check(cudaMemcpyAsync(outbox_[side].data() + at, a.data.get() + range.first * a.meta.elem_size, b, cudaMemcpyDeviceToDevice, compute_.get()),
           "stage");
-    if (shift.axis >= 0 && static_cast<int>(f) == pos_[shift.axis])
-      launch(compute_, range.count, shift_kernel, reinterpret_cast<float*>(outbox_[side].data + at), u32(range.count), shift.offset);
+    if (shift.axis >= 0 && a.meta.spec == &kParticleFields[kField_pos] && a.meta.component == shift.axis)
+      launch(compute_.get(), range.count, shift_kernel, reinterpret_cast<float*>(outbox_[side].data() + at), u32(range.count), shift);
     at += b;
   }
   out_count_[side] = range.count;
   out_bytes_[side] = bytes;
-  check(cudaEventRecord(staged_, compute_), "cudaEventRecord(staged)");
+  check(cudaEventRecord(staged_.get(), compute_.get()), "cudaEventRecord(staged)");
 }
 
 // The protocol is HaloExchange's (halo_exchange.cpp, tested on the CPU); these are its copies,
@@ -510,8 +539,8 @@ void DeviceSlabArrays::stage(Side side, FieldSet set, ParticleRange range, Shift
 // staging (the interior of the fluid loop) while the payload travels.
 std::array<std::size_t, 2> DeviceSlabArrays::exchange(SlabTransport& t, FieldSet) {
   select();
-  const std::array<Outgoing, 2> out{Outgoing{outbox_[kLeft].data, out_count_[kLeft], out_bytes_[kLeft]},
-                                    Outgoing{outbox_[kRight].data, out_count_[kRight], out_bytes_[kRight]}};
+  const std::array<Outgoing, 2> out{Outgoing{outbox_[kLeft].data(), out_count_[kLeft], out_bytes_[kLeft]},
+                                    Outgoing{outbox_[kRight].data(), out_count_[kRight], out_bytes_[kRight]}};
   in_count_ = halo_.exchange(t, *this, out);
   return in_count_;
 }
@@ -523,26 +552,32 @@ bool DeviceSlabArrays::peer_both_ways(int other) {
   else check(e, "cudaDeviceEnablePeerAccess");
   return true;
 }
-void DeviceSlabArrays::wait_staged() { check(cudaEventSynchronize(staged_), "halo: outgoing buffers"); }
+void DeviceSlabArrays::wait_staged() { check(cudaEventSynchronize(staged_.get()), "halo: outgoing buffers"); }
 void DeviceSlabArrays::copy_to_host(void* host, const void* device, std::size_t bytes) {
-  check(cudaMemcpyAsync(host, device, bytes, cudaMemcpyDeviceToHost, copy_), "halo D2H");
+  check(cudaMemcpyAsync(host, device, bytes, cudaMemcpyDeviceToHost, copy_.get()), "halo D2H");
 }
 void DeviceSlabArrays::copy_from_host(void* device, const void* host, std::size_t bytes) {
-  check(cudaMemcpyAsync(device, host, bytes, cudaMemcpyHostToDevice, copy_), "halo H2D");
+  check(cudaMemcpyAsync(device, host, bytes, cudaMemcpyHostToDevice, copy_.get()), "halo H2D");
 }
 void DeviceSlabArrays::copy_peer(void* device, const void* their_device, int their_device_index, std::size_t bytes) {
-  check(cudaMemcpyPeerAsync(device, device_, their_device, their_device_index, bytes, copy_), "cudaMemcpyPeerAsync");
+  check(cudaMemcpyPeerAsync(device, device_, their_device, their_device_index, bytes, copy_.get()), "cudaMemcpyPeerAsync");
 }
-void DeviceSlabArrays::after_incoming_read() { check(cudaStreamWaitEvent(copy_, consumed_, 0), "cudaStreamWaitEvent(consumed)"); }
-void DeviceSlabArrays::wait_incoming_read() { check(cudaEventSynchronize(consumed_), "halo: incoming buffers read"); }
-void DeviceSlabArrays::wait_copies() { check(cudaStreamSynchronize(copy_), "halo copies"); }
+void DeviceSlabArrays::after_incoming_read() { check(cudaStreamWaitEvent(copy_.get(), consumed_.get(), 0), "cudaStreamWaitEvent(consumed)"); }
+// The copy stream waits for the readers of the incoming buffers (after_incoming_read) and holds
+// their growth (incoming()): once it is idle, MPI may write them.
+void DeviceSlabArrays::wait_incoming_read() { check(cudaStreamSynchronize(copy_.get()), "halo: incoming buffers read"); }
+void DeviceSlabArrays::wait_copies() { check(cudaStreamSynchronize(copy_.get()), "halo copies"); }
+// HaloExchange asks for the incoming buffers after after_incoming_read(): the copy stream already
+// waits for the kernels that read the old blocks, so a block that must grow is freed and its
+// successor allocated in the copy stream's order. Neither the host nor the compute stream (which
+// may be running the interior of the fluid loop) waits.
 void* DeviceSlabArrays::incoming(Side side, std::size_t bytes) {
-  inbox_[side].reserve(bytes, compute_);
-  return inbox_[side].data;
+  inbox_[side].reserve(bytes, copy_.get());
+  return inbox_[side].data();
 }
 void* DeviceSlabArrays::pinned(int which, std::size_t bytes) {
   pinned_[which].reserve(bytes);
-  return pinned_[which].data;
+  return pinned_[which].data();
 }
 
 void DeviceSlabArrays::append_received(Side side, FieldSet set) {
@@ -554,11 +589,12 @@ void DeviceSlabArrays::append_received(Side side, FieldSet set) {
   for (auto& a : arrays_) {
     if (!in_set(a.meta, set)) continue;
     const std::size_t b = n * a.meta.elem_size;
-    check(cudaMemcpyAsync(a.data + size_ * a.meta.elem_size, inbox_[side].data + at, b, cudaMemcpyDeviceToDevice, compute_), "append");
+    check(cudaMemcpyAsync(a.data.get() + size_ * a.meta.elem_size, inbox_[side].data() + at, b, cudaMemcpyDeviceToDevice, compute_.get()), "append");
     at += b;
   }
+  zero_fields_outside(set, size_, n);
   size_ += n;
-  check(cudaEventRecord(consumed_, compute_), "cudaEventRecord(consumed)");
+  check(cudaEventRecord(consumed_.get(), compute_.get()), "cudaEventRecord(consumed)");
 }
 
 void DeviceSlabArrays::scatter_received(Side side) {
@@ -568,11 +604,11 @@ void DeviceSlabArrays::scatter_received(Side side) {
   std::size_t at = 0;
   for (auto& a : arrays_) {
     if (!in_set(a.meta, FieldSet::Refresh)) continue;
-    launch(compute_, n, scatter_kernel, reinterpret_cast<const float*>(inbox_[side].data + at), slots_[side].as<const std::uint32_t>(),
-           reinterpret_cast<float*>(a.data), u32(n));
+    launch(compute_.get(), n, scatter_kernel, reinterpret_cast<const float*>(inbox_[side].data() + at), slots_[side].as<const std::uint32_t>(),
+           reinterpret_cast<float*>(a.data.get()), u32(n));
     at += n * a.meta.elem_size;
   }
-  check(cudaEventRecord(consumed_, compute_), "cudaEventRecord(consumed)");
+  check(cudaEventRecord(consumed_.get(), compute_.get()), "cudaEventRecord(consumed)");
 }
 
 // ---- periodic images ----------------------------------------------------------------------------
@@ -586,8 +622,8 @@ void DeviceSlabArrays::make_images(const CellGrid& geometry, int axis) {
   select();
   const std::size_t n = size_;  // images of the particles that exist before this axis
   if (n == 0) return;
-  image_source_[axis].reserve(2 * n * sizeof(std::uint32_t), compute_);
-  image_target_[axis].reserve(2 * n * sizeof(std::uint32_t), compute_);
+  image_source_[axis].reserve(2 * n * sizeof(std::uint32_t), compute_.get());
+  image_target_[axis].reserve(2 * n * sizeof(std::uint32_t), compute_.get());
   for (const bool local : {true, false}) {
     for (const int layer : {0, geometry.lattice().cells[axis] - 1}) append_images(geometry, axis, layer, local, n);
     if (local) local_images_[axis] = images_[axis];
@@ -601,24 +637,24 @@ void DeviceSlabArrays::append_images(const CellGrid& geometry, int axis, int lay
   const Lattice& L = geometry.lattice();
   std::uint32_t* flags = sort_values_[0].as<std::uint32_t>();
   std::uint32_t* prefix = sort_values_[1].as<std::uint32_t>();
-  launch(compute_, n, layer_flag_kernel, static_cast<const float*>(fields().pos[0]), static_cast<const float*>(fields().pos[axis]), L,
+  launch(compute_.get(), n, layer_flag_kernel, static_cast<const float*>(fields().pos[0]), static_cast<const float*>(fields().pos[axis]), L,
          axis, layer, geometry.owned_lo(), geometry.owned_hi(), local, flags, u32(n));
   std::size_t bytes = 0;
-  check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, flags, prefix, static_cast<int>(n), compute_), "cub::DeviceScan");
-  check(cub::DeviceScan::ExclusiveSum(cub_scratch(bytes), bytes, flags, prefix, static_cast<int>(n), compute_), "cub::DeviceScan");
+  check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, flags, prefix, static_cast<int>(n), compute_.get()), "cub::DeviceScan");
+  check(cub::DeviceScan::ExclusiveSum(cub_scratch(bytes), bytes, flags, prefix, static_cast<int>(n), compute_.get()), "cub::DeviceScan");
   std::uint32_t* list = image_source_[axis].as<std::uint32_t>() + images_[axis];
-  launch(compute_, n, compact_kernel, static_cast<const std::uint32_t*>(flags), static_cast<const std::uint32_t*>(prefix), list, u32(n));
-  check(cudaMemcpyAsync(result_host_.data, prefix + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_), "image count");
-  check(cudaMemcpyAsync(result_host_.data + 4, flags + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_), "image count");
-  check(cudaStreamSynchronize(compute_), "image count");
+  launch(compute_.get(), n, compact_kernel, static_cast<const std::uint32_t*>(flags), static_cast<const std::uint32_t*>(prefix), list, u32(n));
+  check(cudaMemcpyAsync(result_host_.data(), prefix + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_.get()), "image count");
+  check(cudaMemcpyAsync(result_host_.data() + 4, flags + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_.get()), "image count");
+  check(cudaStreamSynchronize(compute_.get()), "image count");
   std::uint32_t last_prefix, last_flag;
-  std::memcpy(&last_prefix, result_host_.data, 4);
-  std::memcpy(&last_flag, result_host_.data + 4, 4);
+  std::memcpy(&last_prefix, result_host_.data(), 4);
+  std::memcpy(&last_flag, result_host_.data() + 4, 4);
   const std::size_t count = last_prefix + last_flag;
   reserve(size_ + count);
-  const float offset = layer == 0 ? L.period[axis] : -L.period[axis];
-  gather_fields(FieldSet::Ghost, list, count, size_, Shift{axis, offset});
-  launch(compute_, count, iota_kernel, image_target_[axis].as<std::uint32_t>() + images_[axis], u32(size_), u32(count));
+  gather_fields(FieldSet::Ghost, list, count, size_, periodic_shift(L, axis, layer == 0));
+  zero_fields_outside(FieldSet::Ghost, size_, count);
+  launch(compute_.get(), count, iota_kernel, image_target_[axis].as<std::uint32_t>() + images_[axis], u32(size_), u32(count));
   size_ += count;
   images_[axis] += count;
 }
@@ -629,19 +665,19 @@ void DeviceSlabArrays::record_halo_slots(std::size_t left, std::size_t right) {
   if (sort_first_ != owned_ || sort_count_ != n) throw std::logic_error("DeviceSlabArrays: record_halo_slots must follow the ghost sort");
   const std::uint32_t* perm = sort_values_[sorted_values_].as<const std::uint32_t>();
   std::uint32_t* slot_of = sort_values_[1 - sorted_values_].as<std::uint32_t>();
-  launch(compute_, n, inverse_kernel, perm, slot_of, u32(owned_), u32(n));
+  launch(compute_.get(), n, inverse_kernel, perm, slot_of, u32(owned_), u32(n));
   const std::size_t count[2] = {left, right}, from[2] = {0, left};
   for (Side side : {kLeft, kRight}) {
-    slots_[side].reserve(count[side] * sizeof(std::uint32_t), compute_);
+    slots_[side].reserve(count[side] * sizeof(std::uint32_t), compute_.get());
     if (count[side] > 0)
-      check(cudaMemcpyAsync(slots_[side].data, slot_of + from[side], count[side] * sizeof(std::uint32_t), cudaMemcpyDeviceToDevice, compute_),
+      check(cudaMemcpyAsync(slots_[side].data(), slot_of + from[side], count[side] * sizeof(std::uint32_t), cudaMemcpyDeviceToDevice, compute_.get()),
             "halo slots");
     slot_count_[side] = count[side];
   }
   for (int axis = 0; axis < 3; ++axis) {
-    launch(compute_, images_[axis], map_slots_kernel, image_source_[axis].as<std::uint32_t>(), static_cast<const std::uint32_t*>(slot_of),
+    launch(compute_.get(), images_[axis], map_slots_kernel, image_source_[axis].as<std::uint32_t>(), static_cast<const std::uint32_t*>(slot_of),
            u32(owned_), u32(images_[axis]));
-    launch(compute_, images_[axis], map_slots_kernel, image_target_[axis].as<std::uint32_t>(), static_cast<const std::uint32_t*>(slot_of),
+    launch(compute_.get(), images_[axis], map_slots_kernel, image_target_[axis].as<std::uint32_t>(), static_cast<const std::uint32_t*>(slot_of),
            u32(owned_), u32(images_[axis]));
   }
 }
@@ -654,7 +690,7 @@ void DeviceSlabArrays::refresh_images(ImagePart part) {
     const std::size_t count = part == ImagePart::Local ? local_images_[axis] : images_[axis] - local_images_[axis];
     for (auto& a : arrays_)
       if (in_set(a.meta, FieldSet::Refresh))
-        launch(compute_, count, copy_within_kernel, reinterpret_cast<float*>(a.data),
+        launch(compute_.get(), count, copy_within_kernel, reinterpret_cast<float*>(a.data.get()),
                image_source_[axis].as<const std::uint32_t>() + first, image_target_[axis].as<const std::uint32_t>() + first, u32(count));
   }
 }
@@ -663,14 +699,16 @@ void DeviceSlabArrays::refresh_images(ImagePart part) {
 
 std::uint32_t DeviceSlabArrays::wrap_and_find_position_fault(const Lattice& L) {
   select();
-  launch(compute_, owned_, position_fault_kernel, fields(), L, u32(owned_), scratch_.as<std::uint32_t>());
+  launch(compute_.get(), owned_, position_fault_kernel, fields(), L, u32(owned_), scratch_.as<std::uint32_t>());
   return min_u32(scratch_.as<const std::uint32_t>(), owned_);
 }
 
 std::uint32_t DeviceSlabArrays::find_unhealthy(const HealthLimits& limits) {
   select();
-  launch(compute_, owned_, health_kernel, fields(), dim_, limits, u32(owned_), scratch_.as<std::uint32_t>());
+  launch(compute_.get(), owned_, health_kernel, fields(), dim_, limits, u32(owned_), scratch_.as<std::uint32_t>());
   return min_u32(scratch_.as<const std::uint32_t>(), owned_);
 }
+
+std::unique_ptr<SlabArrays> make_device_arrays(int device, int dim) { return std::make_unique<DeviceSlabArrays>(device, dim); }
 
 }  // namespace spate::gpu

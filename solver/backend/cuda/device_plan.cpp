@@ -25,11 +25,9 @@ std::size_t grown_capacity(std::size_t needed, std::size_t current) {
 }
 
 DeviceFootprint device_footprint(int dim) {
-  const std::size_t d = static_cast<std::size_t>(dim);
   DeviceFootprint f;
-  // pos, vel, acc, acc_prev: dim floats each; density, pressure, density_rate, density_rate_prev;
-  // id (uint32) and kind (uint8). The same list as ParticleStore::fields().
-  f.field_bytes = 4 * d * sizeof(float) + 4 * sizeof(float) + sizeof(std::uint32_t) + sizeof(std::uint8_t);
+  // Every field of the registry (field_registry.hpp), as the device holds ParticleStore::fields().
+  for (const FieldRef& r : ParticleStore(dim).fields()) f.field_bytes += r.elem_size;
   // key (4), two 64-bit (key, id) words (16), two permutation entries (8): cub::DoubleBuffer.
   f.sort_bytes = sizeof(std::uint32_t) + 2 * sizeof(std::uint64_t) + 2 * sizeof(std::uint32_t);
   f.scratch_bytes = sizeof(float);

@@ -11,6 +11,10 @@
 
 namespace spate::gpu {
 
+namespace {
+[[maybe_unused]] constexpr const char* kNotBuilt = "no CUDA device: this spate was built without CUDA (SPATE_ENABLE_CUDA=OFF or no nvcc)";
+}  // namespace
+
 #if defined(SPATE_WITH_CUDA)
 
 bool built_with_cuda() { return true; }
@@ -48,14 +52,17 @@ int device_count() { return 0; }
 std::vector<DeviceInfo> devices() { return {}; }
 bool can_access_peer(int from, int to) { return from == to; }
 std::unique_ptr<StepKernels> make_cuda_kernels(int, int) {
-  throw std::runtime_error("no CUDA device: this spate was built without CUDA (SPATE_ENABLE_CUDA=OFF or no nvcc)");
+  throw std::runtime_error(kNotBuilt);
+}
+std::unique_ptr<SlabArrays> make_device_arrays(int, int) {
+  throw std::runtime_error(kNotBuilt);
 }
 
 #endif
 
 void require_device() {
   if (!built_with_cuda())
-    throw std::runtime_error("no CUDA device: this spate was built without CUDA (SPATE_ENABLE_CUDA=OFF or no nvcc)");
+    throw std::runtime_error(kNotBuilt);
   if (device_count() == 0) throw std::runtime_error("no CUDA device: " + no_device_reason(std::getenv("CUDA_VISIBLE_DEVICES")));
 }
 

@@ -28,5 +28,8 @@ void require_device();
 
 // The CUDA physics loops for one slab on device `device` (see cuda_kernels.cu).
 std::unique_ptr<StepKernels> make_cuda_kernels(int device, int dim);
+// The resident arrays alone (device_arrays.cu), for the tests that hold them against their host
+// twin, HostSlabArrays.
+std::unique_ptr<SlabArrays> make_device_arrays(int device, int dim);
 
 }  // namespace spate::gpu

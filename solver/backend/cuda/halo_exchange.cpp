@@ -1,23 +1,37 @@
 #include "halo_exchange.hpp"
 
+#include <atomic>
 #include <cstring>
 #include <stdexcept>
+#include <string>
 
 namespace spate::gpu {
 
 HaloLink choose_halo_link(bool has_neighbour, bool shares_memory, int mine, int theirs, bool peer_both_ways,
-                          bool cuda_aware_mpi) {
+                          bool cuda_aware_mpi, bool force_staged) {
   if (!has_neighbour) return HaloLink::None;
   if (!shares_memory) return cuda_aware_mpi ? HaloLink::DeviceMpi : HaloLink::Staged;
+  if (force_staged) return HaloLink::Staged;
   return mine == theirs || peer_both_ways ? HaloLink::Peer : HaloLink::Staged;
 }
 
+bool staged_links_forced(const char* env) {
+  const std::string v = env ? env : "";
+  if (v.empty() || v == "auto") return false;
+  if (v == "staged") return true;
+  throw std::invalid_argument("SPATE_CUDA_HALO_LINK='" + v + "': expected auto or staged");
+}
+
 namespace {
+std::atomic<std::uint64_t> peer_bytes{0}, staged_bytes{0}, device_mpi_bytes{0};
+
 struct Header {
   std::uint64_t count = 0, bytes = 0, address = 0;
   std::int32_t device = -1;
 };
 }  // namespace
+
+HaloTraffic halo_traffic() { return {peer_bytes.load(), staged_bytes.load(), device_mpi_bytes.load()}; }
 
 // Once, at the first exchange (every slab makes its first at the same point): the devices.
 void HaloExchange::discover(SlabTransport& t, DeviceCopies& copies) {
@@ -31,8 +45,8 @@ void HaloExchange::discover(SlabTransport& t, DeviceCopies& copies) {
     const bool shares = neighbour >= 0 && t.shares_memory_with(neighbour);
     std::int32_t theirs = -1;
     if (got[side].size() == sizeof theirs) std::memcpy(&theirs, got[side].data(), sizeof theirs);
-    const bool peer = shares && theirs != mine && theirs >= 0 && copies.peer_both_ways(theirs);
-    links_[side] = choose_halo_link(neighbour >= 0, shares, mine, theirs, peer, cuda_aware_mpi_);
+    const bool peer = shares && !force_staged_ && theirs != mine && theirs >= 0 && copies.peer_both_ways(theirs);
+    links_[side] = choose_halo_link(neighbour >= 0, shares, mine, theirs, peer, cuda_aware_mpi_, force_staged_);
   }
   known_ = true;
 }
@@ -66,17 +80,20 @@ std::array<std::size_t, 2> HaloExchange::exchange(SlabTransport& t, DeviceCopies
     switch (links_[side]) {
       case HaloLink::Peer:
         copies.copy_peer(in, reinterpret_cast<const void*>(h.address), h.device, h.bytes);
+        peer_bytes += h.bytes;
         break;
       case HaloLink::Staged: {
         if (got[side].size() != sizeof h + h.bytes) throw std::runtime_error("halo exchange: truncated payload");
         void* host = copies.pinned(2 + side, h.bytes);
         std::memcpy(host, got[side].data() + sizeof h, h.bytes);
         copies.copy_from_host(in, host, h.bytes);
+        staged_bytes += h.bytes;
         break;
       }
       case HaloLink::DeviceMpi:
         span[side].recv = in;
         span[side].recv_bytes = h.bytes;
+        device_mpi_bytes += h.bytes;
         break;
       case HaloLink::None:
         break;

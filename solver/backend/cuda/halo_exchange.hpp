@@ -23,9 +23,15 @@ enum class HaloLink { None, Peer, Staged, DeviceMpi };
 
 // The link of one neighbour pair, the same at both ends: peer when both slabs run in this process
 // and each device reaches the other (or they share a device); otherwise staged through host
-// memory, or device-to-device through CUDA-aware MPI when the build asks for it.
+// memory, or device-to-device through CUDA-aware MPI when the build asks for it. `force_staged`
+// stages the pairs of one process too (SPATE_CUDA_HALO_LINK=staged: the staged path on one GPU).
 HaloLink choose_halo_link(bool has_neighbour, bool shares_memory, int mine, int theirs, bool peer_both_ways,
-                          bool cuda_aware_mpi);
+                          bool cuda_aware_mpi, bool force_staged = false);
+
+// SPATE_CUDA_HALO_LINK: unset, empty or "auto" chooses as above, "staged" forces staged links
+// inside the process (to exercise that path where every link would be a same-device or peer
+// copy). Anything else: std::invalid_argument naming the variable.
+bool staged_links_forced(const char* env);
 
 // The device side of an exchange. Copies are queued (asynchronous) until wait_copies().
 class DeviceCopies {
@@ -49,6 +55,13 @@ class DeviceCopies {
   virtual void* pinned(int which, std::size_t bytes) = 0;
 };
 
+// Payload bytes received so far by every HaloExchange of this process, by link (a test or a check
+// can see which path the halos took).
+struct HaloTraffic {
+  std::uint64_t peer_bytes = 0, staged_bytes = 0, device_mpi_bytes = 0;
+};
+HaloTraffic halo_traffic();
+
 struct Outgoing {
   const void* device = nullptr;  // the staged fields, one block per field
   std::size_t count = 0, bytes = 0;
@@ -56,7 +69,8 @@ struct Outgoing {
 
 class HaloExchange {
  public:
-  explicit HaloExchange(bool cuda_aware_mpi = false) : cuda_aware_mpi_(cuda_aware_mpi) {}
+  explicit HaloExchange(bool cuda_aware_mpi = false, bool force_staged = false)
+      : cuda_aware_mpi_(cuda_aware_mpi), force_staged_(force_staged) {}
   // Collective with both neighbours. Returns the particle counts received from left and right,
   // in copies.incoming(side, ...).
   std::array<std::size_t, 2> exchange(SlabTransport& t, DeviceCopies& copies, const std::array<Outgoing, 2>& out);
@@ -64,7 +78,7 @@ class HaloExchange {
 
  private:
   void discover(SlabTransport& t, DeviceCopies& copies);
-  bool cuda_aware_mpi_;
+  bool cuda_aware_mpi_, force_staged_;
   bool known_ = false;
   std::array<HaloLink, 2> links_{HaloLink::None, HaloLink::None};
 };

@@ -1,0 +1,128 @@
+#pragma once
+// The registry of per-particle fields: every field a particle carries is declared once, in
+// SPATE_PARTICLE_FIELDS below, with what it is and where it travels. Everything else is derived
+// from that one line (after SPH-EXA's field-name tuples):
+//   - the host storage (ParticleStore members, particle_store.hpp) and its generic view fields(),
+//   - sorting and permutation, halo and migration packing (particle_pack.hpp, the slab arrays),
+//   - checkpoint datasets (io/checkpoint.cpp, with the names below and a format version),
+//   - snapshot and in-situ arrays (io/vtk_snapshot.cpp, sim/insitu.hpp, the Catalyst adaptor),
+//   - the CUDA device arrays and their pointer struct (backend/cuda/device_arrays.cuh), with a
+//     static_assert that host and device agree field by field,
+//   - the CPU neighbour record (the fields flagged kNeighbour, backend/cpu/neighbour_select.hpp),
+//   - bytes per particle (host and device).
+// docs/design.md ("Adding a particle field") shows the steps: one line here, then its physics.
+//
+// This header is plain constexpr data (no std::vector), so nvcc and the physics headers include it.
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+#include <type_traits>
+
+namespace spate {
+
+enum class FieldType : std::uint8_t { F32, U32, U8 };
+constexpr std::size_t field_type_size(FieldType t) { return t == FieldType::U8 ? 1 : 4; }
+// A scalar has one array; a vector one array per axis (dim of them; storage for 3).
+enum class FieldShape : std::uint8_t { Scalar, Vector };
+// What a field is to the time loop.
+enum class FieldRole : std::uint8_t {
+  State,    // evolves and defines the particle (position, velocity, density, id, material)
+  Rate,     // time derivatives computed each step (checkpointed: the integrator's next "previous")
+  History,  // the integrator's previous rates (swapped with the rates every step)
+  Derived,  // recomputed from the state every step before use (pressure from density)
+};
+
+// Where a field travels. Bit flags of FieldSpec::flags.
+enum FieldFlag : std::uint16_t {
+  kMigrated = 1 << 0,    // moves with an owned particle that changes slab (and gathers to the writer)
+  kCheckpointed = 1 << 1,  // part of the restartable state: one HDF5 dataset per component
+  kGhost = 1 << 2,       // copied to halo ghosts and periodic images (a neighbour needs it)
+  kRefreshed = 1 << 3,   // a ghost field that changes after the halo is built: sent again in refreshes
+  kExported = 1 << 4,    // written to snapshots and handed to in-situ pipelines (zero copy on the CPU)
+  kNeighbour = 1 << 5,   // packed into the CPU fluid pass's 32-byte neighbour record (floats only)
+};
+
+struct FieldSpec {
+  std::string_view member;  // C++ member of ParticleStore / DeviceFields
+  FieldType type;
+  FieldShape shape;
+  FieldRole role;
+  std::uint16_t flags;
+  std::string_view exported;     // array name in snapshots and in situ ("" when not exported)
+  std::string_view names[3];     // checkpoint dataset name of each component (scalars: names[0])
+  constexpr bool has(std::uint16_t f) const { return (flags & f) == f; }
+  constexpr int components(int dim) const { return shape == FieldShape::Vector ? dim : 1; }
+  constexpr std::size_t elem_size() const { return field_type_size(type); }
+};
+
+template <class T>
+constexpr FieldType field_type_of() {
+  static_assert(sizeof(T) == 1 || sizeof(T) == 4, "fields are 1 or 4 bytes wide (the sort's scratch word is 4 bytes)");
+  if constexpr (sizeof(T) == 1) return FieldType::U8;
+  else if constexpr (std::is_floating_point_v<T>) return FieldType::F32;
+  else return FieldType::U32;
+}
+
+// F(member, C++ type, shape, role, flags, exported name, dataset name(s) ...)
+// Order matters only for readability and the neighbour record layout (kNeighbour fields in this
+// order). Renaming a dataset is a checkpoint format change (kCheckpointFormatVersion, checkpoint.cpp).
+// clang-format off
+#define SPATE_PARTICLE_FIELDS(F)                                                                                       \
+  F(pos, float, Vector, State, kMigrated | kCheckpointed | kGhost | kExported | kNeighbour, "Points", "x", "y", "z")  \
+  F(vel, float, Vector, State, kMigrated | kCheckpointed | kGhost | kRefreshed | kExported | kNeighbour, "velocity",  \
+    "vx", "vy", "vz")                                                                                                  \
+  F(density, float, Scalar, State, kMigrated | kCheckpointed | kGhost | kRefreshed | kExported | kNeighbour,          \
+    "density", "density")                                                                                              \
+  F(pressure, float, Scalar, Derived, kMigrated | kGhost | kRefreshed | kExported | kNeighbour, "pressure", "pressure") \
+  F(id, std::uint32_t, Scalar, State, kMigrated | kCheckpointed | kGhost | kExported, "id", "id")                     \
+  F(material, std::uint8_t, Scalar, State, kMigrated | kCheckpointed | kGhost | kExported, "kind", "material")       \
+  F(acc, float, Vector, Rate, kMigrated | kCheckpointed, "", "ax", "ay", "az")                                        \
+  F(density_rate, float, Scalar, Rate, kMigrated | kCheckpointed, "", "density_rate")                                 \
+  F(acc_prev, float, Vector, History, kMigrated, "", "ax_prev", "ay_prev", "az_prev")                                 \
+  F(density_rate_prev, float, Scalar, History, kMigrated, "", "density_rate_prev")
+// clang-format on
+
+#define SPATE_FIELD_SPEC(member, ctype, shape, role, flags, exported, ...) \
+  FieldSpec{#member, field_type_of<ctype>(), FieldShape::shape, FieldRole::role, static_cast<std::uint16_t>(flags), exported, {__VA_ARGS__}},
+inline constexpr FieldSpec kParticleFields[] = {SPATE_PARTICLE_FIELDS(SPATE_FIELD_SPEC)};
+#undef SPATE_FIELD_SPEC
+
+// Field numbers in registry order: kField_pos, kField_vel, ...
+#define SPATE_FIELD_INDEX(member, ...) kField_##member,
+enum FieldIndex : int { SPATE_PARTICLE_FIELDS(SPATE_FIELD_INDEX) kBuiltinFieldCount };
+#undef SPATE_FIELD_INDEX
+
+// The CPU neighbour record: the kNeighbour fields in registry order, 3 floats per vector (the
+// third 0 in 2D), one 32-byte record per candidate (an 8 x 8 AVX2 transpose gathers 8 of them).
+constexpr int neighbour_record_offset(int field) {
+  int at = 0;
+  for (int f = 0; f < field; ++f)
+    if (kParticleFields[f].has(kNeighbour)) at += kParticleFields[f].shape == FieldShape::Vector ? 3 : 1;
+  return kParticleFields[field].has(kNeighbour) ? at : -1;
+}
+constexpr int neighbour_record_floats() {
+  int n = 0;
+  for (const FieldSpec& f : kParticleFields)
+    if (f.has(kNeighbour)) n += f.shape == FieldShape::Vector ? 3 : 1;
+  return n;
+}
+static_assert(neighbour_record_floats() <= 8, "the CPU neighbour record holds 8 floats (one 32-byte AVX2 row)");
+static_assert([] {
+  for (const FieldSpec& f : kParticleFields)
+    if (f.has(kNeighbour) && f.type != FieldType::F32) return false;
+  return true;
+}(), "only float fields can be packed into the neighbour record");
+static_assert([] {
+  for (const FieldSpec& f : kParticleFields)
+    if (f.has(kRefreshed) && !f.has(kGhost)) return false;
+  return true;
+}(), "a refreshed field must be a ghost field");
+
+// Bytes one particle's fields take (every field, dim components per vector).
+constexpr std::size_t builtin_field_bytes(int dim) {
+  std::size_t b = 0;
+  for (const FieldSpec& f : kParticleFields) b += static_cast<std::size_t>(f.components(dim)) * f.elem_size();
+  return b;
+}
+
+}  // namespace spate
