@@ -68,9 +68,12 @@ struct Case {
 
   std::vector<FluidSpec> fluids{FluidSpec{}};  // material k is fluids[k] (one today)
   double artificial_viscosity = 0.0;
+  bool tension = true;  // false: fluid pressures clipped at 0 (eos.hpp fluid_pressure)
   DensityMode density_mode = DensityMode::Continuity;
   DensityDiffusion diffusion = DensityDiffusion::Fourtakas;
   double delta = 0.1;
+  MomentumFlux flux = MomentumFlux::Central;
+  double riemann_limiter = 3.0;
   Vec3d gravity{0, 0, -9.81};
   Vec3d body_force{0, 0, 0};
 

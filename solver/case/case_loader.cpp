@@ -389,6 +389,7 @@ Case read(Section& root, const std::string& file) {
     c.artificial_viscosity = f.number("artificial_viscosity", 0.0);
     if (c.artificial_viscosity < 0) f.fail(f.raw("artificial_viscosity"), "artificial_viscosity", "must be >= 0");
     c.body_force = f.vector("body_force", d, Vec3d{0, 0, 0});
+    c.tension = f.boolean("tension", true);
     f.finish();
   }
   {
@@ -397,7 +398,8 @@ Case read(Section& root, const std::string& file) {
                                             {{"continuity", DensityMode::Continuity}, {"summation", DensityMode::Summation}});
     c.diffusion = s.choice<DensityDiffusion>(
         "diffusion", DensityDiffusion::Fourtakas,
-        {{"fourtakas", DensityDiffusion::Fourtakas}, {"molteni_colagrossi", DensityDiffusion::MolteniColagrossi}, {"none", DensityDiffusion::None}});
+        {{"fourtakas", DensityDiffusion::Fourtakas}, {"molteni_colagrossi", DensityDiffusion::MolteniColagrossi},
+         {"riemann", DensityDiffusion::Riemann}, {"none", DensityDiffusion::None}});
     c.delta = s.number("delta", 0.1);
     if (c.delta < 0 || c.delta > 1) s.fail(s.raw("delta"), "delta", "must be between 0 and 1");
     c.density_min_ratio = s.number("min_ratio", 0.5);
@@ -407,6 +409,13 @@ Case read(Section& root, const std::string& file) {
       s.fail(s.raw("min_ratio"), "min_ratio", "must be in [0, 1) (a fraction of the reference density)");
     if (!(c.density_max_ratio > 1)) s.fail(s.raw("max_ratio"), "max_ratio", "must be > 1 (a multiple of the reference density)");
     s.finish();
+  }
+  {
+    auto m = root.optional_child("momentum");
+    c.flux = m.choice<MomentumFlux>("flux", MomentumFlux::Central, {{"central", MomentumFlux::Central}, {"riemann", MomentumFlux::Riemann}});
+    c.riemann_limiter = m.number("riemann_limiter", 3.0);
+    if (!(c.riemann_limiter >= 0)) m.fail(m.raw("riemann_limiter"), "riemann_limiter", "must be >= 0");
+    m.finish();
   }
   if (auto t = root.child("time")) {
     c.end_time = t->number("end");
@@ -630,9 +639,12 @@ PhysicsParams physics_params(const Case& c) {
                                       static_cast<float>(f.density * std::pow(c.dp, c.dim)),
                                       static_cast<float>(f.background_pressure));
   }
+  P.tension = c.tension;
   P.artificial_viscosity = static_cast<float>(c.artificial_viscosity);
   P.delta = static_cast<float>(c.delta);
   P.diffusion = c.diffusion;
+  P.flux = c.flux;
+  P.riemann_limiter = static_cast<float>(c.riemann_limiter);
   P.density_mode = c.density_mode;
   for (int k = 0; k < 3; ++k) {
     P.gravity[k] = static_cast<float>(c.gravity[k]);

@@ -110,6 +110,8 @@ TEST(CaseLoader, MinimalCaseGetsDefaults) {
   EXPECT_DOUBLE_EQ(c.cfl, 0.2);
   EXPECT_EQ(c.density_mode, DensityMode::Continuity);
   EXPECT_EQ(c.diffusion, DensityDiffusion::Fourtakas);
+  EXPECT_EQ(c.flux, MomentumFlux::Central);
+  EXPECT_TRUE(c.tension);
   EXPECT_EQ(c.wall_layers, 3);
   EXPECT_TRUE(c.open_top);
   EXPECT_EQ(c.balance_every, 100);
@@ -123,6 +125,20 @@ TEST(CaseLoader, MinimalCaseGetsDefaults) {
   EXPECT_FLOAT_EQ(P.support2, 4.0f * 0.013f * 0.013f);
   EXPECT_FLOAT_EQ(P.materials.fluid[0].mass, 1000.0f * 0.01f * 0.01f);
   EXPECT_FLOAT_EQ(P.materials.fluid[0].tait_b, P.materials.fluid[0].c0 * P.materials.fluid[0].c0 * 1000.0f / 7.0f);
+}
+
+// The impact options of issue 11 (docs/physics.md, "Impact pressures").
+TEST(CaseLoader, RiemannAndTensionKeysAreRead) {
+  const Case c = parse_case(kMinimal2D, "tiny.yaml",
+                            {"density.diffusion=riemann", "momentum.flux=riemann", "momentum.riemann_limiter=2", "fluid.tension=false"});
+  EXPECT_EQ(c.diffusion, DensityDiffusion::Riemann);
+  EXPECT_EQ(c.flux, MomentumFlux::Riemann);
+  EXPECT_DOUBLE_EQ(c.riemann_limiter, 2.0);
+  EXPECT_FALSE(c.tension);
+  const PhysicsParams P = physics_params(c);
+  EXPECT_EQ(P.flux, MomentumFlux::Riemann);
+  EXPECT_FLOAT_EQ(P.riemann_limiter, 2.0f);
+  EXPECT_FALSE(P.tension);
 }
 
 TEST(CaseLoader, EveryKeyIsRead) {
@@ -245,6 +261,9 @@ TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
        {"probes[0].diameter", ">= 0"}},
       {"wall sensor with a negative window", {"probes=[{name: s, type: wall_pressure, position: [0, 0.02], window: -1}]"},
        {"probes[0].window", ">= 0"}},
+      {"unknown momentum flux", {"momentum.flux=upwind"}, {"'momentum.flux'", "central", "riemann"}},
+      {"negative Riemann limiter", {"momentum.riemann_limiter=-1"}, {"'momentum.riemann_limiter'", ">= 0"}},
+      {"tension not a boolean", {"fluid.tension=maybe"}, {"'fluid.tension'"}},
   };
   for (const BadCase& b : cases) {
     const std::string message = error_of(kMinimal2D, b.overrides);
