@@ -31,7 +31,7 @@ SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, 
         accumulate_fluid_pair<Kernel, Dim, Gamma7>(P, M, si, load_state<Dim>(f, j), rates);
     }
   });
-  add_body_forces(P, rates);
+  finish_fluid_rates(P, M, si, rates);
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = rates.acc[k];
   f.density_rate[i] = P.density_mode == DensityMode::Continuity ? rates.density_rate : 0.0f;
 }

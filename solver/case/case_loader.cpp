@@ -12,6 +12,7 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "case.hpp"
 
@@ -304,6 +305,76 @@ std::optional<std::string> file_name_problem(const std::string& name) {
 constexpr double kLargestCoordinateInDp = 1048576.0;
 constexpr double kLargestCoordinate = 1.0e7;  // metres
 
+// "x-" -> 0, "x+" -> 1, "y-" -> 2, ... (2 axis + side); -1 for anything else.
+int face_index(const std::string& name, int dim) {
+  if (name.size() != 2 || (name[1] != '-' && name[1] != '+')) return -1;
+  const int axis = name[0] == 'x' ? 0 : name[0] == 'y' ? 1 : name[0] == 'z' ? 2 : -1;
+  if (axis < 0 || axis >= dim) return -1;
+  return 2 * axis + (name[1] == '+' ? 1 : 0);
+}
+
+// A wall-pressure sensor sits on a face that fluid can touch: an interior face of the tank (not
+// along a periodic axis, not the open top) or a face of a solid box. Its normal points into the
+// fluid; given, it must be that face's normal; left out, the face must be unique (not an edge).
+void read_wall_sensor(Section& p, const Case& c, ProbeSpec& probe) {
+  const int d = c.dim;
+  probe.position = p.vector("position", d);
+  probe.diameter = p.number("diameter", 0.0);
+  if (probe.diameter < 0) p.fail(p.raw("diameter"), "diameter", "must be >= 0 (0: a point sensor)");
+  probe.window = p.number("window", 0.0);
+  if (probe.window < 0) p.fail(p.raw("window"), "window", "must be >= 0 seconds (0: no averaging)");
+  // Within half a particle spacing of a face: the tank's extents are rounded to whole dp, so its
+  // walls may sit up to dp/2 from where the case puts them (e.g. Buchner's tank, 5.366 H long). The
+  // sensor is moved onto the face the particles make.
+  const double tol = 0.5 * c.dp + 1e-9;
+  std::vector<std::pair<Vec3d, Vec3d>> found;  // (normal, position on the face) of every face it lies on
+  auto consider = [&](const Vec3d& lo, const Vec3d& hi, int axis, double plane, double into) {
+    if (std::fabs(probe.position[axis] - plane) > tol) return;
+    for (int k = 0; k < d; ++k)
+      if (k != axis && (probe.position[k] < lo[k] - 1e-9 || probe.position[k] > hi[k] + 1e-9)) return;
+    Vec3d n{0, 0, 0}, at = probe.position;
+    n[axis] = into;
+    at[axis] = plane;
+    found.emplace_back(n, at);
+  };
+  Vec3d tank_hi{0, 0, 0};
+  for (int k = 0; k < d; ++k) tank_hi[k] = c.tank_origin[k] + static_cast<double>(std::lround(c.tank_size[k] / c.dp)) * c.dp;
+  for (int a = 0; a < d; ++a) {
+    if (c.periodic[a]) continue;
+    consider(c.tank_origin, tank_hi, a, c.tank_origin[a], 1.0);
+    if (!(a == d - 1 && c.open_top)) consider(c.tank_origin, tank_hi, a, tank_hi[a], -1.0);
+  }
+  for (auto& s : c.solids)
+    for (int a = 0; a < d; ++a) {
+      consider(s.box.min, s.box.max, a, s.box.min[a], -1.0);
+      consider(s.box.min, s.box.max, a, s.box.max[a], 1.0);
+    }
+  if (found.empty())
+    p.fail(p.raw("position"), "position",
+           "a wall_pressure sensor must lie on a face of the tank interior or of a solid (within dp/2)");
+  if (!p.has("normal")) {
+    if (found.size() > 1) p.fail(p.raw("position"), "position", "lies on an edge of two faces: give 'normal' to choose one");
+    std::tie(probe.normal, probe.position) = found[0];
+    return;
+  }
+  Vec3d n = p.vector("normal", d);
+  double length = 0;
+  for (int k = 0; k < d; ++k) length += n[k] * n[k];
+  length = std::sqrt(length);
+  if (!(length > 0)) p.fail(p.raw("normal"), "normal", "must be a non-zero vector");
+  for (int k = 0; k < d; ++k) n[k] /= length;
+  for (auto& [m, at] : found) {
+    double dot = 0;
+    for (int k = 0; k < d; ++k) dot += m[k] * n[k];
+    if (dot > 1 - 1e-6) {
+      probe.normal = m;
+      probe.position = at;
+      return;
+    }
+  }
+  p.fail(p.raw("normal"), "normal", "is not the normal (pointing into the fluid) of the face the sensor lies on");
+}
+
 Case read(Section& root, const std::string& file) {
   Case c;
   c.file = file;
@@ -343,6 +414,7 @@ Case read(Section& root, const std::string& file) {
     c.artificial_viscosity = f.number("artificial_viscosity", 0.0);
     if (c.artificial_viscosity < 0) f.fail(f.raw("artificial_viscosity"), "artificial_viscosity", "must be >= 0");
     c.body_force = f.vector("body_force", d, Vec3d{0, 0, 0});
+    c.tension = f.boolean("tension", true);
     f.finish();
   }
   {
@@ -351,7 +423,8 @@ Case read(Section& root, const std::string& file) {
                                             {{"continuity", DensityMode::Continuity}, {"summation", DensityMode::Summation}});
     c.diffusion = s.choice<DensityDiffusion>(
         "diffusion", DensityDiffusion::Fourtakas,
-        {{"fourtakas", DensityDiffusion::Fourtakas}, {"molteni_colagrossi", DensityDiffusion::MolteniColagrossi}, {"none", DensityDiffusion::None}});
+        {{"fourtakas", DensityDiffusion::Fourtakas}, {"molteni_colagrossi", DensityDiffusion::MolteniColagrossi},
+         {"riemann", DensityDiffusion::Riemann}, {"none", DensityDiffusion::None}});
     c.delta = s.number("delta", 0.1);
     if (c.delta < 0 || c.delta > 1) s.fail(s.raw("delta"), "delta", "must be between 0 and 1");
     c.density_min_ratio = s.number("min_ratio", 0.5);
@@ -361,6 +434,13 @@ Case read(Section& root, const std::string& file) {
       s.fail(s.raw("min_ratio"), "min_ratio", "must be in [0, 1) (a fraction of the reference density)");
     if (!(c.density_max_ratio > 1)) s.fail(s.raw("max_ratio"), "max_ratio", "must be > 1 (a multiple of the reference density)");
     s.finish();
+  }
+  {
+    auto m = root.optional_child("momentum");
+    c.flux = m.choice<MomentumFlux>("flux", MomentumFlux::Central, {{"central", MomentumFlux::Central}, {"riemann", MomentumFlux::Riemann}});
+    c.riemann_limiter = m.number("riemann_limiter", 3.0);
+    if (!(c.riemann_limiter >= 0)) m.fail(m.raw("riemann_limiter"), "riemann_limiter", "must be >= 0");
+    m.finish();
   }
   if (auto t = root.child("time")) {
     c.end_time = t->number("end");
@@ -467,7 +547,7 @@ Case read(Section& root, const std::string& file) {
       if (other.name == probe.name) p.fail(p.raw("name"), "name", "probe '" + probe.name + "' is defined twice");
     probe.type = p.choice<ProbeType>("type", ProbeType::Pressure,
                                      {{"pressure", ProbeType::Pressure}, {"velocity", ProbeType::Velocity}, {"height", ProbeType::Height},
-                                      {"force", ProbeType::Force}, {"front", ProbeType::Front}});
+                                      {"force", ProbeType::Force}, {"front", ProbeType::Front}, {"wall_pressure", ProbeType::WallPressure}});
     switch (probe.type) {
       case ProbeType::Pressure:
       case ProbeType::Velocity: probe.position = p.vector("position", d); break;
@@ -478,7 +558,15 @@ Case read(Section& root, const std::string& file) {
       case ProbeType::Force:
         probe.solid = p.text("solid");
         if (!solid_names.count(probe.solid)) p.fail(p.raw("solid"), "solid", "no solid named '" + probe.solid + "'");
+        if (p.has("face")) {
+          const std::string face = p.text("face");
+          probe.face = face_index(face, d);
+          if (probe.face < 0)
+            p.fail(p.raw("face"), "face", "'" + face + "' is not a face of a " + std::to_string(d) + "D box (x-, x+, " +
+                                              (d == 3 ? "y-, y+, z-, z+)" : "y-, y+)"));
+        }
         break;
+      case ProbeType::WallPressure: read_wall_sensor(p, c, probe); break;
       case ProbeType::Front: {
         const std::string axis = p.text("axis", std::string("x"));
         probe.axis = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;
@@ -623,9 +711,12 @@ PhysicsParams physics_params(const Case& c) {
                                       static_cast<float>(f.density * std::pow(c.dp, c.dim)),
                                       static_cast<float>(f.background_pressure));
   }
+  P.tension = c.tension;
   P.artificial_viscosity = static_cast<float>(c.artificial_viscosity);
   P.delta = static_cast<float>(c.delta);
   P.diffusion = c.diffusion;
+  P.flux = c.flux;
+  P.riemann_limiter = static_cast<float>(c.riemann_limiter);
   P.density_mode = c.density_mode;
   for (int k = 0; k < 3; ++k) {
     P.gravity[k] = static_cast<float>(c.gravity[k]);

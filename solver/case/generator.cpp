@@ -59,10 +59,8 @@ bool classify(const Case& c, const MaterialTable& M, const Sites& s, const int i
     if (solid.hollow) {
       // Keep sites within wall_layers of a face that touches fluid (the floor face does not).
       double depth = 1e30;
-      for (int a = 0; a < d; ++a) {
-        depth = std::min(depth, x[a] - solid.box.min[a] + (a == d - 1 ? 1e30 : 0.0));
-        depth = std::min(depth, solid.box.max[a] - x[a]);
-      }
+      for (int f = 0; f < 2 * d; ++f)
+        if (f != 2 * (d - 1)) depth = std::min(depth, face_depth(solid.box, x, f));
       if (depth > c.wall_layers * c.dp) return false;
     }
     kind = M.solid(static_cast<int>(k));
@@ -94,6 +92,11 @@ void for_each_site(const Case& c, Visit&& visit) {
 }
 
 }  // namespace
+
+double face_depth(const Box& b, const double x[3], int face) {
+  const int a = face / 2;
+  return face % 2 == 0 ? x[a] - b.min[a] : b.max[a] - x[a];
+}
 
 Lattice make_lattice(const Case& c) {
   Lattice L;
