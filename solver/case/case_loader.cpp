@@ -15,10 +15,14 @@
 #include <tuple>
 
 #include "case.hpp"
+#include "../io/input_file.hpp"
 
 namespace spate {
 
 namespace {
+
+// A case file is a page of YAML; 16 MiB of it is not one (nor is /dev/zero).
+constexpr std::size_t kLargestCaseFile = std::size_t{16} << 20;
 
 // Edits (insert, delete, substitute, swap two neighbours) between a and b: the optimal string
 // alignment distance, so that the usual typo `edn` is one edit from `end`.
@@ -661,13 +665,13 @@ Case parse_case(const std::string& yaml_text, const std::string& file_name, cons
 }
 
 Case load_case(const std::string& path, const std::vector<std::string>& overrides) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw CaseError(path + ": cannot read the case file (it is a folder)");
-  std::ifstream in(path);
-  if (!in) throw CaseError(path + ": cannot read the case file (" + std::string(std::strerror(errno)) + ")");
-  std::stringstream s;
-  s << in.rdbuf();
-  return parse_case(s.str(), path, overrides);
+  std::string text;
+  try {
+    text = read_input_text(path, "the case file", kLargestCaseFile);
+  } catch (const InputFileError& e) {
+    throw CaseError(e.what());
+  }
+  return parse_case(text, path, overrides);
 }
 
 double highest_fluid_column(const Case& c) {
