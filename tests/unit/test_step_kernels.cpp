@@ -286,6 +286,7 @@ std::vector<CheckedCase> gpu_checked_cases() {
             {"tank.size=[0.3, 0.2, 0.3]", "fluid_blocks=[{min: [0, 0, 0], max: [0.3, 0.2, 0.1]}]", "tank.periodic=[y]"}),
        50},
       {"summation", load("dam_break_2d.yaml", {"density.mode=summation"}), 100},
+      {"riemann", load("dam_break_2d.yaml", {"density.diffusion=riemann", "momentum.flux=riemann", "fluid.tension=false"}), 300},
   };
 }
 
