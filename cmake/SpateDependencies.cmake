@@ -8,6 +8,8 @@ find_package(nlohmann_json REQUIRED)
 find_package(OpenSSL REQUIRED COMPONENTS Crypto)
 find_package(ZLIB REQUIRED)
 find_package(spdlog REQUIRED)
+# spate plot runs scripts/plot_probes.py (matplotlib) with this Python.
+find_package(Python3 COMPONENTS Interpreter)
 find_package(CLI11 CONFIG QUIET)
 if(NOT CLI11_FOUND)
   # Debian's libcli11-dev ships only the header.

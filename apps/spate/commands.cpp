@@ -92,10 +92,10 @@ std::string live_address(const std::string& arg) {
 }
 
 #ifdef SPATE_WITH_CATALYST
-// pipelines/ (live.py, spate_steering.xml): $SPATE_PIPELINES_DIR, else the source tree's.
+// pipelines/ (live.py, spate_steering.xml): $SPATE_PIPELINES_DIR, else the data folder's.
 std::filesystem::path pipelines_dir() {
   const char* env = std::getenv("SPATE_PIPELINES_DIR");
-  return env && *env ? std::filesystem::path(env) : std::filesystem::path(SPATE_PIPELINES_DIR);
+  return env && *env ? std::filesystem::path(env) : data_dir() / "pipelines";
 }
 #endif
 
@@ -108,9 +108,41 @@ std::vector<std::string> warn_thin_features(const Case& c) {
   return messages;
 }
 
+}  // namespace
+
 int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
-}  // namespace
+std::filesystem::path data_dir() {
+  const char* env = std::getenv("SPATE_DATA_DIR");
+  if (env && *env) return env;
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  const auto installed = exe.parent_path().parent_path() / "share" / "spate";
+  if (!ec && std::filesystem::is_directory(installed / "pipelines", ec)) return installed;
+  return SPATE_SOURCE_DIR;
+}
+
+#ifdef SPATE_WITH_CATALYST
+std::unique_ptr<catalyst::CatalystSink> make_catalyst_sink(const std::vector<std::filesystem::path>& scripts, int every,
+                                                           const std::filesystem::path& working_dir, const Case& c) {
+  catalyst::CatalystOptions co;
+  co.scripts = scripts;
+  co.every = every;
+  co.working_dir = working_dir;
+  co.constants = case_constants(c);
+  std::filesystem::create_directories(working_dir);
+  // Started outside mpirun, ParaView initialises MPI itself, and OpenMPI's TCP transport would
+  // then listen on every interface (ports 1024 and up) for the whole run. One process needs only
+  // shared memory; with it the run opens no listening socket at all (docs/live.md, Security).
+  // An explicit OMPI_MCA_btl in the environment wins.
+  if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK")) ::setenv("OMPI_MCA_btl", "self,vader", 0);
+  try {
+    return std::make_unique<catalyst::CatalystSink>(co);
+  } catch (const catalyst::InSituLoadError& e) {
+    throw BadInput(e.what());
+  }
+}
+#endif
 
 int run_command(const RunArgs& a) {
   Case c = load(a.case_file, a.overrides);
@@ -170,27 +202,13 @@ int run_command(const RunArgs& a) {
   std::unique_ptr<catalyst::CatalystSink> insitu;
   std::unique_ptr<catalyst::CatalystSteering> live_steering;
   if (!pipelines.empty() || live) {
-    catalyst::CatalystOptions co;
-    co.scripts.assign(pipelines.begin(), pipelines.end());
+    std::vector<std::filesystem::path> scripts(pipelines.begin(), pipelines.end());
     if (live) {
       // pipelines/live.py reads the address from the environment (ParaView scripts take no arguments).
       ::setenv("SPATE_LIVE_URL", live_url.c_str(), 1);
-      co.scripts.push_back(pipelines_dir() / "live.py");
+      scripts.push_back(pipelines_dir() / "live.py");
     }
-    co.every = insitu_every;
-    co.working_dir = o.out_dir;
-    co.constants = case_constants(c);
-    std::filesystem::create_directories(o.out_dir);
-    // Started outside mpirun, ParaView initialises MPI itself, and OpenMPI's TCP transport would
-    // then listen on every interface (ports 1024 and up) for the whole run. One process needs only
-    // shared memory; with it the run opens no listening socket at all (docs/live.md, Security).
-    // An explicit OMPI_MCA_btl in the environment wins.
-    if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK")) ::setenv("OMPI_MCA_btl", "self,vader", 0);
-    try {
-      insitu = std::make_unique<catalyst::CatalystSink>(co);
-    } catch (const catalyst::InSituLoadError& e) {
-      throw BadInput(e.what());
-    }
+    insitu = make_catalyst_sink(scripts, insitu_every, o.out_dir, c);
     o.insitu = insitu.get();
     if (live) {
       catalyst::SteeringInitial init;

@@ -1,9 +1,18 @@
 #pragma once
 // The subcommands of the spate program, each a thin layer over the solver library.
+#include <filesystem>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+namespace spate {
+struct Case;
+namespace catalyst {
+class CatalystSink;
+}
+}  // namespace spate
 
 namespace spate::app {
 
@@ -39,9 +48,34 @@ struct BenchArgs {
   bool json = false;
 };
 
+struct PostArgs {
+  std::string run_dir, out, from;
+  std::vector<std::string> probes, pipelines;
+  std::vector<long long> steps;  // saved steps to use (empty: all)
+  int threads = 0;
+  bool plot = false;
+};
+struct PlotArgs {
+  std::string dir, out;
+};
+
 int run_command(const RunArgs& a);
+int post_command(const PostArgs& a);
+int plot_command(const PlotArgs& a);
 int info_command(const InfoArgs& a);
 int compare_command(const CompareArgs& a);
 int bench_command(const BenchArgs& a);
+
+// Shared by the commands.
+int hardware_threads();
+// spate's data files (pipelines/, scripts/): $SPATE_DATA_DIR, else <prefix>/share/spate for an
+// installed spate (cmake --install), else the source tree it was built from.
+std::filesystem::path data_dir();
+#ifdef SPATE_WITH_CATALYST
+// A Catalyst sink running `scripts` every `every` steps with extracts under `working_dir` and the
+// case's constants in the dataset's field data. A script that fails to load: BadInput.
+std::unique_ptr<catalyst::CatalystSink> make_catalyst_sink(const std::vector<std::filesystem::path>& scripts, int every,
+                                                           const std::filesystem::path& working_dir, const Case& c);
+#endif
 
 }  // namespace spate::app

@@ -100,6 +100,24 @@ int main(int argc, char** argv) {
                       "Largest allowed difference of each field as a fraction of its scale (dp, c0, rho0, c0^2/h, rho0 c0/h; material exact), "
                       "from the case stored in the first checkpoint");
 
+  PostArgs post;
+  auto* post_cmd = app.add_subcommand("post", "After a run: evaluate probes and run Catalyst pipelines on its saved snapshots or checkpoints");
+  post_cmd->add_option("run_dir", post.run_dir, "The run's output folder (spate run --out)")->required();
+  post_cmd->add_option("--probe", post.probes,
+                       "A probe as in a case file, in YAML: '{name: p1, type: pressure, position: [0.5, 0.1]}' (repeatable; "
+                       "replaces the case's probes)");
+  post_cmd->add_option("--from", post.from, "snapshots or checkpoints (default: snapshots when the run wrote any)");
+  post_cmd->add_option("--step", post.steps, "Only this saved step (repeatable)");
+  post_cmd->add_option("--pipeline", post.pipelines, "ParaView Catalyst script to run on every saved step (repeatable)");
+  post_cmd->add_option("--out", post.out, "Output folder (default RUN_DIR/post)");
+  post_cmd->add_option("--threads", post.threads, "CPU threads (default: all cores)");
+  post_cmd->add_flag("--plot", post.plot, "Also plot the probes (as spate plot OUT)");
+
+  PlotArgs plot;
+  auto* plot_cmd = app.add_subcommand("plot", "PNG plots of every probe of a run (or of a spate post output folder)");
+  plot_cmd->add_option("dir", plot.dir, "Run folder (or post output folder) with probes/*.csv")->required();
+  plot_cmd->add_option("--out", plot.out, "Where the PNGs go (default DIR/plots)");
+
   BenchArgs bench;
   auto* bench_cmd = app.add_subcommand("bench", "Measure particle-steps and neighbour interactions per second");
   bench_cmd->add_option("case", bench.case_file, "Case file (YAML)")->required();
@@ -125,6 +143,8 @@ int main(int argc, char** argv) {
     if (*run_cmd) return finish(run_command(run));
     if (*info_cmd) return finish(info_command(info));
     if (*cmp_cmd) return finish(compare_command(cmp));
+    if (*post_cmd) return finish(post_command(post));
+    if (*plot_cmd) return finish(plot_command(plot));
     if (*bench_cmd) return finish(bench_command(bench));
   } catch (const BadInput& e) {
     spdlog::error("{}", e.what());

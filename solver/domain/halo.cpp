@@ -51,8 +51,8 @@ void Halo::send(ParticleStore& p, const CellGrid& grid, SlabTransport& transport
   // Wrapping across the periodic x boundary shifts the copy by the period, computed by the owner
   // so that every split produces the same float.
   Shift to_left, to_right;
-  if (has_left && grid.owned_lo() == 0) to_left = Shift{0, L.period[0]};
-  if (has_right && grid.owned_hi() == L.cells[0]) to_right = Shift{0, -L.period[0]};
+  if (has_left && grid.owned_lo() == 0) to_left = periodic_shift(L, 0, true);
+  if (has_right && grid.owned_hi() == L.cells[0]) to_right = periodic_shift(L, 0, false);
   p.resize(p.owned());  // ghosts are stale once owned particles moved
   edge_columns(p, grid, send_left_, send_right_);
   if (!has_left) send_left_.clear();
@@ -106,9 +106,8 @@ void Halo::make_periodic_images(ParticleStore& p, const CellGrid& grid, int axis
     if (c == L.cells[axis] - 1) high.push_back(static_cast<std::uint32_t>(i));
   }
   for (auto* list : {&low, &high}) {
-    const float offset = list == &low ? L.period[axis] : -L.period[axis];
     const std::size_t first = p.size();
-    unpack_append(p, pack_particles(p, *list, FieldSet::Ghost, Shift{axis, offset}), FieldSet::Ghost);
+    unpack_append(p, pack_particles(p, *list, FieldSet::Ghost, periodic_shift(L, axis, list == &low)), FieldSet::Ghost);
     for (std::size_t k = 0; k < list->size(); ++k) {
       image_source_.push_back((*list)[k]);
       image_target_.push_back(static_cast<std::uint32_t>(first + k));

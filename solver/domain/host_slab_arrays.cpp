@@ -120,9 +120,8 @@ void HostSlabArrays::make_images(const CellGrid& geometry, int axis) {
         if (L.cell_of(store_.pos[axis][i], axis) == layer &&
             geometry.owns_column(L.cell_of(store_.pos[0][i], 0)) == (part == ImagePart::Local))
           list.push_back(static_cast<std::uint32_t>(i));
-      const float offset = layer == 0 ? L.period[axis] : -L.period[axis];
       const std::size_t first = store_.size();
-      unpack_append(store_, pack_particles(store_, list, FieldSet::Ghost, Shift{axis, offset}), FieldSet::Ghost);
+      unpack_append(store_, pack_particles(store_, list, FieldSet::Ghost, periodic_shift(L, axis, layer == 0)), FieldSet::Ghost);
       for (std::size_t k = 0; k < list.size(); ++k) {
         im.source.push_back(list[k]);
         im.target.push_back(static_cast<std::uint32_t>(first + k));

@@ -58,8 +58,8 @@ HaloSends plan_halo_sends(const CellGrid& grid, std::span<const std::uint32_t> s
   if (has_right) h.range[kRight] = between(starts[n - 1], starts[n]);
   // Wrapping across the periodic x boundary shifts the copy by the period, computed by the owner
   // so that every split produces the same float.
-  if (has_left && grid.owned_lo() == 0) h.shift[kLeft] = Shift{0, L.period[0]};
-  if (has_right && grid.owned_hi() == L.cells[0]) h.shift[kRight] = Shift{0, -L.period[0]};
+  if (has_left && grid.owned_lo() == 0) h.shift[kLeft] = periodic_shift(L, 0, true);
+  if (has_right && grid.owned_hi() == L.cells[0]) h.shift[kRight] = periodic_shift(L, 0, false);
   return h;
 }
 

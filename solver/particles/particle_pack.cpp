@@ -41,7 +41,7 @@ Bytes pack_particles(ParticleStore& p, std::span<const std::uint32_t> indices, F
       for (std::uint64_t k = 0; k < n; ++k) {
         float v;
         std::memcpy(&v, x + k, sizeof v);
-        v += shift.offset;
+        v = shift.apply(v);
         std::memcpy(x + k, &v, sizeof v);
       }
     }

@@ -5,6 +5,7 @@
 #include <span>
 #include <vector>
 
+#include "../grid/lattice.hpp"
 #include "particle_store.hpp"
 
 namespace spate {
@@ -19,11 +20,6 @@ enum class FieldSet {
 };
 
 bool in_set(const FieldRef& f, FieldSet set);
-
-struct Shift {
-  int axis = -1;        // no shift
-  float offset = 0.0f;  // added to pos[axis] (periodic images)
-};
 
 Bytes pack_particles(ParticleStore& p, std::span<const std::uint32_t> indices, FieldSet set, Shift shift = {});
 // Appends the packed particles at the end of the store; returns how many.

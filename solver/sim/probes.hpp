@@ -37,6 +37,8 @@ class ProbeSet {
 std::vector<std::string> probe_columns(const ProbeSpec& p, int dim);
 // The CSV header line of a probe, without the line break: "time[s],step,pressure[Pa]".
 std::string probe_header(const ProbeSpec& p, int dim);
+// What and where, for plot titles: "pressure at (0.89, 0.305, 0.02) m", "force on solid 'column'".
+std::string probe_description(const ProbeSpec& p, int dim);
 
 // Single probe evaluations on one slab (exposed for tests). NaN when this slab does not own the point.
 double sample_pressure(SlabWorker& w, const Vec3d& at);

@@ -239,7 +239,10 @@ class Worker {
     auto output = [&](bool final_step) {
       if (!probes.empty() && (s_.c.probe_interval <= 0 || time >= next_probe - 1e-12 || final_step)) {
         probes.sample(time, step, w_);
-        while (next_probe <= time + 1e-12) next_probe += std::max(s_.c.probe_interval, 1e-300);
+        // (probe_interval 0 samples every step: no schedule to advance; stepping by a tiny interval
+        // instead would loop for ever.)
+        if (s_.c.probe_interval > 0)
+          while (next_probe <= time + 1e-12) next_probe += s_.c.probe_interval;
       }
       if (out_dt > 0 && (time >= next_output - 1e-9 * out_dt || (final_step && last_snapshot != step))) {
         write_snapshot(pvd, time, step, "snapshots");

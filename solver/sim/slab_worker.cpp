@@ -163,6 +163,16 @@ void SlabWorker::prepare(bool rates) {
   if (!resident()) kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
 }
 
+void SlabWorker::refresh_ghosts() {
+  refresh_halo();
+  if (resident()) host_stale_ = true;  // the device's ghosts changed; the host mirror follows on demand
+}
+
+void SlabWorker::prepare_saved() {
+  rebuild();
+  if (!resident()) kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
+}
+
 std::optional<ParticleFault> SlabWorker::wrap_and_check_domain(bool wrap) {
   std::optional<ParticleFault> fault;
   for (int a = 0; a < lattice_.dim; ++a) {

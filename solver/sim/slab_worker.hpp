@@ -38,6 +38,14 @@ class SlabWorker {
   // Sort, halos and everything the rates need; with `rates` also the accelerations and density
   // rates (a fresh start; a restart brings them from the checkpoint).
   void prepare(bool rates);
+  // Ghosts take their owners' current Refresh fields (velocity, density, pressure). Between steps
+  // the ghosts still hold the values of the step's force evaluation (the predicted velocity and
+  // density), the owners the corrected ones: what reads ghosts between steps (probes) refreshes
+  // them first, so that it sees the same values whatever the split. Collective.
+  void refresh_ghosts();
+  // Sort and halos only, for particles read back from a snapshot or checkpoint: they keep the
+  // pressures and wall states they were saved with, so probes sample them exactly as the run did.
+  void prepare_saved();
   // One full step of size dt. Returns a fault if a particle left the domain (before rates).
   std::optional<ParticleFault> step(float dt);
   // NaN/infinity or density outside [min, max] x rho0 among owned particles.

@@ -147,5 +147,158 @@ def checkpoint_retention(env):
     check(p.returncode == 2 and "--checkpoint-keep-last" in p.stderr, "a negative --checkpoint-keep-last is not bad input")
 
 
+# ---- spate post ---------------------------------------------------------------------------------
+
+def probe_rows(folder):
+    """{probe: (header, {step: row})} of a probes/ folder, rows as the exact text of the file."""
+    out = {}
+    for f in sorted(os.listdir(folder)):
+        lines = open(os.path.join(folder, f)).read().splitlines()
+        out[f[:-4]] = (lines[0], {line.split(",")[1]: line for line in lines[1:]})
+    return out
+
+
+def check_reproduced(run_probes, post_probes, saved_steps, what):
+    """Every row spate post wrote is, to the last digit, the run's row of that step; one per saved step."""
+    run, post = probe_rows(run_probes), probe_rows(post_probes)
+    check(sorted(post) == sorted(run), f"{what}: probes {sorted(post)}, the run has {sorted(run)}")
+    for name, (header, rows) in post.items():
+        check(header == run[name][0], f"{what}: {name}: header {header!r}, the run's {run[name][0]!r}")
+        check(sorted(rows, key=int) == saved_steps, f"{what}: {name}: steps {sorted(rows, key=int)}, saved {saved_steps}")
+        for step, row in rows.items():
+            check(row == run[name][1].get(step), f"{what}: {name} at step {step}: post {row!r}, run {run[name][1].get(step)!r}")
+
+
+@test
+def post_reproduces_probes_at_every_saved_step(env):
+    """spate post on the snapshots and on the checkpoints of a finished run (2 devices) writes, at
+    every saved step, exactly the values the run's probes wrote; the run's probes are the same with
+    1 and 2 devices (ghosts refreshed before sampling)."""
+    case = os.path.join(env.cases, "probes_2d.yaml")
+    runs = {}
+    for devices in ("1", "2"):
+        out = env.path(f"run{devices}")
+        p = env.run("run", case, "--devices", devices, "--out", out, "--quiet")
+        check(p.returncode == 0, f"run --devices {devices}: exit {p.returncode}")
+        runs[devices] = out
+    check(probe_rows(os.path.join(runs["1"], "probes")) == probe_rows(os.path.join(runs["2"], "probes")),
+          "the run's probe files differ between 1 and 2 devices")
+    out = runs["2"]
+    snapshots = sorted(int(f[5:13]) for f in os.listdir(os.path.join(out, "snapshots")) if f.endswith(".vtm"))
+    checkpoints = sorted(int(f[16:24]) for f in os.listdir(os.path.join(out, "checkpoints")) if f.endswith(".h5"))
+    check(len(snapshots) >= 6 and len(checkpoints) >= 3, f"saved steps: snapshots {snapshots}, checkpoints {checkpoints}")
+    p = env.run("post", out)
+    check(p.returncode == 0, f"post: exit {p.returncode}")
+    check_reproduced(os.path.join(out, "probes"), os.path.join(out, "post", "probes"), [str(s) for s in snapshots], "snapshots")
+    p = env.run("post", out, "--from", "checkpoints", "--out", env.path("from_checkpoints"))
+    check(p.returncode == 0, f"post --from checkpoints: exit {p.returncode}")
+    check_reproduced(os.path.join(out, "probes"), env.path("from_checkpoints", "probes"), [str(s) for s in checkpoints], "checkpoints")
+    # The values are not trivial: the water at the foot of the column is moving.
+    u = [float(r.split(",")[2]) for r in probe_rows(os.path.join(out, "probes"))["u"][1].values()]
+    check(max(u) > 0.2, f"the velocity probe reads at most {max(u)} m/s")
+
+
+@test
+def post_probes_from_the_command_line(env):
+    """--probe defines probes after the run; one that repeats a case probe gives the run's values."""
+    out = env.path("run")
+    p = env.run("run", os.path.join(env.cases, "probes_2d.yaml"), "--out", out, "--until", "0.01", "--quiet")
+    check(p.returncode == 0, f"run: exit {p.returncode}")
+    p = env.run("post", out, "--probe", "{name: again, type: pressure, position: [0.002, 0.01]}",
+                "--probe", "{name: middle, type: velocity, position: [0.02, 0.05]}", "--out", env.path("post"))
+    check(p.returncode == 0, f"post --probe: exit {p.returncode}")
+    post = probe_rows(env.path("post", "probes"))
+    run = probe_rows(os.path.join(out, "probes"))
+    check(sorted(post) == ["again", "middle"], f"post wrote {sorted(post)}")
+    check(post["again"][0] == "time[s],step,pressure[Pa]" and post["middle"][0] == "time[s],step,vx[m/s],vy[m/s]",
+          f"headers {post['again'][0]!r}, {post['middle'][0]!r}")
+    for step, row in post["again"][1].items():
+        check(row == run["wall_pressure"][1][step], f"step {step}: {row!r} vs the run's wall_pressure {run['wall_pressure'][1][step]!r}")
+    # Bad input: a probe the case loader rejects, a run folder that is not one, a step never saved.
+    p = env.run("post", out, "--probe", "{name: x, type: pressure, position: [0.1]}")
+    check(p.returncode == 2 and "--probe" in p.stderr and "probes[0].position" in p.stderr, "a bad --probe is not bad input")
+    p = env.run("post", env.path("nowhere"))
+    check(p.returncode == 2 and "no such run folder" in p.stderr, "a missing run folder")
+    p = env.run("post", out, "--step", "7")
+    check(p.returncode == 2 and "--step 7" in p.stderr, "a step that was not saved")
+    p = env.run("post", out, "--from", "nothing")
+    check(p.returncode == 2 and "--from" in p.stderr, "a bad --from")
+
+
+@test
+def post_reads_run_folders_of_earlier_versions(env):
+    """A run folder of spate before 0.1 (raw snapshots without field data, a checkpoint without the
+    pressures, no case.yaml): post takes the case from the checkpoint, reads the snapshots as they
+    are, and recomputes the checkpoint's pressures with a warning (close to the snapshot's)."""
+    old = os.path.join(source_dir(env), "tests", "fixtures", "run_v0_tiny_2d")
+    probe = "{name: p, type: pressure, position: [0.01, 0.005]}"
+    p = env.run("post", old, "--probe", probe, "--out", env.path("snapshots"))
+    check(p.returncode == 0, f"post on snapshots: exit {p.returncode}")
+    from_snapshots = probe_rows(env.path("snapshots", "probes"))["p"][1]
+    check(sorted(from_snapshots, key=int) == ["0", "3"], f"steps {sorted(from_snapshots)}")
+    p = env.run("post", old, "--probe", probe, "--from", "checkpoints", "--out", env.path("checkpoints"))
+    check(p.returncode == 0 and "recomputed from the densities" in p.stderr, "no warning about the recomputed pressures")
+    from_checkpoint = probe_rows(env.path("checkpoints", "probes"))["p"][1]
+    a, b = float(from_snapshots["3"].split(",")[2]), float(from_checkpoint["3"].split(",")[2])
+    check(a > 10 and abs(a - b) < 0.05 * a, f"pressure at step 3: {a} Pa from the snapshot, {b} Pa recomputed")
+    check(from_snapshots["3"].split(",")[0] == from_checkpoint["3"].split(",")[0], "times differ")
+
+
+# ---- spate plot ---------------------------------------------------------------------------------
+
+def png_size(path):
+    with open(path, "rb") as f:
+        head = f.read(24)
+    check(head[:8] == b"\x89PNG\r\n\x1a\n", f"{path} is not a PNG")
+    return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+
+
+@test
+def plot_every_probe(env):
+    """spate plot RUN_DIR draws one PNG per probe; spate post --plot plots what post wrote."""
+    out = env.path("run")
+    p = env.run("run", os.path.join(env.cases, "probes_2d.yaml"), "--out", out, "--until", "0.01", "--quiet")
+    check(p.returncode == 0, f"run: exit {p.returncode}")
+    p = env.run("plot", out)
+    check(p.returncode == 0, f"plot: exit {p.returncode}: {p.stderr}")
+    probes = sorted(f[:-4] for f in os.listdir(os.path.join(out, "probes")))
+    plots = sorted(f[:-4] for f in os.listdir(os.path.join(out, "plots")))
+    check(plots == probes, f"plots {plots} for probes {probes}")
+    for name in plots:
+        w, h = png_size(os.path.join(out, "plots", name + ".png"))
+        check(w >= 800 and h >= 450, f"{name}.png is {w} x {h}")
+    p = env.run("post", out, "--plot", "--probe", "{name: deep, type: height, position: [0.02], connected: true}")
+    check(p.returncode == 0 and os.listdir(os.path.join(out, "post", "plots")) == ["deep.png"], "post --plot")
+    p = env.run("plot", env.path("nowhere"))
+    check(p.returncode == 2 and "probes/" in p.stderr, "plot of a folder without probes")
+
+
+# ---- cmake --install ----------------------------------------------------------------------------
+
+@test
+def install_tree(env):
+    """cmake --install puts the program, the pipelines, the plot script, the cases and the docs under
+    a prefix, and the installed spate finds its data there (not in the source tree)."""
+    build = os.path.dirname(os.path.dirname(env.spate))
+    prefix = env.path("prefix")
+    p = subprocess.run(["cmake", "--install", build, "--prefix", prefix], capture_output=True, text=True)
+    check(p.returncode == 0, f"cmake --install: exit {p.returncode}: {p.stderr[-2000:]}")
+    for f in ["bin/spate", "share/spate/pipelines/free_surface.py", "share/spate/pipelines/live.py",
+              "share/spate/pipelines/spate_steering.xml", "share/spate/scripts/plot_probes.py",
+              "share/spate/cases/dam_break_column_3d.yaml", "share/doc/spate/README.md", "share/doc/spate/docs/cli.md"]:
+        check(os.path.isfile(os.path.join(prefix, f)), f"{f} not installed")
+    spate = os.path.join(prefix, "bin", "spate")
+    env_clean = {k: v for k, v in os.environ.items() if k not in ("SPATE_DATA_DIR", "SPATE_PIPELINES_DIR")}
+    p = subprocess.run([spate, "--version"], capture_output=True, text=True, env=env_clean)
+    check(p.returncode == 0 and p.stdout.startswith("spate "), f"installed spate --version: {p.stdout!r}")
+    out = env.path("run")
+    p = subprocess.run([spate, "run", os.path.join(prefix, "share/spate/cases/dam_break_2d.yaml"), "--steps", "3", "--out", out,
+                        "--quiet"], capture_output=True, text=True, env=env_clean)
+    check(p.returncode == 0, f"installed spate run: exit {p.returncode}")
+    p = subprocess.run([spate, "plot", out, "--log-level", "debug"], capture_output=True, text=True, env=env_clean)
+    check(p.returncode == 0 and os.path.join(prefix, "share/spate/scripts/plot_probes.py") in p.stdout,
+          f"the installed spate plot does not use the installed script: {p.stdout}{p.stderr}")
+
+
 if __name__ == "__main__":
     sys.exit(main(TESTS))

@@ -2,6 +2,8 @@
 // gathers send must arrive bit for bit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "particles/particle_pack.hpp"
@@ -78,7 +80,16 @@ TEST(ParticlePack, ShiftMovesOnlyTheChosenAxis) {
   ParticleStore src = numbered_store(3, 5);
   const std::vector<std::uint32_t> picked = {2};
   ParticleStore dst(3);
-  unpack_append(dst, pack_particles(src, picked, FieldSet::Ghost, Shift{1, 2.5f}), FieldSet::Ghost);
+  // A lattice periodic along y whose first cell layer holds the picked particle: its copy lands one
+  // period up, in the ghost layer.
+  Lattice L;
+  L.origin[1] = src.pos[1][2] - 0.25f;
+  L.cell_size[1] = 0.5f;
+  L.inv_cell[1] = 2.0f;
+  L.cells[1] = 5;
+  L.periodic[1] = true;
+  L.period[1] = 2.5f;
+  unpack_append(dst, pack_particles(src, picked, FieldSet::Ghost, periodic_shift(L, 1, true)), FieldSet::Ghost);
   EXPECT_EQ(dst.pos[0][0], src.pos[0][2]);
   EXPECT_EQ(dst.pos[1][0], src.pos[1][2] + 2.5f);
   EXPECT_EQ(dst.pos[2][0], src.pos[2][2]);
@@ -131,6 +142,47 @@ TEST(ParticleStore, PermuteAndRemoveKeepParticlesWhole) {
   EXPECT_EQ(p.owned(), 4u);
   EXPECT_TRUE(same_particle(p, 0, original, 1, FieldSet::All));
   EXPECT_TRUE(same_particle(p, 2, original, 3, FieldSet::All));
+}
+
+// x + period rounds to nearest: for a particle within an ulp of a cell face the sum can land on the
+// next face, one cell beyond the ghost layer, where a slab's grid has no cell (the resident path
+// stopped with "ghost outside the local grid"). periodic_copy keeps every copy in its layer, moved
+// by no more than a few ulps. The lattices are searched for such particles, so the test holds one.
+TEST(PeriodicCopy, ACopyRoundedOntoTheNextFaceStaysInItsGhostLayer) {
+  int rounded_out[2] = {0, 0};
+  for (int trial = 0; trial < 200; ++trial) {
+    Lattice L;
+    L.dim = 2;
+    L.origin[0] = -0.0137f * static_cast<float>(trial % 17);
+    L.cell_size[0] = 0.026f + 0.00071f * static_cast<float>(trial);
+    L.inv_cell[0] = 1.0f / L.cell_size[0];
+    L.cells[0] = 7 + trial % 53;
+    L.periodic[0] = true;
+    L.period[0] = static_cast<float>(L.cells[0]) * L.cell_size[0];
+    for (const bool up : {true, false}) {
+      const Shift shift = periodic_shift(L, 0, up);
+      const int source_cell = up ? 0 : L.cells[0] - 1, target = up ? L.cells[0] : -1;
+      // Walk a few ulps around both faces of the source cell.
+      for (const float face : {L.origin[0] + static_cast<float>(source_cell) * L.cell_size[0],
+                               L.origin[0] + static_cast<float>(source_cell + 1) * L.cell_size[0]}) {
+        float x = face;
+        for (int k = 0; k < 8; ++k) x = nextafterf(x, -INFINITY);
+        for (int k = 0; k < 16; ++k, x = nextafterf(x, INFINITY)) {
+          if (L.cell_of(x, 0) != source_cell) continue;
+          const float plain = x + shift.offset;
+          if (L.cell_of(plain, 0) != target) ++rounded_out[up ? 0 : 1];
+          const float copy = shift.apply(x);
+          EXPECT_EQ(L.cell_of(copy, 0), target) << "x = " << x << ", trial " << trial;
+          // No further than the sum's own rounding error (half an ulp of the larger term) and the few
+          // ulps the lattice's float arithmetic puts between a face and its cell.
+          const float big = std::max(std::fabs(x), std::fabs(shift.offset));
+          EXPECT_LE(std::fabs(copy - plain), 4.0f * (nextafterf(big, INFINITY) - big)) << "x = " << x;
+        }
+      }
+    }
+  }
+  // The searched lattices do contain copies that plain addition puts outside the layer.
+  EXPECT_GT(rounded_out[0] + rounded_out[1], 0);
 }
 
 }  // namespace

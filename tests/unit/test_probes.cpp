@@ -70,7 +70,7 @@ TEST(HeightGauge, FollowsTheSurfaceContinuously) {
   for (int k = 0; k <= 10; ++k) {
     ParticleStore p = initial;
     for (std::size_t i = 0; i < p.size(); ++i)
-      if (physics_params(c).is_fluid(p.material[i])) p.pos[1][i] += static_cast<float>(k * lift);
+      if (P.is_fluid(p.material[i])) p.pos[1][i] += static_cast<float>(k * lift);
     Slab s(c, p);
     heights.push_back(sample_height(s.w, c.probes[0], c));
   }

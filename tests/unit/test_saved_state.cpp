@@ -87,12 +87,12 @@ TEST(SavedState, SnapshotRoundTripsCompressedWithFieldData) {
 // A snapshot written before compression (raw appended data) reads back as the checkpoint of the
 // same step holds it.
 TEST(SavedState, RawSnapshotOfEarlierVersionsStillReads) {
-  const auto dir = kFixtures / "snapshot_v0_tiny_2d";
-  Snapshot s = read_snapshot(dir / "step_00000003.vtm", 2);
+  const auto dir = kFixtures / "run_v0_tiny_2d";
+  Snapshot s = read_snapshot(dir / "snapshots" / "step_00000003.vtm", 2);
   ASSERT_EQ(s.pieces.size(), 1u);
   EXPECT_TRUE(s.field_data.empty());
   ParticleStore ck;
-  const CheckpointMeta meta = read_checkpoint(dir / "checkpoint_step_00000003.h5", ck);
+  const CheckpointMeta meta = read_checkpoint(dir / "checkpoints" / "checkpoint_step_00000003.h5", ck);
   EXPECT_FALSE(meta.derived_saved) << "that checkpoint predates the derived datasets";
   ParticleStore& p = s.pieces[0];
   ASSERT_EQ(p.size(), ck.size());

@@ -108,9 +108,9 @@ __global__ void table_kernel(const std::uint32_t* keys, std::uint32_t n, std::ui
   table[b] = lo;
 }
 
-__global__ void shift_kernel(float* x, std::uint32_t n, float offset) {
+__global__ void shift_kernel(float* x, std::uint32_t n, Shift shift) {
   const std::uint32_t k = thread_index();
-  if (k < n) x[k] += offset;
+  if (k < n) x[k] = shift.apply(x[k]);
 }
 
 __global__ void scatter_kernel(const float* src, const std::uint32_t* slots, float* dst, std::uint32_t n) {
@@ -501,7 +501,7 @@ void DeviceSlabArrays::gather_fields(FieldSet set, const std::uint32_t* from, st
       launch(compute_.get(), count, gather_kernel<std::uint8_t>, reinterpret_cast<const std::uint8_t*>(a.data.get()), from,
              reinterpret_cast<std::uint8_t*>(dst), u32(count));
     if (shift.axis >= 0 && a.meta.spec == &kParticleFields[kField_pos] && a.meta.component == shift.axis)
-      launch(compute_.get(), count, shift_kernel, reinterpret_cast<float*>(dst), u32(count), shift.offset);
+      launch(compute_.get(), count, shift_kernel, reinterpret_cast<float*>(dst), u32(count), shift);
   }
 }
 
@@ -526,7 +526,7 @@ void DeviceSlabArrays::stage(Side side, FieldSet set, ParticleRange range, Shift
     check(cudaMemcpyAsync(outbox_[side].data() + at, a.data.get() + range.first * a.meta.elem_size, b, cudaMemcpyDeviceToDevice, compute_.get()),
           "stage");
     if (shift.axis >= 0 && a.meta.spec == &kParticleFields[kField_pos] && a.meta.component == shift.axis)
-      launch(compute_.get(), range.count, shift_kernel, reinterpret_cast<float*>(outbox_[side].data() + at), u32(range.count), shift.offset);
+      launch(compute_.get(), range.count, shift_kernel, reinterpret_cast<float*>(outbox_[side].data() + at), u32(range.count), shift);
     at += b;
   }
   out_count_[side] = range.count;
@@ -652,8 +652,7 @@ void DeviceSlabArrays::append_images(const CellGrid& geometry, int axis, int lay
   std::memcpy(&last_flag, result_host_.data() + 4, 4);
   const std::size_t count = last_prefix + last_flag;
   reserve(size_ + count);
-  const float offset = layer == 0 ? L.period[axis] : -L.period[axis];
-  gather_fields(FieldSet::Ghost, list, count, size_, Shift{axis, offset});
+  gather_fields(FieldSet::Ghost, list, count, size_, periodic_shift(L, axis, layer == 0));
   zero_fields_outside(FieldSet::Ghost, size_, count);
   launch(compute_.get(), count, iota_kernel, image_target_[axis].as<std::uint32_t>() + images_[axis], u32(size_), u32(count));
   size_ += count;
