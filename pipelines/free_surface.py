@@ -10,7 +10,8 @@
 # PNGs go to <run output>/insitu/free_surface_<step>.png.
 #
 # Environment: SPATE_INSITU_IMAGE_SIZE=WxH (default 1200x800); SPATE_FREE_SURFACE_CELL=c, grid cell
-# size in units of dp (default 1; larger is faster: cost ~ 25 us per grid point on 2 cores).
+# size in units of dp (default 1; larger is faster: cost ~ 25 us per grid point on 2 cores);
+# SPATE_FREE_SURFACE_PHASE=k, with several fluids the surface of fluid k (default 0, the first).
 # Case constants come from the dataset's field data (dp, dimensions), put there by spate.
 import os
 
@@ -82,6 +83,12 @@ def _build_scene():
     """Once, from the first step's data: the grid, the static geometry and the camera."""
     dim = int(_constant("dimensions", 3))
     dp = _constant("dp", 0.01)
+    # Materials 0 .. fluids-1 are fluids (phases), the walls follow. The surface drawn is that of
+    # phase SPATE_FREE_SURFACE_PHASE (default 0, the first fluid: the water under air).
+    fluids = int(_constant("fluids", 1))
+    phase = int(os.environ.get("SPATE_FREE_SURFACE_PHASE", "0"))
+    fluid.LowerThreshold = fluid.UpperThreshold = min(max(phase, 0), fluids - 1)
+    walls.LowerThreshold = fluids
     walls.UpdatePipeline()
     fluid_all.UpdatePipeline()
     wb = walls.GetDataInformation().GetBounds()  # tank with its wall layers (walls never move)
@@ -90,7 +97,7 @@ def _build_scene():
     surface_source.Kernel = "SPHWendlandQuinticKernel"
     surface_source.Kernel.SpatialStep = dp
     surface_source.Kernel.Dimension = dim
-    surface_source.ExcludedArrays = ["pressure", "density", "id", "kind", "device"]
+    surface_source.ExcludedArrays = ["pressure", "density", "id", "kind", "device", "phase"]
     surface_source.ComputeShepardSum = 1
     surface_source.Source = "Bounded Volume"
     box = surface_source.Source
@@ -127,7 +134,7 @@ def _build_scene():
         outline_shown.AmbientColor = outline_shown.DiffuseColor = [0.15, 0.15, 0.15]
         outline_shown.LineWidth = 2.0
         kinds = walls.GetDataInformation().GetPointDataInformation().GetArrayInformation("kind").GetComponentRange(0)
-        for kind in range(2, int(kinds[1]) + 1):
+        for kind in range(fluids + 1, int(kinds[1]) + 1):
             solid = Threshold(registrationName="solid_%d" % kind, Input=walls)
             solid.Scalars = ["POINTS", "kind"]
             solid.LowerThreshold = kind

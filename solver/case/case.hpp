@@ -41,7 +41,7 @@ struct SolidSpec {
   bool hollow = true;  // only `wall_layers` layers under its surface are particles
 };
 
-enum class ProbeType { Pressure, Velocity, Height, Force, Front };
+enum class ProbeType { Pressure, Velocity, Height, Force, Front, Centroid };
 
 struct ProbeSpec {
   std::string name;
@@ -51,6 +51,10 @@ struct ProbeSpec {
   int axis = 0;             // front: the axis along which the front advances
   bool connected = false;   // height: the top of the water column standing on the floor (spray above ignored)
   double min_depth = 0.0;   // front: only water at least this deep counts (a bore over a wet bed)
+  // pressure, velocity, height, centroid: only this fluid's particles (index into Case::fluids;
+  // -1: every fluid); `phase_name` its name, for descriptions.
+  int phase = -1;
+  std::string phase_name;
 };
 
 // A fluid (a material, physics/materials.hpp): the case's `fluid:` section, or each entry of its

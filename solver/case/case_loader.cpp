@@ -488,7 +488,16 @@ Case read(Section& root, const std::string& file) {
       if (other.name == probe.name) p.fail(p.raw("name"), "name", "probe '" + probe.name + "' is defined twice");
     probe.type = p.choice<ProbeType>("type", ProbeType::Pressure,
                                      {{"pressure", ProbeType::Pressure}, {"velocity", ProbeType::Velocity}, {"height", ProbeType::Height},
-                                      {"force", ProbeType::Force}, {"front", ProbeType::Front}});
+                                      {"force", ProbeType::Force}, {"front", ProbeType::Front}, {"centroid", ProbeType::Centroid}});
+    // A phase (fluid) to measure: required by a centroid, optional for a point or a gauge.
+    const bool phased = probe.type == ProbeType::Pressure || probe.type == ProbeType::Velocity ||
+                        probe.type == ProbeType::Height || probe.type == ProbeType::Centroid;
+    if (probe.type == ProbeType::Centroid && !p.has("phase")) p.text("phase");  // reports it as required
+    if (p.has("phase")) {
+      if (!phased) p.fail(p.raw("phase"), "phase", "only pressure, velocity, height and centroid probes take a phase");
+      probe.phase = fluid_index(p, "phase", c);
+      probe.phase_name = c.fluids[probe.phase].name;
+    }
     switch (probe.type) {
       case ProbeType::Pressure:
       case ProbeType::Velocity: probe.position = p.vector("position", d); break;
@@ -500,6 +509,7 @@ Case read(Section& root, const std::string& file) {
         probe.solid = p.text("solid");
         if (!solid_names.count(probe.solid)) p.fail(p.raw("solid"), "solid", "no solid named '" + probe.solid + "'");
         break;
+      case ProbeType::Centroid: break;
       case ProbeType::Front: {
         const std::string axis = p.text("axis", std::string("x"));
         probe.axis = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;

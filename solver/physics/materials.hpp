@@ -67,4 +67,10 @@ struct MaterialTable {
   SPATE_HD const FluidMaterial& of(std::uint8_t m) const { return fluid[m]; }
 };
 
+// The `phase` array that snapshots and Catalyst get with several fluids: the fluid index of a
+// fluid particle (its material), -1 for a wall or solid particle.
+inline std::int8_t phase_of(std::uint8_t material, int fluids) {
+  return material < fluids ? static_cast<std::int8_t>(material) : std::int8_t{-1};
+}
+
 }  // namespace spate

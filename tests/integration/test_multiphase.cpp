@@ -46,6 +46,17 @@ TEST(Multiphase, TwoLayerHydrostaticPressures) {
   EXPECT_NEAR(p_oil, expected_oil, 0.02 * expected_oil) << "p_oil";
   EXPECT_NEAR(p_water, expected_water, 0.01 * expected_water) << "p_water";
 
+  // The oil's centroid stays at mid-layer, (0.25, 0.4) m, within a tenth of a particle spacing, and
+  // the water's surface under the oil (a height gauge of phase water) at 0.3 m within half of one.
+  const auto centroid_y = test::read_probe(out / "probes" / "oil_centroid.csv", 3);
+  const auto centroid_x = test::read_probe(out / "probes" / "oil_centroid.csv", 2);
+  ASSERT_FALSE(centroid_y.empty());
+  EXPECT_NEAR(centroid_y.front().second, 0.4, 1e-6);
+  for (auto [t, y] : centroid_y) EXPECT_NEAR(y, 0.4, 0.1 * c.dp) << "oil centroid at t = " << t;
+  for (auto [t, x] : centroid_x) EXPECT_NEAR(x, 0.25, 0.1 * c.dp) << "oil centroid at t = " << t;
+  for (auto [t, h] : test::read_probe(out / "probes" / "interface.csv", 2))
+    EXPECT_NEAR(h, interface, 0.5 * c.dp) << "water surface under the oil at t = " << t;
+
   ParticleStore p;
   read_checkpoint(r.last_checkpoint, p);
   std::size_t oil = 0, water = 0, oil_below = 0, water_above = 0;
