@@ -2,17 +2,30 @@
 # spate in-situ pipeline: the free surface, reconstructed from the particles and rendered off screen.
 #
 # The fluid particles are interpolated with an SPH kernel onto a regular grid that covers the tank
-# (ParaView's SPH Volume Interpolator, Wendland kernel, spatial step dp so that the Shepard sum
-# sum_j W_ij dp^d is 1 inside the water and 0 outside); the surface is the Shepard sum's 0.5
-# contour, coloured by the interpolated speed. The tank floor, its outline and every solid (the
-# column) are drawn too, from a three-quarter view like the paper's Figure 4. In 2D the water is
-# the region where the Shepard sum exceeds 0.5, seen from the front.
+# (ParaView's SPH Volume Interpolator, Wendland kernel, spatial step dp, so that the Shepard sum
+# S = sum_j W_ij dp^d is 1 inside the water and 0 outside); the surface is the Shepard sum's 0.5
+# contour. It is coloured by the Shepard-normalised field, sum_j f_j W_ij dp^d / S (the SPH
+# estimate of f; without the division a field reads half its value on the 0.5 contour), by default
+# the speed |v|. The tank floor, its outline and every solid (the column) are drawn too, from a
+# three-quarter view like the paper's Figure 4, with the simulated time in a corner. In 2D the
+# water is the region where the Shepard sum exceeds 0.5, seen from the front.
 # PNGs go to <run output>/insitu/free_surface_<step>.png.
 #
-# Environment: SPATE_INSITU_IMAGE_SIZE=WxH (default 1200x800); SPATE_FREE_SURFACE_CELL=c, grid cell
-# size in units of dp (default 1; larger is faster: cost ~ 25 us per grid point on 2 cores);
-# SPATE_FREE_SURFACE_PHASE=k, with several fluids the surface of fluid k (default 0, the first).
+# Environment (scripts take no arguments):
+#   SPATE_INSITU_IMAGE_SIZE=WxH      image size (default 1200x800)
+#   SPATE_FREE_SURFACE_CELL=c        grid cell in units of dp (default 1; larger is faster: cost
+#                                    about 25 us per grid point on 2 cores)
+#   SPATE_FREE_SURFACE_ARRAY=name    the point array to colour by (default velocity, shown as
+#                                    speed; vectors by magnitude): velocity, pressure, density, ...
+#   SPATE_FREE_SURFACE_RANGE=lo,hi   its colour range (default 0,3 m/s for the speed; else the
+#                                    data's range at each step)
+#   SPATE_FREE_SURFACE_DATA=1        also write the coloured surface (3D, .vtp) or water region
+#                                    (2D, .vtu) with its values: insitu/free_surface_<step>.vt?
+#   SPATE_FREE_SURFACE_PHASE=k       with several fluids, the surface of fluid k (default 0, the
+#                                    first: the water under air or oil)
 # Case constants come from the dataset's field data (dp, dimensions), put there by spate.
+# The colour map belongs to this script alone (a separate colour map): other pipelines in the same
+# run cannot change it.
 import os
 
 from paraview.simple import *
@@ -20,6 +33,12 @@ from paraview import catalyst
 
 width, height = (int(v) for v in os.environ.get("SPATE_INSITU_IMAGE_SIZE", "1200x800").split("x"))
 cell_factor = float(os.environ.get("SPATE_FREE_SURFACE_CELL", "1.0"))
+coloured = os.environ.get("SPATE_FREE_SURFACE_ARRAY", "velocity")
+write_data = os.environ.get("SPATE_FREE_SURFACE_DATA", "0") == "1"
+TITLES = {"velocity": "speed [m/s]", "pressure": "pressure [Pa]", "density": "density [kg/m3]"}
+value_name = "speed" if coloured == "velocity" else coloured + "_normalised"
+value_range = os.environ.get("SPATE_FREE_SURFACE_RANGE", "0,3" if coloured == "velocity" else "")
+value_range = [float(v) for v in value_range.split(",")] if value_range else None
 
 particles = TrivialProducer(registrationName="particles")
 
@@ -45,14 +64,12 @@ view.BackgroundColorMode = "Gradient"
 view.Background2 = [0.32, 0.34, 0.43]
 view.Background = [0.85, 0.87, 0.9]
 
-speed = GetColorTransferFunction("velocity")
-speed.ApplyPreset("Jet", True)
-bar = GetScalarBar(speed, view)
-bar.Title = "speed [m/s]"
-bar.ComponentTitle = ""
-bar.WindowLocation = "Any Location"
-bar.Position = [0.89, 0.05]
-bar.ScalarBarLength = 0.33
+# The simulated time (and the step), updated at every in-situ step.
+clock = Text(registrationName="clock")
+clock_shown = Show(clock, view)
+clock_shown.WindowLocation = "Upper Left Corner"
+clock_shown.Color = [0.05, 0.05, 0.05]
+clock_shown.FontSize = max(10, height // 40)
 
 png = CreateExtractor("PNG", view, registrationName="free_surface_png")
 png.Trigger = "TimeStep"
@@ -73,10 +90,33 @@ def _constant(name, fallback):
     return array.GetValue(0) if array else fallback
 
 
-def _fix_speed_range():
-    # After ColorBy, which rescales to the data: a fixed range keeps images comparable over time.
-    speed.AutomaticRescaleRangeMode = "Never"
-    speed.RescaleTransferFunction(0.0, 3.0)
+def _colour(shown):
+    """Colours by the normalised value with this script's own colour map (Jet) and scale bar."""
+    ColorBy(shown, ("POINTS", value_name), separate=True)
+    lut = shown.LookupTable
+    lut.ApplyPreset("Jet", True)
+    if value_range:
+        # A fixed range keeps images comparable over time (after ColorBy, which rescales to the data).
+        lut.AutomaticRescaleRangeMode = "Never"
+        lut.RescaleTransferFunction(*value_range)
+    else:
+        lut.AutomaticRescaleRangeMode = "Grow and update every timestep"
+    bar = GetScalarBar(lut, view)
+    bar.Title = TITLES.get(coloured, coloured)
+    bar.ComponentTitle = ""
+    bar.WindowLocation = "Any Location"
+    bar.Position = [0.89, 0.05]
+    bar.ScalarBarLength = 0.33
+    shown.SetScalarBarVisibility(view, True)
+
+
+def _normalised(interpolated):
+    """The interpolated field divided by the Shepard sum (0 where no particle is in reach)."""
+    calc = Calculator(registrationName="normalised", Input=interpolated)
+    calc.ResultArrayName = value_name
+    vector = fluid_all.PointData[coloured].GetNumberOfComponents() > 1
+    calc.Function = ("mag(%s)" if vector else "%s") % coloured + "/max(shepard,1e-6)"
+    return calc
 
 
 def _build_scene():
@@ -92,13 +132,17 @@ def _build_scene():
     walls.UpdatePipeline()
     fluid_all.UpdatePipeline()
     wb = walls.GetDataInformation().GetBounds()  # tank with its wall layers (walls never move)
+    if coloured not in fluid_all.PointData.keys():
+        raise RuntimeError("SPATE_FREE_SURFACE_ARRAY=%s: no such point array (there are %s)"
+                           % (coloured, ", ".join(fluid_all.PointData.keys())))
 
     surface_source = SPHVolumeInterpolator(registrationName="sph", Input=fluid_all, Source="Bounded Volume")
     surface_source.Kernel = "SPHWendlandQuinticKernel"
     surface_source.Kernel.SpatialStep = dp
     surface_source.Kernel.Dimension = dim
-    surface_source.ExcludedArrays = ["pressure", "density", "id", "kind", "device", "phase"]
+    surface_source.ExcludedArrays = [a for a in fluid_all.PointData.keys() if a != coloured]
     surface_source.ComputeShepardSum = 1
+    surface_source.ShepardSumArrayName = "shepard"
     surface_source.Source = "Bounded Volume"
     box = surface_source.Source
     box.RefinementMode = "Use cell-size"
@@ -110,17 +154,15 @@ def _build_scene():
         hi = [wb[1], wb[3], wb[5]]
         box.Origin = lo
         box.Scale = [hi[k] - lo[k] for k in range(3)]
-        surface = Contour(registrationName="surface", Input=surface_source)
-        surface.ContourBy = ["POINTS", "Shepard Summation"]
+        surface = Contour(registrationName="surface", Input=_normalised(surface_source))
+        surface.ContourBy = ["POINTS", "shepard"]
         surface.Isosurfaces = [0.5]
-        surface.ComputeScalars = 0
+        surface.ComputeScalars = 1
         surface.ComputeNormals = 1
         shown = Show(surface, view)
         shown.Specular = 0.4
         shown.SpecularPower = 40.0
-        ColorBy(shown, ("POINTS", "velocity", "Magnitude"))
-        shown.SetScalarBarVisibility(view, True)
-        _fix_speed_range()
+        _colour(shown)
 
         # Static geometry: the floor, the tank outline and the solids, from the wall particles.
         floor = Plane(registrationName="floor")
@@ -162,16 +204,14 @@ def _build_scene():
         c = cell_factor * dp
         box.Origin = [wb[0], wb[2], -0.5 * c]
         box.Scale = [wb[1] - wb[0], wb[3] - wb[2], c]
-        water = Threshold(registrationName="water", Input=surface_source)
-        water.Scalars = ["POINTS", "Shepard Summation"]
-        water.LowerThreshold = 0.5
-        water.UpperThreshold = 1.0e30
-        water.ThresholdMethod = "Between"
-        water.AllScalars = 0
-        shown = Show(water, view)
-        ColorBy(shown, ("POINTS", "velocity", "Magnitude"))
-        shown.SetScalarBarVisibility(view, True)
-        _fix_speed_range()
+        surface = Threshold(registrationName="water", Input=_normalised(surface_source))
+        surface.Scalars = ["POINTS", "shepard"]
+        surface.LowerThreshold = 0.5
+        surface.UpperThreshold = 1.0e30
+        surface.ThresholdMethod = "Between"
+        surface.AllScalars = 0
+        shown = Show(surface, view)
+        _colour(shown)
         wall_shown = Show(walls, view)
         wall_shown.SetRepresentationType("Points")
         wall_shown.PointSize = 2.0
@@ -183,11 +223,17 @@ def _build_scene():
         view.CameraFocalPoint = [(wb[0] + wb[1]) / 2, (wb[2] + wb[3]) / 2, 0.0]
         view.CameraViewUp = [0, 1, 0]
         view.ResetCamera([wb[0], wb[1], wb[2], wb[3], -0.01, 0.01], 0.95)
+    if write_data:
+        data = CreateExtractor("VTP" if dim == 3 else "VTU", surface, registrationName="free_surface_data")
+        data.Trigger = "TimeStep"
+        data.Trigger.Frequency = 1
+        data.Writer.FileName = "free_surface_{timestep:06d}." + ("vtp" if dim == 3 else "vtu")
     return surface_source
 
 
 def catalyst_execute(info):
     global _scene
     particles.UpdatePipeline(info.time)
+    clock.Text = "t = %.3f s   (step %d)" % (info.time, info.timestep)
     if _scene is None:
         _scene = _build_scene()

@@ -1,7 +1,9 @@
 # script-version: 2
-# spate in-situ pipeline: the fluid particles as point sprites coloured by speed, written as PNGs
-# to <run output>/insitu/particles_<step>.png. A standard ParaView Catalyst v2 script: the source
-# named 'particles' is bound to the simulation's channel of the same name.
+# spate in-situ pipeline: the fluid particles as point sprites coloured by speed, with the
+# simulated time in a corner, written as PNGs to <run output>/insitu/particles_<step>.png. A
+# standard ParaView Catalyst v2 script: the source named 'particles' is bound to the simulation's
+# channel of the same name. Its colour map (Turbo) is its own (a separate colour map): other
+# pipelines in the same run cannot change it, nor it theirs.
 # Environment: SPATE_INSITU_IMAGE_SIZE=WxH (default 800x600).
 import os
 
@@ -29,8 +31,8 @@ display = Show(fluid, view)
 display.SetRepresentationType("Point Gaussian")
 display.ShaderPreset = "Sphere"
 display.GaussianRadius = 0.004
-ColorBy(display, ("POINTS", "velocity", "Magnitude"))
-speed = GetColorTransferFunction("velocity")
+ColorBy(display, ("POINTS", "velocity", "Magnitude"), separate=True)
+speed = display.LookupTable
 speed.ApplyPreset("Turbo", True)
 speed.RescaleTransferFunction(0.0, 3.0)
 speed.AutomaticRescaleRangeMode = "Never"
@@ -39,6 +41,13 @@ bar.Title = "speed [m/s]"
 bar.ComponentTitle = ""
 bar.TitleColor = bar.LabelColor = [0.1, 0.1, 0.1]
 display.SetScalarBarVisibility(view, True)
+
+# The simulated time (and the step), updated at every in-situ step.
+clock = Text(registrationName="clock")
+clock_shown = Show(clock, view)
+clock_shown.WindowLocation = "Upper Left Corner"
+clock_shown.Color = [0.1, 0.1, 0.1]
+clock_shown.FontSize = max(10, height // 40)
 
 png = CreateExtractor("PNG", view, registrationName="particles_png")
 png.Trigger = "TimeStep"
@@ -56,6 +65,7 @@ _camera_set = False
 def catalyst_execute(info):
     global _camera_set
     particles.UpdatePipeline(info.time)
+    clock.Text = "t = %.3f s   (step %d)" % (info.time, info.timestep)
     if not _camera_set:
         # The whole tank, seen from the front (2D) or three-quarters (3D), fixed for the run.
         bounds = particles.GetDataInformation().GetBounds()

@@ -1,293 +1,442 @@
 #include "catalyst_sink.hpp"
 
-#include <vtkCPDataDescription.h>
-#include <vtkCPInputDataDescription.h>
-#include <vtkCPPipeline.h>
-#include <vtkCPProcessor.h>
-#include <vtkCPPythonScriptV2Pipeline.h>
-#include <vtkDataObject.h>
-#include <vtkLogger.h>
-#include <vtkMultiBlockDataSet.h>
-#include <vtkObjectFactory.h>
-#include <vtkOutputWindow.h>
-#include <vtkSmartPointer.h>
-
 #ifdef SPATE_CATALYST_MPI
 #include <mpi.h>
-#include <vtkMPI.h>
 #endif
+
+#include <unistd.h>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
-#include <cstdio>
-#include <functional>
+#include <cstdlib>
+#include <cstring>
 #include <mutex>
+#include <set>
+#include <string_view>
 
-#include "particle_dataset.hpp"
+#include "extract_index.hpp"
+#include "helper_process.hpp"
+#include "insitu_wire.hpp"
+#include "particles/particle_store.hpp"
 #include "private_display.hpp"
 
 namespace spate::catalyst {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-constexpr const char* kChannel = "particles";
-
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-// What VTK and Python report goes to spate's log (plain text, timestamped in files, at the
-// message's level), and a copy is kept while armed: that is how a pipeline's Python traceback
-// reaches failures() and summary.json. Messages of VTK's error/warning macros reach the log through
-// vtkLogger instead (see forward_vtk_log); the base class would not print those either.
-class CapturingOutputWindow : public vtkOutputWindow {
- public:
-  static CapturingOutputWindow* New();
-  vtkTypeMacro(CapturingOutputWindow, vtkOutputWindow)
-  void DisplayText(const char* text) override {
-    if (!text) return;
-    if (armed_) captured_ += text;
-    const MessageTypes type = GetCurrentMessageType();
-    if (GetDisplayStream(type) == StreamType::Null) return;
-    switch (type) {
-      case MESSAGE_TYPE_ERROR: spdlog::error("{}", text); break;
-      case MESSAGE_TYPE_WARNING:
-      case MESSAGE_TYPE_GENERIC_WARNING: spdlog::warn("{}", text); break;
-      case MESSAGE_TYPE_DEBUG: spdlog::debug("{}", text); break;
-      default: spdlog::info("{}", text); break;
-    }
-  }
-  void arm() {
-    captured_.clear();
-    armed_ = true;
-  }
-  std::string disarm() {
-    armed_ = false;
-    return std::move(captured_);
-  }
-
- private:
-  bool armed_ = false;
-  std::string captured_;
-};
-vtkStandardNewMacro(CapturingOutputWindow);
-
-// One script, guarded: remembers whether it failed, on which call, with what text, and its time.
-class GuardedPipeline : public vtkCPPipeline {
- public:
-  static GuardedPipeline* New();
-  vtkTypeMacro(GuardedPipeline, vtkCPPipeline)
-
-  void setup(const std::filesystem::path& script, CapturingOutputWindow* log) {
-    script_ = script;
-    log_ = log;
-    inner_ = vtkSmartPointer<vtkCPPythonScriptV2Pipeline>::New();
-    if (!inner_->Initialize(script.c_str())) fail("ParaView could not prepare the script");
-  }
-  int RequestDataDescription(vtkCPDataDescription* d) override { return failed_ ? 0 : inner_->RequestDataDescription(d); }
-  int CoProcess(vtkCPDataDescription* d) override {
-    if (failed_) return 1;
-    log_->arm();
-    const auto t0 = Clock::now();
-    const int ok = inner_->CoProcess(d);
-    seconds_ += since(t0);
-    std::string text = log_->disarm();
-    ++calls_;
-    if (!ok) fail(text.empty() ? "the script failed (no Python error text was reported)" : text);
-    return 1;  // failures are handled by the sink, per script
-  }
-  int Finalize() override { return failed_ ? 1 : inner_->Finalize(); }
-
-  const std::filesystem::path& script() const { return script_; }
-  bool failed() const { return failed_; }
-  bool failed_on_first_run() const { return failed_ && failed_at_call_ <= 1; }
-  const std::string& error() const { return error_; }
-  double seconds() const { return seconds_; }
-  std::int64_t failed_at_step = -1;
-
- private:
-  void fail(std::string text) {
-    failed_ = true;
-    failed_at_call_ = calls_;
-    error_ = std::move(text);
-  }
-  std::filesystem::path script_;
-  CapturingOutputWindow* log_ = nullptr;
-  vtkSmartPointer<vtkCPPythonScriptV2Pipeline> inner_;
-  bool failed_ = false;
-  std::int64_t calls_ = 0, failed_at_call_ = 0;
-  std::string error_;
-  double seconds_ = 0.0;
-};
-vtkStandardNewMacro(GuardedPipeline);
-
-// vtkLogger (loguru) writes VTK's and ParaView's messages to stderr itself, coloured whenever TERM
-// names a colour terminal, even into a file. Its stderr output is switched off and its messages
-// (warnings and errors; info at debug level) go to spate's log, one line each, naming the source
-// file as loguru did.
-void forward_vtk_log() {
-  vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
-  vtkLogger::AddCallback(
-      "spate",
-      [](void*, const vtkLogger::Message& m) {
-        std::string text = m.message ? m.message : "";
-        while (!text.empty() && text.back() == '\n') text.pop_back();
-        const std::string where = m.filename ? fmt::format(" ({}:{})", std::filesystem::path(m.filename).filename().string(), m.line) : "";
-        if (m.verbosity <= vtkLogger::VERBOSITY_ERROR) spdlog::error("{}{}", text, where);
-        else if (m.verbosity == vtkLogger::VERBOSITY_WARNING) spdlog::warn("{}{}", text, where);
-        else spdlog::debug("{}{}", text, where);
-      },
-      nullptr, vtkLogger::VERBOSITY_INFO);
+bool mpi_initialised() {
+#ifdef SPATE_CATALYST_MPI
+  int on = 0;
+  MPI_Initialized(&on);
+  return on != 0;
+#else
+  return false;
+#endif
 }
+
+int mpi_rank() {
+#ifdef SPATE_CATALYST_MPI
+  int rank = 0;
+  if (mpi_initialised()) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  return rank;
+#else
+  return 0;
+#endif
+}
+
+// ParaView initialises MPI wherever Catalyst runs. Outside mpirun, OpenMPI would then start a
+// singleton `orted` daemon that listens on every interface, and its TCP transport would listen too
+// (ports 1024 and up), for the whole run. One process needs neither: no daemon (it only serves
+// MPI_Comm_spawn) and shared memory only; with both, spate and its children open no listening
+// socket at all (docs/live.md, Security). Explicit settings in the environment win.
+void quiet_mpi_environment() {
+  if (std::getenv("OMPI_COMM_WORLD_SIZE") || std::getenv("PMIX_RANK")) return;
+  setenv("OMPI_MCA_btl", "self,vader", 0);
+  setenv("OMPI_MCA_ess_singleton_isolated", "1", 0);
+}
+
+// This very program, even if its file was replaced or deleted since it started (a rebuild during
+// a run): the helper restarted in the middle of a run must be the same binary.
+std::filesystem::path this_program() { return "/proc/self/exe"; }
 
 }  // namespace
 
-struct CatalystSink::Impl {
+struct CatalystSink::Impl : ScriptObserver {
+  struct Script {
+    std::filesystem::path path;  // absolute
+    std::string label;           // as the user gave it (or "--live HOST:PORT")
+    bool live = false;
+    bool active = true;
+  };
+
   CatalystOptions options;
-  std::unique_ptr<PrivateDisplay> display;  // outlives every VTK object below (declared first)
-  vtkSmartPointer<vtkCPProcessor> processor;
-  vtkSmartPointer<CapturingOutputWindow> log;
-  std::vector<vtkSmartPointer<GuardedPipeline>> pipelines;
-  std::unique_ptr<ParticleDataset> dataset;
-  std::vector<std::string> failures;
+  std::vector<Script> scripts;  // by id: the options' scripts, then live.py
+  bool isolated = true;
+  std::unique_ptr<PrivateDisplay> display;
+  std::unique_ptr<ExtractIndex> index;  // the writing process only (rank 0)
+  // In process.
+  std::unique_ptr<CatalystEngine> engine;
+  std::unique_ptr<CatalystSteering> steering;
+  // Isolated.
+  const SharedParticleMemory* arena = nullptr;
+  std::unique_ptr<HelperProcess> helper;
+  std::vector<SteeringChange> requested;  // from the helper, until polled
+  int display_restarts = 0, stray_deaths = 0;
+  std::vector<FieldVector<char>> staging;  // particle memory, so in the arena
+  bool warned_staging = false;
+  // The step being run.
+  std::int64_t step = 0;
+  double time = 0.0;
+  int current = -1;       // the script that started last and has not finished
+  std::set<int> done;     // scripts done with this step
+  std::vector<std::string> load_errors;
+  // Results.
+  std::vector<std::string> failures, incidents;
   InSituTiming timing;
   bool first = true;
-  std::atomic<int> every{1};  // options.every, then as steered (set by every slab thread)
-  mutable std::mutex mutex;  // guards failures and timing, read from other threads
+  std::int64_t steps_done = 0;
+  std::atomic<int> every{1};
+  mutable std::mutex mutex;  // guards failures, incidents, timing (read from other threads)
 
-  void start() {
-    forward_vtk_log();
-    display = std::make_unique<PrivateDisplay>();
-    processor = vtkSmartPointer<vtkCPProcessor>::New();
-    const std::string dir = options.working_dir.string();
-    const char* working = dir.empty() ? nullptr : dir.c_str();
-    int ok = 0;
-#ifdef SPATE_CATALYST_MPI
-    int mpi = 0;
-    MPI_Initialized(&mpi);
-    if (mpi) {
-      static MPI_Comm world = MPI_COMM_WORLD;
-      vtkMPICommunicatorOpaqueComm comm(&world);
-      ok = processor->Initialize(comm, working);
-    } else {
-      ok = processor->Initialize(working);
+  struct HelperSteering : SteeringSource {
+    Impl* m;
+    explicit HelperSteering(Impl* impl) : m(impl) {}
+    std::vector<SteeringChange> poll(std::int64_t step, double time) override {
+      auto out = std::move(m->requested);
+      m->requested.clear();
+      for (auto& c : out) c.step = step, c.time = time;
+      return out;
     }
-#else
-    ok = processor->Initialize(working);
-#endif
-    if (!ok) throw InSituLoadError("ParaView Catalyst failed to initialise");
-    log = vtkSmartPointer<CapturingOutputWindow>::New();
-    vtkOutputWindow::SetInstance(log);
-    dataset = std::make_unique<ParticleDataset>();
-    for (auto& [name, value] : options.constants) dataset->set_constant(name, value);
-    for (auto& script : options.scripts) {
-      auto p = vtkSmartPointer<GuardedPipeline>::New();
-      p->setup(script, log);
-      if (p->failed()) throw InSituLoadError(fmt::format("--pipeline {}: {}", script.string(), p->error()));
-      processor->AddPipeline(p);
-      pipelines.push_back(p);
-    }
-    timing.script_seconds.assign(options.scripts.size(), 0.0);
+  } helper_steering{this};
+
+  bool has_live() const { return options.live.has_value(); }
+  int live_id() const { return has_live() ? static_cast<int>(scripts.size()) - 1 : -1; }
+  bool any_active() const {
+    for (auto& s : scripts)
+      if (s.active) return true;
+    return false;
   }
 
-  void stop() {
-    if (processor) processor->Finalize();
-    processor = nullptr;
-    pipelines.clear();
-    dataset.reset();
-    vtkOutputWindow::SetInstance(nullptr);
-    log = nullptr;
-    vtkLogger::RemoveCallback("spate");
+  // ScriptObserver: which script runs, and which files it wrote.
+  void started(int id) override { current = id; }
+  void finished(int id) override {
+    done.insert(id);
+    current = -1;
+    if (index) index->record(step, time, scripts[id].label);
   }
 
-  void run_step(std::int64_t step, double time, const std::vector<SlabView>& slabs) {
-    vtkNew<vtkCPDataDescription> description;
-    description->AddInput(kChannel);
-    description->SetTimeData(time, step);
-    if (!processor->RequestDataDescription(description)) return;
-    vtkCPInputDataDescription* input = description->GetInputDescriptionByName(kChannel);
-    // A v2 script's first request comes before it is imported and names no fields: give it all.
-    std::function<bool(std::string_view)> wanted;
-    if (input->GetGenerateMesh() && !input->GetAllFields())
-      wanted = [input](std::string_view name) { return input->IsFieldNeeded(std::string(name).c_str(), vtkDataObject::POINT); };
+  // Records an event; the log gets its first line (a traceback is in the log already).
+  void note(std::vector<std::string>& list, std::string text) {
+    spdlog::warn("in situ: {}", text.substr(0, text.find('\n')));
+    std::lock_guard lock(mutex);
+    list.push_back(std::move(text));
+  }
 
-    const auto t0 = Clock::now();
-    input->SetGrid(dataset->update(slabs, wanted));
-    const double adaptor = since(t0);
+  // A script is out for the rest of the run; in the run's first in-situ step that is a load error.
+  // `what` says what happened, `detail` (a traceback) follows on the next lines.
+  void switch_off(int id, const std::string& what, const std::string& detail = "") {
+    Script& s = scripts[id];
+    if (!s.active) return;
+    s.active = false;
+    if (steps_done == 0 && !s.live) {
+      load_errors.push_back(fmt::format("--pipeline {}: the script failed to load: {}{}{}", s.label, what,
+                                        detail.empty() ? "" : ":\n", detail));
+      return;
+    }
+    note(failures, fmt::format("{}: {} at step {} (t = {:.6g} s), switched off{}{}{}", s.label, what, step, time,
+                               s.live ? " (the run goes on without live)" : "", detail.empty() ? "" : ":\n", detail));
+  }
 
-    std::vector<double> before;
-    for (auto& p : pipelines) before.push_back(p->seconds());
-    processor->CoProcess(description);
-
-    std::vector<std::string> load_errors;
+  void account(const nlohmann::json& script_seconds, double adaptor_seconds, bool ran) {
     std::lock_guard lock(mutex);
     timing.steps += 1;
-    timing.adaptor_seconds += adaptor;
-    timing.adaptor_step_seconds.push_back(adaptor);
+    timing.adaptor_seconds += adaptor_seconds;
+    timing.adaptor_step_seconds.push_back(ran ? adaptor_seconds : 0.0);
     timing.pipelines_step_seconds.push_back(0.0);
-    for (std::size_t k = 0; k < pipelines.size(); ++k) {
-      GuardedPipeline* p = pipelines[k];
-      const double spent = p->seconds() - before[k];
-      timing.pipelines_seconds += spent;
-      timing.pipelines_step_seconds.back() += spent;
-      for (std::size_t s = 0; s < options.scripts.size(); ++s)
-        if (options.scripts[s] == p->script()) timing.script_seconds[s] += spent;
-      if (!p->failed() || p->failed_at_step >= 0) continue;
-      p->failed_at_step = step;
-      if (p->failed_on_first_run()) {
-        load_errors.push_back(fmt::format("--pipeline {}: the script failed to load:\n{}", p->script().string(), p->error()));
+    for (auto& entry : script_seconds) {
+      const int id = entry.at(0).get<int>();
+      const double s = entry.at(1).get<double>();
+      timing.pipelines_seconds += s;
+      timing.pipelines_step_seconds.back() += s;
+      if (id >= 0 && static_cast<std::size_t>(id) < timing.script_seconds.size()) timing.script_seconds[id] += s;
+    }
+  }
+
+  void python_failures(const nlohmann::json& list) {
+    for (auto& f : list) {
+      const int id = f.at("id").get<int>();
+      switch_off(id, "failed", f.at("error").get<std::string>());
+    }
+  }
+
+  // ---- in process ----
+  void start_in_process() {
+    display = std::make_unique<PrivateDisplay>(/*export_display=*/true);
+    EngineOptions eo;
+    for (std::size_t k = 0; k < scripts.size(); ++k) {
+      eo.scripts.push_back(scripts[k].path);
+      eo.ids.push_back(static_cast<int>(k));
+    }
+    eo.working_dir = options.working_dir;
+    eo.constants = options.constants;
+    eo.mpi = mpi_initialised();
+    engine = std::make_unique<CatalystEngine>(eo);
+    if (has_live()) steering = std::make_unique<CatalystSteering>(options.live->xml, options.live->initial);
+  }
+
+  void run_in_process(const std::vector<SlabView>& slabs) {
+    const EngineStep r = engine->run_step(step, time, slabs, {}, this);
+    nlohmann::json seconds = nlohmann::json::array();
+    for (auto& [id, s] : r.script_seconds) seconds.push_back({id, s});
+    account(seconds, r.adaptor_seconds, r.ran);
+    nlohmann::json fails = nlohmann::json::array();
+    for (auto& f : r.failures) fails.push_back({{"id", f.id}, {"error", f.error}});
+    python_failures(fails);
+  }
+
+  // ---- isolated ----
+  nlohmann::json init_message() const {
+    nlohmann::json j = {{"type", "init"}, {"working_dir", options.working_dir.string()}, {"log_level", static_cast<int>(spdlog::get_level())}};
+    j["scripts"] = nlohmann::json::array();
+    j["ids"] = nlohmann::json::array();
+    for (std::size_t k = 0; k < scripts.size(); ++k) {
+      if (!scripts[k].active) continue;
+      j["scripts"].push_back(scripts[k].path.string());
+      j["ids"].push_back(k);
+    }
+    j["constants"] = nlohmann::json::object();
+    for (auto& [name, value] : options.constants) j["constants"][name] = value;
+    j["arena"] = {{"base", arena->base}, {"size", arena->size}};
+    j["live"] = nullptr;
+    if (has_live() && scripts[live_id()].active) {
+      const LiveOptions& l = *options.live;
+      j["live"] = {{"id", live_id()},
+                   {"url", l.url},
+                   {"xml", l.xml.string()},
+                   {"timeout", l.handshake_timeout},
+                   {"initial",
+                    {{"gravity", l.initial.gravity},
+                     {"viscosity", l.initial.viscosity},
+                     {"artificial_viscosity", l.initial.artificial_viscosity},
+                     {"insitu_every", l.initial.insitu_every}}}};
+    }
+    return j;
+  }
+
+  // Starts a helper for the active scripts. At construction a failure is a load error; later it
+  // switches in situ off for the rest of the run.
+  bool start_helper() {
+    std::string why;
+    try {
+      helper = std::make_unique<HelperProcess>(options.helper_program, display->display(), *arena);
+      nlohmann::json reply;
+      if (!helper->send(init_message())) {
+        why = "it did not take its instructions (" + helper->reap(5.0) + ")";
       } else {
-        spdlog::warn("in-situ pipeline {} failed at step {} and is switched off; the run continues", p->script().string(), step);
-        failures.push_back(fmt::format("{}: failed at step {} (t = {:.6g} s), switched off:\n{}", p->script().string(), step, time, p->error()));
+        const auto got = helper->receive(reply, std::max(120.0, options.timeout));
+        if (got == wire::Received::kMessage && reply.value("type", "") == "ready") return true;
+        if (got == wire::Received::kMessage && reply.value("type", "") == "error") why = reply.value("message", "");
+        else if (got == wire::Received::kTimeout) why = "it did not start within the time allowed (" + helper->kill_now() + ")";
+        else why = "it ended while starting (" + helper->reap(5.0) + ")";
+      }
+    } catch (const std::exception& e) {
+      why = e.what();
+    }
+    helper.reset();
+    if (steps_done == 0 && first) throw InSituLoadError("ParaView Catalyst could not start: " + why);
+    for (std::size_t k = 0; k < scripts.size(); ++k)
+      if (scripts[k].active) switch_off(static_cast<int>(k), "the in-situ process could not be restarted (" + why + ")");
+    return false;
+  }
+
+  // The solver's arrays as the helper can see them: in the shared arena they go as they are (zero
+  // copy); anything else (arrays allocated before the arena existed) is copied into it once per step.
+  std::vector<SlabView> staged(const std::vector<SlabView>& slabs) {
+    std::vector<SlabView> out = slabs;
+    std::size_t used = 0;
+    auto stage = [&](const void*& p, std::size_t bytes) {
+      if (!p || bytes == 0 || arena->contains(p)) return;
+      if (!warned_staging) {
+        spdlog::warn("in situ: particle arrays outside the shared arena are copied for the pipelines");
+        warned_staging = true;
+      }
+      if (staging.size() <= used) staging.emplace_back();
+      auto& buffer = staging[used++];
+      buffer.resize(bytes);
+      std::memcpy(buffer.data(), p, bytes);
+      p = buffer.data();
+    };
+    for (SlabView& v : out) {
+      for (auto& p : v.pos) {
+        const void* q = p;
+        stage(q, v.owned * sizeof(float));
+        p = static_cast<const float*>(q);
+      }
+      for (SlabArray& a : v.arrays)
+        for (auto& d : a.data) stage(d, v.owned * field_type_size(a.type));
+    }
+    return out;
+  }
+
+  // The helper ended in the middle of a step: a lost display (replace it and retry), the live
+  // handshake watch, or the script that was running (switched off).
+  void after_helper_ended(const std::string& how, bool display_lost, const std::string& live_timeout) {
+    if (!live_timeout.empty() && has_live()) {
+      switch_off(live_id(), live_timeout);
+      return;
+    }
+    if (display_lost || !display->alive()) {
+      const std::string lost = display->display();
+      if (display_restarts < 3 && display->restart()) {
+        ++display_restarts;
+        note(incidents, fmt::format("step {}: the display {} was lost (the in-situ process {}); the step is run again on a "
+                                    "new private display {}", step, lost.empty() ? "(none)" : lost, how, display->display()));
+        return;
+      }
+      if (current >= 0) switch_off(current, fmt::format("could not render: the display {} was lost and no new one could be started (the in-situ process {})", lost, how));
+      return;
+    }
+    if (current >= 0) {
+      switch_off(current, "ended the in-situ process (" + how + ")");
+      return;
+    }
+    // Outside any script (ParaView itself): once is an incident, twice ends in situ.
+    if (++stray_deaths < 2) {
+      note(incidents, fmt::format("step {}: the in-situ process {} outside any pipeline; restarted", step, how));
+      return;
+    }
+    for (std::size_t k = 0; k < scripts.size(); ++k)
+      if (scripts[k].active) switch_off(static_cast<int>(k), "the in-situ process ended twice outside any pipeline (" + how + ")");
+  }
+
+  void run_isolated(const std::vector<SlabView>& slabs) {
+    const nlohmann::json views = wire::slabs_to_json(staged(slabs));
+    for (;;) {
+      std::set<int> skip = done;
+      bool left = false;
+      for (std::size_t k = 0; k < scripts.size(); ++k) left = left || (scripts[k].active && !done.count(static_cast<int>(k)));
+      if (!left) return;
+      if (!helper && !start_helper()) return;
+      current = -1;
+      std::string live_timeout;
+      if (helper->send({{"type", "step"}, {"step", step}, {"time", time}, {"slabs", views}, {"skip", skip}})) {
+        for (;;) {
+          // A script gets `timeout` seconds of silence; the live script may wait for ever (a paused
+          // client), its handshake is watched inside the helper.
+          const bool live_running = current >= 0 && scripts[current].live;
+          nlohmann::json in;
+          const auto got = helper->receive(in, live_running ? -1.0 : options.timeout);
+          if (got == wire::Received::kTimeout) {
+            const std::string how = helper->kill_now();
+            helper.reset();
+            if (index) index->discard();
+            if (current >= 0) switch_off(current, fmt::format("did not finish within {:g} s (insitu.timeout) and was stopped", options.timeout));
+            else after_helper_ended(how, false, "");
+            break;
+          }
+          if (got == wire::Received::kClosed) break;
+          const std::string type = in.value("type", "");
+          if (type == "started") started(in.at("id").get<int>());
+          else if (type == "finished") finished(in.at("id").get<int>());
+          else if (type == "live_timeout") live_timeout = in.value("message", "");
+          else if (type == "done") {
+            account(in.at("script_seconds"), in.value("adaptor_seconds", 0.0), in.value("ran", false));
+            python_failures(in.at("failures"));
+            for (auto& c : in.at("steering")) {
+              SteeringChange change{step, time, c.at("name").get<std::string>(), c.at("value").get<std::vector<double>>()};
+              remember_steered(change);
+              requested.push_back(std::move(change));
+            }
+            return;
+          }
+        }
+      }
+      if (helper) {  // the connection closed: the helper ended
+        const std::string how = helper->reap(10.0);
+        const bool display_lost = helper->exit_status() == kDisplayLostExit;
+        helper.reset();
+        if (index) index->discard();
+        after_helper_ended(how, display_lost, live_timeout);
       }
     }
-    // Switched-off scripts leave the processor (they already answer no to every request).
-    for (auto it = pipelines.begin(); it != pipelines.end();) {
-      if ((*it)->failed()) {
-        processor->RemovePipeline(*it);
-        it = pipelines.erase(it);
-      } else {
-        ++it;
-      }
-    }
-    if (!load_errors.empty()) {
-      std::string all;
-      for (auto& e : load_errors) all += (all.empty() ? "" : "\n") + e;
-      throw InSituLoadError(all);
-    }
+  }
+
+  // A fresh helper's steering proxy starts with the values steered so far.
+  void remember_steered(const SteeringChange& c) {
+    if (!has_live() || validate(c, static_cast<int>(dimensions())).has_value()) return;
+    SteeringInitial& i = options.live->initial;
+    if (c.name == "gravity" && c.value.size() == 3) i.gravity = {c.value[0], c.value[1], c.value[2]};
+    if (c.name == "viscosity") i.viscosity = c.value.at(0);
+    if (c.name == "artificial_viscosity") i.artificial_viscosity = c.value.at(0);
+    if (c.name == "insitu_every") i.insitu_every = static_cast<int>(c.value.at(0));
+  }
+  double dimensions() const {
+    for (auto& [name, value] : options.constants)
+      if (name == "dimensions") return value;
+    return 3.0;
   }
 };
 
 CatalystSink::CatalystSink(CatalystOptions options) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
   if (options.every < 1) throw InSituLoadError(fmt::format("--insitu-every {}: must be at least 1", options.every));
+  if (!(options.timeout > 0)) throw InSituLoadError(fmt::format("insitu.timeout {}: must be > 0 seconds", options.timeout));
+  if (options.live) options.scripts.push_back(options.live->script);
   for (auto& script : options.scripts) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(script, ec) && !std::filesystem::is_directory(script, ec))
       throw InSituLoadError(fmt::format("--pipeline {}: no such script", script.string()));
-    script = std::filesystem::absolute(script);
+    m.scripts.push_back({std::filesystem::absolute(script), script.string(), false, true});
+  }
+  if (options.live) {
+    m.scripts.back().live = true;
+    m.scripts.back().label = "--live " + options.live->url;
   }
   if (!options.working_dir.empty()) options.working_dir = std::filesystem::absolute(options.working_dir);
-  impl_->every = options.every;
-  impl_->options = std::move(options);
-  try {
-    impl_->start();
-  } catch (...) {
-    impl_->stop();
-    throw;
+  if (options.helper_program.empty()) options.helper_program = this_program();
+  m.every = options.every;
+  m.timing.script_seconds.assign(m.scripts.size(), 0.0);
+  m.options = std::move(options);
+  quiet_mpi_environment();
+  // SPATE_INSITU_IN_PROCESS=1 runs the pipelines in the solver's process (no isolation: for a
+  // debugger, and to measure what the helper costs; docs/insitu.md).
+  const char* in_process = std::getenv("SPATE_INSITU_IN_PROCESS");
+  const bool asked_in_process = in_process && std::string_view(in_process) == "1";
+  m.isolated = m.options.isolation == Isolation::kHelper ||
+               (m.options.isolation == Isolation::kAuto && !mpi_initialised() && !asked_in_process);
+  if (mpi_rank() == 0 && !m.options.working_dir.empty()) m.index = std::make_unique<ExtractIndex>(m.options.working_dir);
+  if (!m.isolated) {
+    m.start_in_process();
+    return;
   }
+  try {
+    m.arena = &share_particle_memory();
+  } catch (const std::exception& e) {
+    throw InSituLoadError(e.what());
+  }
+  m.display = std::make_unique<PrivateDisplay>(/*export_display=*/false);
+  m.start_helper();
 }
 
 CatalystSink::~CatalystSink() {
-  try {
-    impl_->stop();
-  } catch (const std::exception& e) {
-    spdlog::error("finalising Catalyst: {}", e.what());
+  Impl& m = *impl_;
+  if (m.index) {
+    const std::string error = m.index->write(true);
+    if (!error.empty()) spdlog::error("{}", error);
   }
+  if (m.helper) {
+    const std::string how = m.helper->finish(60.0);
+    if (m.helper->exit_status() != 0) m.note(m.incidents, "the in-situ process " + how + " while finishing (after the last in-situ step)");
+  }
+  m.helper.reset();
+  m.steering.reset();  // unregisters its proxy while ParaView is still up
+  m.engine.reset();
 }
 
 bool CatalystSink::wants(std::int64_t step, double) {
-  if (impl_->pipelines.empty()) return false;
+  if (!impl_->any_active()) return false;
   return impl_->first || step % impl_->every.load() == 0;
 }
 
@@ -296,8 +445,31 @@ void CatalystSink::set_interval(int every) {
 }
 
 void CatalystSink::execute(std::int64_t step, double time, const std::vector<SlabView>& slabs) {
-  impl_->first = false;
-  impl_->run_step(step, time, slabs);
+  Impl& m = *impl_;
+  m.first = false;
+  m.step = step;
+  m.time = time;
+  m.current = -1;
+  m.done.clear();
+  if (m.index) m.index->begin_step();
+  const auto t0 = std::chrono::steady_clock::now();
+  if (m.isolated) m.run_isolated(slabs);
+  else m.run_in_process(slabs);
+  {
+    std::lock_guard lock(m.mutex);
+    m.timing.solver_wait_step_seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  ++m.steps_done;
+  if (m.index) {
+    const std::string error = m.index->write(false);
+    if (!error.empty()) m.note(m.failures, error);
+  }
+  if (!m.load_errors.empty()) {
+    std::string all;
+    for (auto& e : m.load_errors) all += (all.empty() ? "" : "\n") + e;
+    m.load_errors.clear();
+    throw InSituLoadError(all);
+  }
 }
 
 std::vector<std::string> CatalystSink::failures() const {
@@ -305,11 +477,24 @@ std::vector<std::string> CatalystSink::failures() const {
   return impl_->failures;
 }
 
+std::vector<std::string> CatalystSink::incidents() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->incidents;
+}
+
 InSituTiming CatalystSink::timing() const {
   std::lock_guard lock(impl_->mutex);
   return impl_->timing;
 }
 
-vtkMultiBlockDataSet* CatalystSink::last_dataset() const { return impl_->dataset ? impl_->dataset->data() : nullptr; }
+SteeringSource* CatalystSink::steering() {
+  if (!impl_->has_live()) return nullptr;
+  if (impl_->isolated) return &impl_->helper_steering;
+  return impl_->steering.get();
+}
+
+bool CatalystSink::isolated() const { return impl_->isolated; }
+
+vtkMultiBlockDataSet* CatalystSink::last_dataset() const { return impl_->engine ? impl_->engine->last_dataset() : nullptr; }
 
 }  // namespace spate::catalyst

@@ -5,8 +5,8 @@
 // live step (inside CoProcess, on every rank). poll() reports the properties that changed since the
 // last poll as SteeringChange entries; the solver validates and applies them (solver/sim/steering).
 //
-// Construct after the CatalystSink (which starts ParaView's proxy manager) and use on the main
-// thread. The simulation never listens: the Live connection is made by ParaView's script pipeline
+// Construct after the CatalystEngine (which starts ParaView's proxy manager), in the process that
+// runs Catalyst (the in-situ helper, or the solver under MPI), and use on the main thread. The simulation never listens: the Live connection is made by ParaView's script pipeline
 // (pipelines/live.py), which connects out to the configured host.
 #include <array>
 #include <filesystem>
@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "catalyst_sink.hpp"
+#include "catalyst_engine.hpp"
 #include "sim/steering.hpp"
 
 namespace spate::catalyst {

@@ -69,9 +69,12 @@ void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::pa
   j["adaptor_seconds_each_step"] = t.adaptor_step_seconds;
   j["pipelines_seconds_per_step"] = t.pipelines_seconds / n;
   j["pipelines_seconds_each_step"] = t.pipelines_step_seconds;
+  j["solver_wait_seconds_each_step"] = t.solver_wait_step_seconds;
   j["script_seconds_per_step"] = nlohmann::json::array();
   for (double s : t.script_seconds) j["script_seconds_per_step"].push_back(s / n);
   j["failures"] = sink.failures();
+  j["incidents"] = sink.incidents();
+  j["isolated"] = sink.isolated();
   std::ofstream(out_dir / "insitu.json") << j.dump(2) << "\n";
   spdlog::info("in situ: {} steps, adaptor {:.3g} ms/step, pipelines {:.3g} s/step", t.steps, 1e3 * t.adaptor_seconds / n,
                t.pipelines_seconds / n);
@@ -123,21 +126,12 @@ std::filesystem::path data_dir() {
 }
 
 #ifdef SPATE_WITH_CATALYST
-std::unique_ptr<catalyst::CatalystSink> make_catalyst_sink(const std::vector<std::filesystem::path>& scripts, int every,
-                                                           const std::filesystem::path& working_dir, const Case& c) {
-  catalyst::CatalystOptions co;
-  co.scripts = scripts;
-  co.every = every;
-  co.working_dir = working_dir;
+std::unique_ptr<catalyst::CatalystSink> make_catalyst_sink(catalyst::CatalystOptions co, const Case& c) {
   co.constants = case_constants(c);
-  std::filesystem::create_directories(working_dir);
-  // Started outside mpirun, ParaView initialises MPI itself, and OpenMPI's TCP transport would
-  // then listen on every interface (ports 1024 and up) for the whole run. One process needs only
-  // shared memory; with it the run opens no listening socket at all (docs/live.md, Security).
-  // An explicit OMPI_MCA_btl in the environment wins.
-  if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK")) ::setenv("OMPI_MCA_btl", "self,vader", 0);
+  co.timeout = c.insitu_timeout;
+  std::filesystem::create_directories(co.working_dir);
   try {
-    return std::make_unique<catalyst::CatalystSink>(co);
+    return std::make_unique<catalyst::CatalystSink>(std::move(co));
   } catch (const catalyst::InSituLoadError& e) {
     throw BadInput(e.what());
   }
@@ -200,18 +194,20 @@ int run_command(const RunArgs& a) {
 
 #ifdef SPATE_WITH_CATALYST
   std::unique_ptr<catalyst::CatalystSink> insitu;
-  std::unique_ptr<catalyst::CatalystSteering> live_steering;
   if (!pipelines.empty() || live) {
-    std::vector<std::filesystem::path> scripts(pipelines.begin(), pipelines.end());
+    catalyst::CatalystOptions co;
+    co.scripts.assign(pipelines.begin(), pipelines.end());
+    co.every = insitu_every;
+    co.working_dir = o.out_dir;
     if (live) {
+      catalyst::LiveOptions lo;
+      lo.url = live_url;
+      lo.script = pipelines_dir() / "live.py";
+      lo.xml = pipelines_dir() / "spate_steering.xml";
+      lo.handshake_timeout = c.insitu_live_timeout;
       // pipelines/live.py reads the address from the environment (ParaView scripts take no arguments).
       ::setenv("SPATE_LIVE_URL", live_url.c_str(), 1);
-      scripts.push_back(pipelines_dir() / "live.py");
-    }
-    insitu = make_catalyst_sink(scripts, insitu_every, o.out_dir, c);
-    o.insitu = insitu.get();
-    if (live) {
-      catalyst::SteeringInitial init;
+      catalyst::SteeringInitial& init = lo.initial;
       // The case's own (double) values: they survive ParaView's state round trips unchanged, so an
       // untouched parameter never shows up as a change.
       for (int k = 0; k < 3; ++k) init.gravity[k] = k < c.dim ? c.gravity[k] : 0.0;
@@ -233,28 +229,40 @@ int run_command(const RunArgs& a) {
           // an unreadable checkpoint is reported by the run itself (exit 2)
         }
       }
-      try {
-        live_steering = std::make_unique<catalyst::CatalystSteering>(pipelines_dir() / "spate_steering.xml", init);
-      } catch (const catalyst::InSituLoadError& e) {
-        throw BadInput(e.what());
-      }
-      o.steering = live_steering.get();
+      co.live = lo;
+    }
+    insitu = make_catalyst_sink(std::move(co), c);
+    o.insitu = insitu.get();
+    if (live) {
+      o.steering = insitu->steering();
       spdlog::info("live: connecting out to ParaView at {} on every in-situ step (Catalyst > Connect there)", live_url);
     }
   }
 #endif
 
   RunResult r;
+  std::string bad_input;  // found once the run had written outputs: a pipeline that fails to load
   try {
     r = Simulation(c, o).run();
+#ifdef SPATE_WITH_CATALYST
+  } catch (const catalyst::InSituLoadError& e) {
+    bad_input = e.what();
+    r.exit_code = 2;
+    r.exit_status = "bad input";
+    r.message = bad_input;
+    r.insitu_failures = insitu->failures();
+#endif
   } catch (const InputError& e) {
-    throw BadInput(e.what());
+    throw BadInput(e.what());  // before any output (a bad restart file): no output folder
   } catch (const CaseError& e) {
     throw BadInput(e.what());
   }
   // Every rank knows the outcome; rank 0 reports it.
   const ProcessGroup& group = process_group();
-  if (group.rank != 0) return r.exit_code;
+  if (group.rank != 0) {
+    if (!bad_input.empty()) throw BadInput(bad_input);
+    return r.exit_code;
+  }
 #ifdef SPATE_WITH_CATALYST
   if (insitu) report_insitu(*insitu, o.out_dir);
 #endif
@@ -264,7 +272,10 @@ int run_command(const RunArgs& a) {
   x.backend = a.backend;
   x.ranks = group.ranks;
   x.warnings = warnings;
+  // Also for a pipeline that failed to load: the run had started writing outputs, so it leaves its
+  // summary like every run that got this far.
   write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
+  if (!bad_input.empty()) throw BadInput(bad_input);
   if (r.exit_code == 3) {
     spdlog::error("the run went unstable: {}", r.message);
   } else {

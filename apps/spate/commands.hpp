@@ -11,6 +11,7 @@ namespace spate {
 struct Case;
 namespace catalyst {
 class CatalystSink;
+struct CatalystOptions;
 }
 }  // namespace spate
 
@@ -72,10 +73,10 @@ int hardware_threads();
 // installed spate (cmake --install), else the source tree it was built from.
 std::filesystem::path data_dir();
 #ifdef SPATE_WITH_CATALYST
-// A Catalyst sink running `scripts` every `every` steps with extracts under `working_dir` and the
-// case's constants in the dataset's field data. A script that fails to load: BadInput.
-std::unique_ptr<catalyst::CatalystSink> make_catalyst_sink(const std::vector<std::filesystem::path>& scripts, int every,
-                                                           const std::filesystem::path& working_dir, const Case& c);
+// A Catalyst sink for `co` (scripts, every, working_dir, live) with the case's constants in the
+// dataset's field data and its insitu.timeout; working_dir is created. A script that fails to
+// load: BadInput.
+std::unique_ptr<catalyst::CatalystSink> make_catalyst_sink(catalyst::CatalystOptions co, const Case& c);
 #endif
 
 }  // namespace spate::app

@@ -12,6 +12,9 @@
 #include "io/log.hpp"
 #include "io/provenance.hpp"
 #include "io/version.hpp"
+#ifdef SPATE_WITH_CATALYST
+#include "insitu_helper.hpp"
+#endif
 
 namespace {
 
@@ -33,6 +36,10 @@ std::string who() {
 
 int main(int argc, char** argv) {
   using namespace spate::app;
+#ifdef SPATE_WITH_CATALYST
+  // The in-situ helper process spate starts for its Catalyst pipelines (adaptors/catalyst).
+  if (argc > 1 && std::string_view(argv[1]) == spate::catalyst::kHelperCommand) return spate::catalyst::run_insitu_helper(argc, argv);
+#endif
   spate::record_invocation(argc, argv);
   spate::configure_logging(spdlog::level::info);
   try {

@@ -145,7 +145,12 @@ int post_command(const PostArgs& a) {
   if (!c.probes.empty()) probes = std::make_unique<SavedProbes>(c, out);
 #ifdef SPATE_WITH_CATALYST
   std::unique_ptr<catalyst::CatalystSink> pipelines;
-  if (!a.pipelines.empty()) pipelines = make_catalyst_sink({a.pipelines.begin(), a.pipelines.end()}, 1, out, c);
+  if (!a.pipelines.empty()) {
+    catalyst::CatalystOptions co;
+    co.scripts.assign(a.pipelines.begin(), a.pipelines.end());
+    co.working_dir = out;
+    pipelines = make_catalyst_sink(std::move(co), c);
+  }
 #endif
   bool warned = false;
   for (const SavedStep& s : steps) {

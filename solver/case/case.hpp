@@ -116,6 +116,8 @@ struct Case {
   // file's folder, run every `insitu_every` steps; --pipeline/--insitu-every replace them.
   std::vector<std::string> insitu_pipelines;
   int insitu_every = 1;
+  double insitu_timeout = 300.0;      // seconds a pipeline may take on one in-situ step
+  double insitu_live_timeout = 15.0;  // seconds a Catalyst Live peer may take to answer the handshake
 };
 
 // Reads, applies `overrides` ("key.path=value"), validates. Throws CaseError.

@@ -563,6 +563,12 @@ Case read(Section& root, const std::string& file) {
     }
     c.insitu_every = in->integer("every", 1);
     if (c.insitu_every < 1) in->fail(in->raw("every"), "every", "must be >= 1 (steps between in-situ runs)");
+    c.insitu_timeout = in->number("timeout", c.insitu_timeout);
+    if (!(c.insitu_timeout > 0) || !std::isfinite(c.insitu_timeout))
+      in->fail(in->raw("timeout"), "timeout", "must be > 0 (seconds a pipeline may take on one in-situ step)");
+    c.insitu_live_timeout = in->number("live_timeout", c.insitu_live_timeout);
+    if (!(c.insitu_live_timeout > 0) || !std::isfinite(c.insitu_live_timeout))
+      in->fail(in->raw("live_timeout"), "live_timeout", "must be > 0 (seconds a live peer may take to answer)");
     in->finish();
   }
   root.finish();

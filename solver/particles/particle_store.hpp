@@ -12,13 +12,14 @@
 #include <vector>
 
 #include "field_registry.hpp"
+#include "particle_memory.hpp"
 
 namespace spate {
 
-// The one place the particle arrays' allocation is chosen (a shared-memory or pinned allocator for
-// in-situ consumers would go here).
+// The one place the particle arrays' allocation is chosen: particle_memory.hpp (the heap, or the
+// shared arena an in-situ helper process maps, so that Catalyst sees the solver's own pages).
 template <class T>
-using FieldVector = std::vector<T>;
+using FieldVector = std::vector<T, ParticleAllocator<T>>;
 template <class T, FieldShape S>
 struct FieldColumns {
   using type = FieldVector<T>;

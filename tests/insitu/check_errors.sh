@@ -24,6 +24,8 @@ grep -q "failed to load" "$out/load.err" || fail "failing load: no message"
 grep -q "Traceback" "$out/load.err" || fail "failing load: no Python traceback"
 grep -q "NoSuchFilterInParaView" "$out/load.err" || fail "failing load: traceback does not name the error"
 [ ! -e "$out/load/probes" ] || [ -z "$(ls "$out/load/checkpoints" 2>/dev/null)" ] || fail "failing load: the run went on"
+python3 -c "import json,sys; s=json.load(open(sys.argv[1])); sys.exit(s['exit_code'] != 2)" "$out/load/summary.json" ||
+  fail "failing load: summary.json missing or not exit 2"
 
 SPATE_FAIL_AT_STEP=2 "$spate" run "$case_2d" --out "$out/later" --steps 4 --pipeline "$src/tests/insitu/fail_at_step.py" \
   --pipeline "$src/pipelines/extract.py" "${common[@]}" 2>"$out/later.err"

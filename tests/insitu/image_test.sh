@@ -8,22 +8,9 @@ spate=$1 src=$2 out=$3 name=$4 case_file=$5 steps=$6
 shift 6
 rm -rf "$out"
 mkdir -p "$out"
-render() {
-  SPATE_INSITU_IMAGE_SIZE=400x300 "$spate" run "$src/cases/$case_file" --out "$out/run" --steps "$steps" \
-    --insitu-every "$steps" --pipeline "$src/pipelines/free_surface.py" --quiet "$@" >"$out/run.log" 2>&1
-}
-# On a shared machine a private Xvfb occasionally goes away under us ("bad X server connection");
-# that is the environment, not the image, so try again (twice at most).
-for attempt in 1 2 3; do
-  if render "$@"; then break; fi
-  if [ "$attempt" -lt 3 ] && grep -q "bad X server connection" "$out/run.log"; then
-    echo "X server lost (attempt $attempt), retrying"
-    rm -rf "$out/run"
-    continue
-  fi
-  cat "$out/run.log"
-  exit 1
-done
+SPATE_INSITU_IMAGE_SIZE=400x300 "$spate" run "$src/cases/$case_file" --out "$out/run" --steps "$steps" \
+  --insitu-every "$steps" --pipeline "$src/pipelines/free_surface.py" --quiet "$@" >"$out/run.log" 2>&1 ||
+  { cat "$out/run.log"; exit 1; }
 image="$out/run/insitu/free_surface_$(printf %06d "$steps").png"
 [ -f "$image" ] || { cat "$out/run.log"; echo "no image $image"; exit 1; }
 cp "$image" "$out/$name.new.png"

@@ -1,8 +1,9 @@
 # script-version: 2
 # Test pipeline: records what the pipeline receives on channel 'particles' -- the addresses of the
-# VTK array objects and of the raw buffers of the single-component arrays (GetVoidPointer does not
-# copy those), and every particle's values -- so that the C++ test can compare them with the
-# solver's buffers. Output: $SPATE_RECORD_DIR/step_<n>.json and step_<n>.csv.
+# raw buffers behind every array (the components of the position and velocity arrays, which are
+# structure-of-arrays, and the single-component arrays; neither lookup copies), and every
+# particle's values -- so that the C++ test can compare them with the solver's buffers.
+# Output: $SPATE_RECORD_DIR/step_<n>.json and step_<n>.csv.
 import json
 import os
 
@@ -22,7 +23,7 @@ def _address(text):
 def catalyst_execute(info):
     particles.UpdatePipeline(info.time)
     data = particles.GetClientSideObject().GetOutputDataObject(0)
-    record = {"step": info.timestep, "blocks": []}
+    record = {"step": info.timestep, "pid": os.getpid(), "blocks": []}
     rows = []
     for b in range(data.GetNumberOfBlocks()):
         block = data.GetBlock(b)
@@ -30,12 +31,15 @@ def catalyst_execute(info):
             continue
         pd = block.GetPointData()
         points = block.GetPoints().GetData()
-        entry = {"block": b, "n": block.GetNumberOfPoints(), "points_object": _address(points.__this__),
-                 "velocity_object": _address(pd.GetArray("velocity").__this__)}
+        vel = pd.GetArray("velocity")
+        entry = {"block": b, "n": block.GetNumberOfPoints(), "soa": points.GetArrayType() == points.SoADataArrayTemplate and vel.GetArrayType() == vel.SoADataArrayTemplate}
+        for k, axis in enumerate("xyz"):
+            entry[axis + "_buffer"] = _address(points.GetComponentArrayPointer(k))
+            entry["v" + axis + "_buffer"] = _address(vel.GetComponentArrayPointer(k))
         for name in ("pressure", "density", "id", "kind", "device"):
             entry[name + "_buffer"] = _address(pd.GetArray(name).GetVoidPointer(0))
         record["blocks"].append(entry)
-        vel, p, rho = pd.GetArray("velocity"), pd.GetArray("pressure"), pd.GetArray("density")
+        p, rho = pd.GetArray("pressure"), pd.GetArray("density")
         ids, kind, dev = pd.GetArray("id"), pd.GetArray("kind"), pd.GetArray("device")
         for i in range(block.GetNumberOfPoints()):
             x = points.GetTuple3(i)

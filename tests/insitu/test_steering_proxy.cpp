@@ -66,8 +66,7 @@ class CountingSink : public InSituSink {
 }  // namespace
 
 TEST(SteeringProxy, ReportsOnlyChangesOnce) {
-  catalyst::CatalystOptions co;
-  catalyst::CatalystSink sink(co);
+  catalyst::CatalystEngine engine(catalyst::EngineOptions{});  // ParaView's proxy manager, no script
   catalyst::CatalystSteering steering(kXml, initial());
   auto v = steering.values();
   ASSERT_EQ(v.size(), steering_parameters().size());
@@ -111,6 +110,7 @@ TEST(SteeringProxy, SteersARunAndTheInSituInterval) {
   catalyst::CatalystOptions co;
   co.scripts = {fs::path(SPATE_SOURCE_DIR) / "pipelines" / "extract.py"};  // any script: the sink must want steps
   co.working_dir = out;
+  co.isolation = catalyst::Isolation::kInProcess;  // the steering proxy lives where Catalyst runs
   fs::create_directories(out);
   catalyst::CatalystSink sink(co);
   catalyst::CatalystSteering steering(kXml, initial());

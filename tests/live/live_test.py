@@ -15,8 +15,11 @@ out to it. The test checks, from the simulation's outputs:
      holding only ParaView's known disconnect messages;
   4. replaying steering.log (--steering-log) gives a bit-identical final checkpoint;
   5. with nobody listening, --live runs on normally (exit 0, same result as without --live);
-  6. the simulation never listens on a TCP port (sampled from /proc while it runs);
-  7. a bad --live address, or --live with --steering-log, is bad input (exit 2).
+  6. neither the simulation nor any child of it listens on a TCP or UDP port (sampled from /proc
+     while it runs);
+  7. a bad --live address, or --live with --steering-log, is bad input (exit 2);
+  8. the pvpython recipe in docs/live.md, run as written, receives the particles and its gravity
+     change reaches steering.log.
 
 Usage: live_test.py SPATE PVPYTHON SOURCE_DIR WORK_DIR
 Every wait is bounded; child processes are killed on any exit.
@@ -24,12 +27,16 @@ Every wait is bounded; child processes are killed on any exit.
 import glob
 import json
 import os
+import re
 import shutil
 import signal
 import socket
 import subprocess
 import sys
 import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "insitu"))
+from process_tree import kill_groups, listening  # noqa: E402
 
 spate, pvpython, src, work = sys.argv[1:5]
 case = os.path.join(src, "cases", "dam_break_2d.yaml")
@@ -42,12 +49,7 @@ children = []
 
 
 def cleanup(*_):
-    for p in children:
-        if p.poll() is None:
-            try:
-                os.killpg(p.pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
+    kill_groups(children)
 
 
 def fail(msg):
@@ -77,8 +79,9 @@ def free_port_pair():
     fail("no free pair of localhost ports")
 
 
-def start(cmd, log):
-    p = subprocess.Popen(cmd, stdout=open(log + ".out", "w"), stderr=open(log + ".err", "w"), start_new_session=True)
+def start(cmd, log, cwd=None):
+    p = subprocess.Popen(cmd, stdout=open(log + ".out", "w"), stderr=open(log + ".err", "w"), start_new_session=True,
+                         cwd=cwd)
     children.append(p)
     return p
 
@@ -90,43 +93,17 @@ def wait(p, seconds, what):
         fail(f"{what} still running after {seconds} s")
 
 
-def listening_ports(pid):
-    """TCP ports process `pid` listens on (from /proc: no tools needed)."""
-    inodes = set()
-    try:
-        for fd in os.listdir(f"/proc/{pid}/fd"):
-            try:
-                link = os.readlink(f"/proc/{pid}/fd/{fd}")
-            except OSError:
-                continue
-            if link.startswith("socket:["):
-                inodes.add(link[8:-1])
-    except OSError:
-        return set()
-    ports = set()
-    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
-        try:
-            rows = open(table).read().splitlines()[1:]
-        except OSError:
-            continue
-        for row in rows:
-            f = row.split()
-            if f[3] == "0A" and f[9] in inodes:  # 0A: LISTEN
-                ports.add(int(f[1].rsplit(":", 1)[1], 16))
-    return ports
-
-
 listened = {}
 
 
 def run(args, name, seconds=120):
     out = os.path.join(work, name)
     p = start([spate, "run", case, "--out", out] + common + args, out)
-    # Security: the simulation must never listen; sample its sockets while it runs.
+    # Security: neither the simulation nor any process it starts may listen; sample while it runs.
     deadline = time.time() + seconds
     ports = set()
     while p.poll() is None and time.time() < deadline:
-        ports |= listening_ports(p.pid)
+        ports |= listening(p.pid)
         time.sleep(0.05)
     listened[name] = ports
     code = wait(p, max(1, deadline - time.time()), f"spate run ({name})")
@@ -277,6 +254,38 @@ try:
     for name in ("live", "nobody_listening"):
         if listened.get(name):
             fail(f"spate run --live ({name}) listened on TCP ports {sorted(listened[name])}")
+
+    # 8. the pvpython recipe of docs/live.md, run as it stands there (from the source tree)
+    docs = open(os.path.join(src, "docs", "live.md")).read()
+    at = docs.find("<!-- recipe: steer.py")
+    match = re.search(r"```python\n(.*?)```", docs[at:], re.S) if at >= 0 else None
+    if not match:
+        fail("docs/live.md has no steer.py recipe")
+    recipe = os.path.join(work, "steer.py")
+    with open(recipe, "w") as f:
+        f.write(match.group(1))
+    port = free_port_pair()
+    log = os.path.join(work, "recipe_client")
+    client = start([pvpython, recipe, str(port)], log, cwd=src)
+    deadline = time.time() + 60
+    while "listening on port" not in open(log + ".out").read():
+        if client.poll() is not None or time.time() > deadline:
+            fail(f"the docs/live.md recipe did not start listening:\n{open(log + '.err').read()[-2000:]}")
+        time.sleep(0.1)
+    code, recipe_out = run(["--live", f"localhost:{port}"], "recipe")
+    client_code = wait(client, 60, "the docs/live.md recipe")
+    said = open(log + ".out").read()
+    print("docs/live.md recipe:", *[l for l in said.splitlines() if l.startswith(("step", "asked", "disconnecting"))],
+          sep="\n  ")
+    if code != 0 or client_code != 0:
+        fail(f"docs/live.md recipe: spate exit {code}, recipe exit {client_code}:\n{open(log + '.err').read()[-2000:]}")
+    if f": {expected} particles" not in said:
+        fail(f"the recipe did not receive the {expected} particles:\n{said}")
+    asked = int(re.search(r"asked for gravity \(2, -9.81, 0\) at step (\d+)", said).group(1))
+    log_lines = [l.split() for l in open(os.path.join(recipe_out, "steering.log")) if l.strip() and not l.startswith("#")]
+    if len(log_lines) != 1 or log_lines[0][2] != "gravity" or int(log_lines[0][0]) < asked or \
+            [float(v) for v in log_lines[0][3:]] != [2.0, -9.81, 0.0]:
+        fail(f"the recipe's gravity change is not in steering.log as asked at step {asked}: {log_lines}")
     print("live round trip: OK")
 finally:
     cleanup()

@@ -95,7 +95,7 @@ class ResidentKernels : public StepKernels {
     ParticleStore& p = store();
     ParticleStore before = p;
     cpu::fluid_rates(p, arrays_.grid(), P);
-    auto keep = [&](std::vector<float>& now, const std::vector<float>& old) {
+    auto keep = [&](FieldVector<float>& now, const FieldVector<float>& old) {
       for (std::size_t i = 0; i < p.owned(); ++i)
         if (i < range.first || i >= range.end()) now[i] = old[i];
     };
