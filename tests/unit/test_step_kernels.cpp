@@ -267,6 +267,9 @@ std::vector<CheckedCase> gpu_checked_cases() {
             {"tank.size=[0.3, 0.2, 0.3]", "fluid_blocks=[{min: [0, 0, 0], max: [0.3, 0.2, 0.1]}]", "tank.periodic=[y]"}),
        50},
       {"summation", load("dam_break_2d.yaml", {"density.mode=summation"}), 100},
+      // Several fluids: the multiphase pair terms, the GPU's per-particle loop against the CPU's
+      // batched one (oil over water, viscosities 50 times apart).
+      {"two_fluids", load("two_layer_hydrostatic_2d.yaml", {"probes=[]"}), 100},
   };
 }
 
