@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -25,7 +26,9 @@
 #include "comm/process_group.hpp"
 #include "io/checkpoint.hpp"
 #include "io/field_scale.hpp"
+#include "io/output_file.hpp"
 #include "io/run_summary.hpp"
+#include "sim/memory_estimate.hpp"
 #include "sim/simulation.hpp"
 #include "sim/slab_worker.hpp"
 #ifdef SPATE_WITH_CATALYST
@@ -75,7 +78,7 @@ void report_insitu(const catalyst::CatalystSink& sink, const std::filesystem::pa
   j["failures"] = sink.failures();
   j["incidents"] = sink.incidents();
   j["isolated"] = sink.isolated();
-  std::ofstream(out_dir / "insitu.json") << j.dump(2) << "\n";
+  write_file_atomically(out_dir / "insitu.json", j.dump(2) + "\n");
   spdlog::info("in situ: {} steps, adaptor {:.3g} ms/step, pipelines {:.3g} s/step", t.steps, 1e3 * t.adaptor_seconds / n,
                t.pipelines_seconds / n);
 }
@@ -115,6 +118,17 @@ std::vector<std::string> warn_thin_features(const Case& c) {
 
 int hardware_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
+namespace {
+
+// SIGINT (Ctrl-C) and SIGTERM (a batch system's notice) stop the run at the next step boundary with
+// its final checkpoint and summary (exit 128 + signal); a second one ends it at once.
+extern "C" void on_stop_signal(int signal) {
+  spate::request_stop(signal);
+  std::signal(signal, SIG_DFL);
+}
+
+}  // namespace
+
 std::filesystem::path data_dir() {
   const char* env = std::getenv("SPATE_DATA_DIR");
   if (env && *env) return env;
@@ -129,7 +143,11 @@ std::filesystem::path data_dir() {
 std::unique_ptr<catalyst::CatalystSink> make_catalyst_sink(catalyst::CatalystOptions co, const Case& c) {
   co.constants = case_constants(c);
   co.timeout = c.insitu_timeout;
-  std::filesystem::create_directories(co.working_dir);
+  try {
+    create_output_folder(co.working_dir);
+  } catch (const OutputError& e) {
+    throw BadInput(fmt::format("the output folder {} is not usable: {}", co.working_dir.string(), e.what()));
+  }
   try {
     return std::make_unique<catalyst::CatalystSink>(std::move(co));
   } catch (const catalyst::InSituLoadError& e) {
@@ -185,7 +203,7 @@ int run_command(const RunArgs& a) {
   std::unique_ptr<SteeringReplay> replay;
   if (!a.steering_log.empty()) {
     try {
-      replay = std::make_unique<SteeringReplay>(read_log(a.steering_log));
+      replay = std::make_unique<SteeringReplay>(read_log(a.steering_log, c.dim));
     } catch (const std::exception& e) {
       throw BadInput(std::string("--steering-log: ") + e.what());
     }
@@ -219,7 +237,7 @@ int run_command(const RunArgs& a) {
         try {
           ParticleStore ignored;
           const CheckpointMeta meta = read_checkpoint(*o.restart, ignored);
-          for (const SteeringChange& ch : parse_log(meta.steering_log, o.restart->string())) {
+          for (const SteeringChange& ch : parse_log(meta.steering_log, o.restart->string(), c.dim)) {
             if (ch.name == "gravity" && ch.value.size() == 3) init.gravity = {ch.value[0], ch.value[1], ch.value[2]};
             if (ch.name == "viscosity" && !ch.value.empty()) init.viscosity = ch.value[0];
             if (ch.name == "artificial_viscosity" && !ch.value.empty()) init.artificial_viscosity = ch.value[0];
@@ -241,6 +259,8 @@ int run_command(const RunArgs& a) {
 #endif
 
   RunResult r;
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
   std::string bad_input;  // found once the run had written outputs: a pipeline that fails to load
   try {
     r = Simulation(c, o).run();
@@ -257,14 +277,21 @@ int run_command(const RunArgs& a) {
   } catch (const CaseError& e) {
     throw BadInput(e.what());
   }
-  // Every rank knows the outcome; rank 0 reports it.
+  // Every rank knows the outcome; rank 0 reports it. A rank that failed itself (exit 4 to 6) also
+  // writes the summary: under mpirun its failure ends the other ranks before they could.
   const ProcessGroup& group = process_group();
-  if (group.rank != 0) {
+  const bool own_failure = r.exit_code >= 4 && r.exit_code <= 6;
+  if (group.rank != 0 && !own_failure) {
     if (!bad_input.empty()) throw BadInput(bad_input);
     return r.exit_code;
   }
 #ifdef SPATE_WITH_CATALYST
-  if (insitu) report_insitu(*insitu, o.out_dir);
+  try {
+    if (insitu && group.rank == 0) report_insitu(*insitu, o.out_dir);
+  } catch (const OutputError& e) {
+    spdlog::error("{}", e.what());
+    if (r.exit_code == 0) r.exit_code = 5;
+  }
 #endif
   SummaryExtras x;
   x.threads = a.threads > 0 ? a.threads : std::max(1, hardware_threads() / group.ranks_on_node);
@@ -272,16 +299,26 @@ int run_command(const RunArgs& a) {
   x.backend = a.backend;
   x.ranks = group.ranks;
   x.warnings = warnings;
-  // Also for a pipeline that failed to load: the run had started writing outputs, so it leaves its
-  // summary like every run that got this far.
-  write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
+  // The summary is written whatever happened; if even that fails (a full disk), the run failed to
+  // deliver its outputs (exit 5) unless it had failed already.
+  try {
+    write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    if (r.exit_code == 0 || r.exit_code == 3) r.exit_code = 5;
+  }
   if (!bad_input.empty()) throw BadInput(bad_input);
   if (r.exit_code == 3) {
     spdlog::error("the run went unstable: {}", r.message);
+  } else if (r.exit_code != 0) {
+    spdlog::error("{}", r.message);
   } else {
-    spdlog::info("{} done: {} steps to t = {:.6g} s in {:.2f} s ({:.3g} particle-steps/s); outputs in {}", c.name, r.steps,
+    const std::string removed =
+        r.removed > 0 ? fmt::format("; {} fluid particle{} removed through open sides", r.removed, r.removed == 1 ? "" : "s") : "";
+    spdlog::info("{} done: {} steps to t = {:.6g} s in {:.2f} s ({:.3g} particle-steps/s){}; outputs in {}", c.name, r.steps,
                  r.simulated_time, r.wall_seconds,
-                 r.wall_seconds > 0 ? r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds : 0.0, o.out_dir.string());
+                 r.wall_seconds > 0 ? r.steps * static_cast<double>(r.particles.total()) / r.wall_seconds : 0.0, removed,
+                 o.out_dir.string());
   }
   return r.exit_code;
 }
@@ -301,6 +338,8 @@ int info_command(const InfoArgs& a) {
   const std::vector<std::string> names = material_names(c);
   const std::size_t bpp = ParticleStore(c.dim).bytes_per_particle();
   const double memory = static_cast<double>(n.total()) * bpp;
+  const MemoryEstimate run_memory = estimate_run_memory(c, process_group().ranks, process_group().ranks_on_node);
+  const AvailableMemory available = available_memory();
   // The GPU estimate needs no device: it is arithmetic on the case (backend/cuda/device_plan.hpp).
   std::vector<gpu::SlabMemory> per_gpu;
   if (a.backend == "cuda") per_gpu = gpu::device_memory_per_slab(L, n.total(), a.devices);
@@ -335,6 +374,9 @@ int info_command(const InfoArgs& a) {
     j["cells"] = {L.cells[0], L.cells[1], L.cells[2]};
     j["bytes_per_particle"] = bpp;
     j["memory_bytes"] = memory;
+    j["run_memory_bytes"] = run_memory.bytes;
+    j["memory_available_bytes"] = available.bytes;
+    j["memory_fits"] = run_memory.bytes <= available.bytes;
     j["backend"] = a.backend;
     j["warnings"] = nlohmann::ordered_json::array();
     for (const ThinFeature& f : thin)
@@ -370,6 +412,9 @@ int info_command(const InfoArgs& a) {
     std::printf("cell lattice    %d x %d x %d\n", L.cells[0], L.cells[1], L.cells[2]);
     std::printf("memory          %zu bytes/particle, %.1f MiB for the particles (%s backend)\n", bpp, memory / 1048576.0,
                 a.backend.c_str());
+    std::printf("run memory      about %s at the peak; %s available (%s)%s\n", format_bytes(static_cast<double>(run_memory.bytes)).c_str(),
+                format_bytes(static_cast<double>(available.bytes)).c_str(), available.source.c_str(),
+                run_memory.bytes <= available.bytes ? "" : ": spate run refuses it");
     if (a.backend == "cuda") {
       std::printf("device memory   %zu bytes/particle slot; per GPU with --devices %d: at most %.1f MiB (%.0f bytes per owned particle)\n",
                   gpu::device_footprint(c.dim).per_particle(), a.devices, gpu_peak / 1048576.0,
@@ -469,8 +514,19 @@ int bench_command(const BenchArgs& a) {
   o.devices = a.devices;
   o.backend = a.backend;
   o.quiet = true;
-  const RunResult r = Simulation(c, o).run();
-  std::filesystem::remove_all(o.out_dir);
+  RunResult r;
+  try {
+    r = Simulation(c, o).run();
+  } catch (const InputError& e) {
+    throw BadInput(e.what());
+  }
+  std::error_code ec;
+  std::filesystem::remove_all(o.out_dir, ec);
+  // A run that did not get through its steps has no rates to report.
+  if (r.exit_code != 0) {
+    if (process_group().rank == 0) spdlog::error("{}", r.message);
+    return r.exit_code;
+  }
   if (process_group().rank != 0) return 0;
   // Rates from the time loop alone: the final checkpoint every run writes is not stepping.
   const double seconds = r.stepping_seconds > 0 ? r.stepping_seconds : r.wall_seconds;

@@ -1,9 +1,13 @@
-// The spate command-line program: parse, load the case, run, report. Exit codes (spate --help):
-// 0 done, 1 `compare` found differences, 2 bad input, 3 the run went unstable, 4 internal error.
+// The spate command-line program: parse, load the case, run, report. Exit codes (spate --help,
+// docs/cli.md): 0 done, 1 `compare` found differences, 2 bad input, 3 the run went unstable,
+// 4 internal error, 5 an output could not be written, 6 out of memory, 130/143 stopped by
+// SIGINT/SIGTERM.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <thread>
 
@@ -22,7 +26,7 @@ namespace {
 // only, while its peers wait in a collective: MPI_Abort ends them all (no hang). Outcomes every
 // rank agrees on (done, differences, unstable) finalise MPI normally.
 int finish(int code) {
-  if (spate::process_group().ranks > 1 && (code == 2 || code == 4)) spate::abort_process_group(code);
+  if (spate::process_group().ranks > 1 && (code == 2 || (code >= 4 && code <= 6))) spate::abort_process_group(code);
   spate::finalize_process_group();
   return code;
 }
@@ -40,6 +44,9 @@ int main(int argc, char** argv) {
   // The in-situ helper process spate starts for its Catalyst pipelines (adaptors/catalyst).
   if (argc > 1 && std::string_view(argv[1]) == spate::catalyst::kHelperCommand) return spate::catalyst::run_insitu_helper(argc, argv);
 #endif
+  // A file-size limit (ulimit -f) makes a write fail with EFBIG, which spate reports, rather than
+  // kill the process with SIGXFSZ before it can say anything.
+  std::signal(SIGXFSZ, SIG_IGN);
   spate::record_invocation(argc, argv);
   spate::configure_logging(spdlog::level::info);
   try {
@@ -59,8 +66,10 @@ int main(int argc, char** argv) {
                  "trace, debug, info (default), warning, error or off. Without a terminal lines carry a UTC timestamp")
       ->check([](const std::string& v) { return spate::parse_log_level(v) ? std::string() : "expected trace, debug, info, warning, error or off"; });
   app.footer(
-      "Exit codes: 0 done; 1 compare found differences; 2 bad input (case file, options, restart file);\n"
-      "            3 the run went unstable (diagnostic snapshot written, last good checkpoint kept); 4 internal error.");
+      "Exit codes: 0 done; 1 compare found differences; 2 bad input (case file, options, restart file, steering log,\n"
+      "            output folder, a run too large for the memory); 3 the run went unstable (diagnostic snapshot written,\n"
+      "            last good checkpoint kept); 4 internal error; 5 an output could not be written (disk full);\n"
+      "            6 out of memory; 130, 143 stopped by SIGINT, SIGTERM (final checkpoint written). docs/cli.md has more.");
   app.require_subcommand(1);
   // Parse errors look like every other bad-input message (and exit 2, below).
   app.failure_message([](const CLI::App*, const CLI::Error& e) {
@@ -154,6 +163,10 @@ int main(int argc, char** argv) {
     if (*plot_cmd) return finish(plot_command(plot));
     if (*bench_cmd) return finish(bench_command(bench));
   } catch (const BadInput& e) {
+    spdlog::error("{}", e.what());
+    return finish(2);
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A file or folder spate was asked to use and cannot: not a bug in spate.
     spdlog::error("{}", e.what());
     return finish(2);
   } catch (const std::exception& e) {

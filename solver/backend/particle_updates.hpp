@@ -38,7 +38,7 @@ SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, 
       }
     }
   });
-  add_body_forces(P, rates);
+  finish_fluid_rates(P, M, si, rates);
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = rates.acc[k];
   f.density_rate[i] = P.density_mode == DensityMode::Continuity ? rates.density_rate : 0.0f;
 }

@@ -41,14 +41,19 @@ struct SolidSpec {
   bool hollow = true;  // only `wall_layers` layers under its surface are particles
 };
 
-enum class ProbeType { Pressure, Velocity, Height, Force, Front, Centroid };
+enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid };
 
 struct ProbeSpec {
   std::string name;
   ProbeType type = ProbeType::Pressure;
-  Vec3d position{0, 0, 0};  // pressure/velocity: the point; height: the gauge (x, y) in 3D, (x) in 2D
+  Vec3d position{0, 0, 0};  // pressure/velocity: the point; height: the gauge (x, y) in 3D, (x) in 2D;
+                            // wall_pressure: the centre of the sensing disc, on a wall or solid face
   std::string solid;        // force: the solid's name
+  int face = -1;            // force: -1 the whole solid, else one face: 2 axis + (0 lower, 1 upper side)
   int axis = 0;             // front: the axis along which the front advances
+  Vec3d normal{0, 0, 0};    // wall_pressure: unit normal of the face, pointing into the fluid
+  double diameter = 0.0;    // wall_pressure: diameter of the sensing disc [m] (0: a point)
+  double window = 0.0;      // wall_pressure: moving-average window [s] (0: none)
   bool connected = false;   // height: the top of the water column standing on the floor (spray above ignored)
   double min_depth = 0.0;   // front: only water at least this deep counts (a bore over a wet bed)
   // pressure, velocity, height, centroid: only this fluid's particles (index into Case::fluids;
@@ -79,9 +84,12 @@ struct Case {
 
   std::vector<FluidSpec> fluids{FluidSpec{}};  // material k is fluids[k]
   double artificial_viscosity = 0.0;
+  bool tension = true;  // false: fluid pressures clipped at 0 (eos.hpp fluid_pressure)
   DensityMode density_mode = DensityMode::Continuity;
   DensityDiffusion diffusion = DensityDiffusion::Fourtakas;
   double delta = 0.1;
+  MomentumFlux flux = MomentumFlux::Central;
+  double riemann_limiter = 3.0;
   Vec3d gravity{0, 0, -9.81};
   Vec3d body_force{0, 0, 0};
 
@@ -97,6 +105,9 @@ struct Case {
   bool open_top = true;
   std::array<bool, 3> periodic{false, false, false};
   double headroom = 0.5;  // domain extends this fraction of the tank height above an open top
+  // Fluid that leaves through the open top (over the walls, above the headroom) is removed; more
+  // than this fraction of the fluid removed stops the run (exit 3).
+  double max_removed_fraction = 0.05;
 
   std::vector<FluidBlock> fluid_blocks;
   double wet_bed = 0.0;  // depth of still water on the rest of the floor

@@ -9,8 +9,10 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "case.hpp"
 
@@ -240,7 +242,9 @@ std::string apply_override(YAML::Node root, const std::string& file, const std::
   const std::string path = assignment.substr(0, eq);
   YAML::Node value;
   try {
-    value = YAML::Load(assignment.substr(eq + 1));
+    const std::vector<YAML::Node> docs = YAML::LoadAll(assignment.substr(eq + 1));
+    if (docs.size() > 1) throw CaseError(file + ": --set '" + assignment + "': the value holds more than one YAML document");
+    if (!docs.empty()) value = docs.front();
   } catch (const YAML::Exception& e) {
     throw CaseError(file + ": --set '" + assignment + "': value is not valid YAML: " + e.msg);
   }
@@ -338,10 +342,102 @@ FluidBlock read_fluid_block(Section& f, const Case& c) {
   return b;
 }
 
+// Why `name` cannot be a file name (case names name the default output folder out/<name>, probe
+// names their probes/<name>.csv), or nothing when it can: no path separators, no '..' or hidden
+// names, no control characters, not an option.
+std::optional<std::string> file_name_problem(const std::string& name) {
+  if (name.empty()) return "must not be empty";
+  if (name.size() > 100) return "is longer than 100 characters";
+  if (name.find('/') != std::string::npos || name.find('\\') != std::string::npos)
+    return "must not contain '/' or '\\' (it names a file inside the output folder)";
+  if (name.front() == '.') return "must not start with '.' (no '..', no hidden files)";
+  if (name.front() == '-') return "must not start with '-'";
+  for (const unsigned char ch : name)
+    if (ch < 0x20 || ch == 0x7f) return "must not contain control characters";
+  return std::nullopt;
+}
+
+// float32 positions resolve a spacing of dp only so far from the origin: beyond 2^20 dp the
+// rounding of a coordinate is 1/8 dp and neighbour distances are noise (and a lattice of sites
+// that large overflows its indices).
+constexpr double kLargestCoordinateInDp = 1048576.0;
+constexpr double kLargestCoordinate = 1.0e7;  // metres
+
+// "x-" -> 0, "x+" -> 1, "y-" -> 2, ... (2 axis + side); -1 for anything else.
+int face_index(const std::string& name, int dim) {
+  if (name.size() != 2 || (name[1] != '-' && name[1] != '+')) return -1;
+  const int axis = name[0] == 'x' ? 0 : name[0] == 'y' ? 1 : name[0] == 'z' ? 2 : -1;
+  if (axis < 0 || axis >= dim) return -1;
+  return 2 * axis + (name[1] == '+' ? 1 : 0);
+}
+
+// A wall-pressure sensor sits on a face that fluid can touch: an interior face of the tank (not
+// along a periodic axis, not the open top) or a face of a solid box. Its normal points into the
+// fluid; given, it must be that face's normal; left out, the face must be unique (not an edge).
+void read_wall_sensor(Section& p, const Case& c, ProbeSpec& probe) {
+  const int d = c.dim;
+  probe.position = p.vector("position", d);
+  probe.diameter = p.number("diameter", 0.0);
+  if (probe.diameter < 0) p.fail(p.raw("diameter"), "diameter", "must be >= 0 (0: a point sensor)");
+  probe.window = p.number("window", 0.0);
+  if (probe.window < 0) p.fail(p.raw("window"), "window", "must be >= 0 seconds (0: no averaging)");
+  // Within half a particle spacing of a face: the tank's extents are rounded to whole dp, so its
+  // walls may sit up to dp/2 from where the case puts them (e.g. Buchner's tank, 5.366 H long). The
+  // sensor is moved onto the face the particles make.
+  const double tol = 0.5 * c.dp + 1e-9;
+  std::vector<std::pair<Vec3d, Vec3d>> found;  // (normal, position on the face) of every face it lies on
+  auto consider = [&](const Vec3d& lo, const Vec3d& hi, int axis, double plane, double into) {
+    if (std::fabs(probe.position[axis] - plane) > tol) return;
+    for (int k = 0; k < d; ++k)
+      if (k != axis && (probe.position[k] < lo[k] - 1e-9 || probe.position[k] > hi[k] + 1e-9)) return;
+    Vec3d n{0, 0, 0}, at = probe.position;
+    n[axis] = into;
+    at[axis] = plane;
+    found.emplace_back(n, at);
+  };
+  Vec3d tank_hi{0, 0, 0};
+  for (int k = 0; k < d; ++k) tank_hi[k] = c.tank_origin[k] + static_cast<double>(std::lround(c.tank_size[k] / c.dp)) * c.dp;
+  for (int a = 0; a < d; ++a) {
+    if (c.periodic[a]) continue;
+    consider(c.tank_origin, tank_hi, a, c.tank_origin[a], 1.0);
+    if (!(a == d - 1 && c.open_top)) consider(c.tank_origin, tank_hi, a, tank_hi[a], -1.0);
+  }
+  for (auto& s : c.solids)
+    for (int a = 0; a < d; ++a) {
+      consider(s.box.min, s.box.max, a, s.box.min[a], -1.0);
+      consider(s.box.min, s.box.max, a, s.box.max[a], 1.0);
+    }
+  if (found.empty())
+    p.fail(p.raw("position"), "position",
+           "a wall_pressure sensor must lie on a face of the tank interior or of a solid (within dp/2)");
+  if (!p.has("normal")) {
+    if (found.size() > 1) p.fail(p.raw("position"), "position", "lies on an edge of two faces: give 'normal' to choose one");
+    std::tie(probe.normal, probe.position) = found[0];
+    return;
+  }
+  Vec3d n = p.vector("normal", d);
+  double length = 0;
+  for (int k = 0; k < d; ++k) length += n[k] * n[k];
+  length = std::sqrt(length);
+  if (!(length > 0)) p.fail(p.raw("normal"), "normal", "must be a non-zero vector");
+  for (int k = 0; k < d; ++k) n[k] /= length;
+  for (auto& [m, at] : found) {
+    double dot = 0;
+    for (int k = 0; k < d; ++k) dot += m[k] * n[k];
+    if (dot > 1 - 1e-6) {
+      probe.normal = m;
+      probe.position = at;
+      return;
+    }
+  }
+  p.fail(p.raw("normal"), "normal", "is not the normal (pointing into the fluid) of the face the sensor lies on");
+}
+
 Case read(Section& root, const std::string& file) {
   Case c;
   c.file = file;
   c.name = root.text("name");
+  if (auto why = file_name_problem(c.name)) root.fail(root.raw("name"), "name", "'" + c.name + "' " + *why);
   c.dim = root.integer("dimensions", 3);
   if (c.dim != 2 && c.dim != 3) root.fail(root.raw("dimensions"), "dimensions", "must be 2 or 3");
   const int d = c.dim;
@@ -357,7 +453,7 @@ Case read(Section& root, const std::string& file) {
   c.gravity = root.vector("gravity", d, g_default);
 
   // Fluids: `fluid:` (one), or a `fluids:` list of materials (several phases); `fluid:` then keeps
-  // only the case-wide artificial_viscosity and body_force.
+  // only the case-wide artificial_viscosity, body_force and tension.
   const bool listed = root.has("fluids");
   if (listed) {
     auto entries = root.list("fluids");
@@ -382,11 +478,12 @@ Case read(Section& root, const std::string& file) {
       for (const char* key : {"name", "density", "viscosity", "sound_speed", "tait_exponent", "background_pressure"})
         if (f.has(key))
           f.fail(f.raw(key), key, "with a 'fluids' list each fluid's properties go in its entry; 'fluid' keeps only "
-                                  "artificial_viscosity and body_force");
+                                  "artificial_viscosity, body_force and tension");
     }
     c.artificial_viscosity = f.number("artificial_viscosity", 0.0);
     if (c.artificial_viscosity < 0) f.fail(f.raw("artificial_viscosity"), "artificial_viscosity", "must be >= 0");
     c.body_force = f.vector("body_force", d, Vec3d{0, 0, 0});
+    c.tension = f.boolean("tension", true);
     f.finish();
   }
   {
@@ -395,7 +492,8 @@ Case read(Section& root, const std::string& file) {
                                             {{"continuity", DensityMode::Continuity}, {"summation", DensityMode::Summation}});
     c.diffusion = s.choice<DensityDiffusion>(
         "diffusion", DensityDiffusion::Fourtakas,
-        {{"fourtakas", DensityDiffusion::Fourtakas}, {"molteni_colagrossi", DensityDiffusion::MolteniColagrossi}, {"none", DensityDiffusion::None}});
+        {{"fourtakas", DensityDiffusion::Fourtakas}, {"molteni_colagrossi", DensityDiffusion::MolteniColagrossi},
+         {"riemann", DensityDiffusion::Riemann}, {"none", DensityDiffusion::None}});
     c.delta = s.number("delta", 0.1);
     if (c.delta < 0 || c.delta > 1) s.fail(s.raw("delta"), "delta", "must be between 0 and 1");
     c.density_min_ratio = s.number("min_ratio", 0.5);
@@ -406,12 +504,26 @@ Case read(Section& root, const std::string& file) {
     if (!(c.density_max_ratio > 1)) s.fail(s.raw("max_ratio"), "max_ratio", "must be > 1 (a multiple of the reference density)");
     s.finish();
   }
+  {
+    auto m = root.optional_child("momentum");
+    c.flux = m.choice<MomentumFlux>("flux", MomentumFlux::Central, {{"central", MomentumFlux::Central}, {"riemann", MomentumFlux::Riemann}});
+    c.riemann_limiter = m.number("riemann_limiter", 3.0);
+    if (!(c.riemann_limiter >= 0)) m.fail(m.raw("riemann_limiter"), "riemann_limiter", "must be >= 0");
+    m.finish();
+  }
   if (auto t = root.child("time")) {
     c.end_time = t->number("end");
     if (!(c.end_time > 0)) t->fail(t->raw("end"), "end", "must be > 0");
     if (t->has("dt") && !(t->raw("dt").IsScalar() && t->raw("dt").Scalar() == "auto")) {
       c.fixed_dt = t->number("dt");
       if (!(*c.fixed_dt > 0)) t->fail(t->raw("dt"), "dt", "must be > 0 or 'auto'");
+      // A step that needs more than 1e12 steps to the end would run for ever (and below the
+      // resolution of t not even advance it).
+      if (c.end_time / *c.fixed_dt > 1e12) {
+        std::ostringstream m;
+        m << "a fixed step of " << *c.fixed_dt << " s takes more than 1e12 steps to time.end = " << c.end_time << " s";
+        t->fail(t->raw("dt"), "dt", m.str());
+      }
     }
     c.cfl = t->number("cfl", 0.2);
     if (!(c.cfl > 0 && c.cfl <= 1)) t->fail(t->raw("cfl"), "cfl", "must be in (0, 1]");
@@ -430,7 +542,10 @@ Case read(Section& root, const std::string& file) {
   if (c.wall_layers < 1 || c.wall_layers > 8) tank->fail(tank->raw("wall_layers"), "wall_layers", "must be between 1 and 8");
   c.open_top = tank->boolean("open_top", true);
   c.headroom = tank->number("headroom", 0.5);
-  if (c.headroom < 0) tank->fail(tank->raw("headroom"), "headroom", "must be >= 0 (a fraction of the tank height)");
+  if (c.headroom < 0 || c.headroom > 10) tank->fail(tank->raw("headroom"), "headroom", "must be >= 0 and <= 10 (a fraction of the tank height)");
+  c.max_removed_fraction = tank->number("max_removed_fraction", 0.05);
+  if (!(c.max_removed_fraction >= 0 && c.max_removed_fraction <= 1))
+    tank->fail(tank->raw("max_removed_fraction"), "max_removed_fraction", "must be in [0, 1] (a fraction of the fluid particles)");
   if (tank->has("periodic")) {
     YAML::Node p = tank->raw("periodic");
     if (!p.IsSequence()) tank->fail(p, "periodic", "expected a list of axes, e.g. [x]");
@@ -443,6 +558,27 @@ Case read(Section& root, const std::string& file) {
     }
   }
   tank->finish();
+  {
+    double largest = 0;
+    for (int k = 0; k < d; ++k) {
+      const double extra = c.wall_layers * c.dp + (k == d - 1 ? c.headroom * c.tank_size[k] : 0.0);
+      largest = std::max({largest, std::fabs(c.tank_origin[k] - extra), std::fabs(c.tank_origin[k] + c.tank_size[k] + extra)});
+    }
+    if (largest > kLargestCoordinate) {
+      bool far_origin = false;
+      for (int k = 0; k < d; ++k) far_origin = far_origin || std::fabs(c.tank_origin[k]) > kLargestCoordinate / 2;
+      std::ostringstream m;
+      m << "the domain reaches " << largest << " m from the origin of the coordinates; at most 1e7 m";
+      const char* key = far_origin ? "origin" : "size";
+      tank->fail(tank->raw(key), key, m.str());
+    }
+    if (largest / c.dp > kLargestCoordinateInDp) {
+      std::ostringstream m;
+      m << "dp = " << c.dp << " m is too fine for float32 positions in a domain reaching " << largest
+        << " m from the origin (at most 2^20 spacings: dp >= " << largest / kLargestCoordinateInDp << " m)";
+      root.fail(root.raw("dp"), "dp", m.str());
+    }
+  }
 
   const Vec3d tank_hi{c.tank_origin[0] + c.tank_size[0], c.tank_origin[1] + c.tank_size[1], c.tank_origin[2] + c.tank_size[2]};
   const double tol = 1e-9;
@@ -478,17 +614,20 @@ Case read(Section& root, const std::string& file) {
     c.solids.push_back(spec);
   }
   if (c.solids.size() > 200) root.fail(root.raw("solids"), "solids", "at most 200 solids");
+  if (c.fluid_blocks.size() > 200) root.fail(root.raw("fluid_blocks"), "fluid_blocks", "at most 200 fluid blocks");
   if (c.fluid_blocks.empty() && c.wet_bed <= 0) root.fail(root.node(), "fluid_blocks", "the case has no fluid (no fluid_blocks and no wet_bed)");
 
   for (auto& p : root.list("probes")) {
     ProbeSpec probe;
     probe.name = p.text("name");
+    if (auto why = file_name_problem(probe.name)) p.fail(p.raw("name"), "name", "'" + probe.name + "' " + *why);
     // Each probe writes probes/<name>.csv.
     for (auto& other : c.probes)
       if (other.name == probe.name) p.fail(p.raw("name"), "name", "probe '" + probe.name + "' is defined twice");
     probe.type = p.choice<ProbeType>("type", ProbeType::Pressure,
                                      {{"pressure", ProbeType::Pressure}, {"velocity", ProbeType::Velocity}, {"height", ProbeType::Height},
-                                      {"force", ProbeType::Force}, {"front", ProbeType::Front}, {"centroid", ProbeType::Centroid}});
+                                      {"force", ProbeType::Force}, {"front", ProbeType::Front}, {"wall_pressure", ProbeType::WallPressure},
+                                      {"centroid", ProbeType::Centroid}});
     // A phase (fluid) to measure: required by a centroid, optional for a point or a gauge.
     const bool phased = probe.type == ProbeType::Pressure || probe.type == ProbeType::Velocity ||
                         probe.type == ProbeType::Height || probe.type == ProbeType::Centroid;
@@ -508,7 +647,15 @@ Case read(Section& root, const std::string& file) {
       case ProbeType::Force:
         probe.solid = p.text("solid");
         if (!solid_names.count(probe.solid)) p.fail(p.raw("solid"), "solid", "no solid named '" + probe.solid + "'");
+        if (p.has("face")) {
+          const std::string face = p.text("face");
+          probe.face = face_index(face, d);
+          if (probe.face < 0)
+            p.fail(p.raw("face"), "face", "'" + face + "' is not a face of a " + std::to_string(d) + "D box (x-, x+, " +
+                                              (d == 3 ? "y-, y+, z-, z+)" : "y-, y+)"));
+        }
         break;
+      case ProbeType::WallPressure: read_wall_sensor(p, c, probe); break;
       case ProbeType::Centroid: break;
       case ProbeType::Front: {
         const std::string axis = p.text("axis", std::string("x"));
@@ -523,6 +670,7 @@ Case read(Section& root, const std::string& file) {
     p.finish();
     c.probes.push_back(probe);
   }
+  if (c.probes.size() > 1000) root.fail(root.raw("probes"), "probes", "at most 1000 probes");
   {
     auto o = root.optional_child("output");
     c.output_interval = o.number("interval", 0.0);
@@ -580,7 +728,14 @@ Case read(Section& root, const std::string& file) {
 Case parse_case(const std::string& yaml_text, const std::string& file_name, const std::vector<std::string>& overrides) {
   YAML::Node root;
   try {
-    root = YAML::Load(yaml_text);
+    // Every document is parsed: a second one would otherwise be ignored without a word.
+    const std::vector<YAML::Node> docs = YAML::LoadAll(yaml_text);
+    if (docs.size() > 1) {
+      const int line = docs[1].Mark().line;
+      throw CaseError(file_name + (line >= 0 ? ":" + std::to_string(line + 1) : std::string()) +
+                      ": a second YAML document ('---'): a case file holds exactly one");
+    }
+    if (!docs.empty()) root = docs.front();
   } catch (const YAML::ParserException& e) {
     throw CaseError(file_name + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +
                     ": YAML syntax error: " + e.msg);
@@ -647,9 +802,12 @@ PhysicsParams physics_params(const Case& c) {
                                       static_cast<float>(f.background_pressure));
     if (P.materials.fluid[k].tait_b > P.materials.fluid[P.materials.reference].tait_b) P.materials.reference = static_cast<std::uint8_t>(k);
   }
+  P.tension = c.tension;
   P.artificial_viscosity = static_cast<float>(c.artificial_viscosity);
   P.delta = static_cast<float>(c.delta);
   P.diffusion = c.diffusion;
+  P.flux = c.flux;
+  P.riemann_limiter = static_cast<float>(c.riemann_limiter);
   P.density_mode = c.density_mode;
   for (int k = 0; k < 3; ++k) {
     P.gravity[k] = static_cast<float>(c.gravity[k]);

@@ -2,6 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include <fmt/format.h>
 
 #include "../physics/eos.hpp"
 
@@ -72,10 +76,8 @@ bool classify(const Case& c, const MaterialTable& M, const Sites& s, const int i
     if (solid.hollow) {
       // Keep sites within wall_layers of a face that touches fluid (the floor face does not).
       double depth = 1e30;
-      for (int a = 0; a < d; ++a) {
-        depth = std::min(depth, x[a] - solid.box.min[a] + (a == d - 1 ? 1e30 : 0.0));
-        depth = std::min(depth, solid.box.max[a] - x[a]);
-      }
+      for (int f = 0; f < 2 * d; ++f)
+        if (f != 2 * (d - 1)) depth = std::min(depth, face_depth(solid.box, x, f));
       if (depth > c.wall_layers * c.dp) return false;
     }
     kind = M.solid(static_cast<int>(k));
@@ -107,6 +109,11 @@ void for_each_site(const Case& c, Visit&& visit) {
 }
 
 }  // namespace
+
+double face_depth(const Box& b, const double x[3], int face) {
+  const int a = face / 2;
+  return face % 2 == 0 ? x[a] - b.min[a] : b.max[a] - x[a];
+}
 
 Lattice make_lattice(const Case& c) {
   Lattice L;
@@ -147,10 +154,195 @@ Lattice make_lattice(const Case& c) {
   return L;
 }
 
+std::string geometry_signature(const Case& c) {
+  const int d = c.dim;
+  auto vec = [&](const Vec3d& v) {
+    std::string s = "[";
+    for (int a = 0; a < d; ++a) s += fmt::format("{}{:.17g}", a ? ", " : "", v[a]);
+    return s + "]";
+  };
+  std::string s = fmt::format("dimensions: {}\ndp: {:.17g}\n", d, c.dp);
+  s += "tank.origin: " + vec(c.tank_origin) + "\ntank.size: " + vec(c.tank_size) + "\n";
+  s += fmt::format("tank.wall_layers: {}\ntank.open_top: {}\n", c.wall_layers, c.open_top);
+  s += fmt::format("tank.periodic: [{}, {}, {}]\n", c.periodic[0], c.periodic[1], c.periodic[2]);
+  for (std::size_t k = 0; k < c.fluid_blocks.size(); ++k)
+    s += fmt::format("fluid_blocks[{}]: {} to {}\n", k, vec(c.fluid_blocks[k].min), vec(c.fluid_blocks[k].max));
+  s += fmt::format("wet_bed: {:.17g}\n", c.wet_bed);
+  for (std::size_t k = 0; k < c.solids.size(); ++k)
+    s += fmt::format("solids[{}]: {} to {}, hollow {}\n", k, vec(c.solids[k].box.min), vec(c.solids[k].box.max), c.solids[k].hollow);
+  return s;
+}
+
+std::string geometry_hash(const Case& c) {
+  std::uint64_t h = 14695981039346656037ull;  // FNV-1a, 64 bits
+  for (const unsigned char ch : geometry_signature(c)) h = (h ^ ch) * 1099511628211ull;
+  return fmt::format("{:016x}", h);
+}
+
+OpenSides open_sides(const Case& c) {
+  OpenSides o;
+  if (!c.open_top) return o;
+  const Sites s(c);
+  const int v = c.dim - 1;
+  o.open = true;
+  o.vertical = v;
+  o.fluids = physics_params(c).materials.fluids;
+  o.top = static_cast<float>(s.origin[v] + s.hi[v] * c.dp);
+  o.ceiling = static_cast<float>(s.origin[v] + s.hi[v] * c.dp + c.headroom * c.tank_size[v]);
+  for (int a = 0; a < 3; ++a) {
+    const bool bounded = a < c.dim && a != v && !c.periodic[a];
+    o.lo[a] = bounded ? static_cast<float>(s.origin[a] + s.lo[a] * c.dp) : -INFINITY;
+    o.hi[a] = bounded ? static_cast<float>(s.origin[a] + s.hi[a] * c.dp) : INFINITY;
+  }
+  return o;
+}
+
+namespace {
+
+// Closed-form counts. Every kind of site is decided by boxes of site indices: outside the tank
+// interior a wall; inside, the first rule whose box holds the site (solids in order, a hollow
+// solid's inner box empty before its shell; then the fluid blocks and the wet bed; else empty).
+// The box of a rule along an axis is found by binary search on the generator's own predicate
+// (classify(), evaluated exactly as it evaluates it), so the counts equal the site loop's, and
+// the sites are counted over a grid of index intervals cut at the boxes' edges: cost grows with
+// the number of boxes, not of sites (spate info answers at once at any dp).
+enum class SiteKind : std::uint8_t { Empty, Wall, Fluid };
+
+struct IndexBox {
+  std::int64_t lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};  // sites [lo, hi) per axis
+  SiteKind kind = SiteKind::Empty;
+  bool empty(int dim) const {
+    for (int a = 0; a < dim; ++a)
+      if (hi[a] <= lo[a]) return true;
+    return false;
+  }
+};
+
+// The sites i in [0, n) where `holds(i)` is true, for a predicate that is true on one interval
+// (`holds` is monotone on either side of it: a box edge test on a monotone coordinate). `rising`
+// tests the lower edge (false then true), `falling` the upper edge (true then false).
+template <class Rising, class Falling>
+void site_interval(std::int64_t n, Rising&& rising, Falling&& falling, std::int64_t& lo, std::int64_t& hi) {
+  std::int64_t a = 0, b = n;  // first i with rising(i)
+  while (a < b) {
+    const std::int64_t m = a + (b - a) / 2;
+    if (rising(m)) b = m;
+    else a = m + 1;
+  }
+  lo = a;
+  a = 0, b = n;  // first i with !falling(i)
+  while (a < b) {
+    const std::int64_t m = a + (b - a) / 2;
+    if (!falling(m)) b = m;
+    else a = m + 1;
+  }
+  hi = std::max(lo, a);
+}
+
+// Counts of the kinds over the interior box `all`: the first rule holding a site decides it.
+// Recursion over the axes, each cut at the edges of the rules that overlap the current slice.
+void count_first_match(const std::vector<const IndexBox*>& rules, const IndexBox& slice, int axis, int dim,
+                       ParticleCounts& n) {
+  if (axis >= dim || axis >= 3) {
+    std::int64_t sites = 1;
+    for (int a = 0; a < dim; ++a) sites *= slice.hi[a] - slice.lo[a];
+    const SiteKind kind = rules.empty() ? SiteKind::Empty : rules.front()->kind;
+    if (kind == SiteKind::Fluid) n.fluid += sites;
+    if (kind == SiteKind::Wall) n.wall += sites;
+    return;
+  }
+  std::vector<std::int64_t> cuts{slice.lo[axis], slice.hi[axis]};
+  for (const IndexBox* r : rules) {
+    if (r->lo[axis] > slice.lo[axis] && r->lo[axis] < slice.hi[axis]) cuts.push_back(r->lo[axis]);
+    if (r->hi[axis] > slice.lo[axis] && r->hi[axis] < slice.hi[axis]) cuts.push_back(r->hi[axis]);
+  }
+  std::sort(cuts.begin(), cuts.end());
+  cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
+  std::vector<const IndexBox*> inside;
+  for (std::size_t k = 0; k + 1 < cuts.size(); ++k) {
+    IndexBox part = slice;
+    part.lo[axis] = cuts[k];
+    part.hi[axis] = cuts[k + 1];
+    inside.clear();
+    for (const IndexBox* r : rules)
+      if (r->lo[axis] <= part.lo[axis] && r->hi[axis] >= part.hi[axis]) inside.push_back(r);
+    // Only rules up to the first that holds the whole remaining slice can decide anything.
+    std::size_t keep = inside.size();
+    for (std::size_t j = 0; j < inside.size(); ++j) {
+      bool whole = true;
+      for (int a = axis + 1; a < dim && a < 3; ++a) whole = whole && inside[j]->lo[a] <= part.lo[a] && inside[j]->hi[a] >= part.hi[a];
+      if (whole) {
+        keep = j + 1;
+        break;
+      }
+    }
+    inside.resize(keep);
+    count_first_match(inside, part, axis + 1, dim, n);
+  }
+}
+
+}  // namespace
+
 ParticleCounts count_particles(const Case& c) {
+  const Sites s(c);
+  const int d = c.dim;
   ParticleCounts n;
-  const MaterialTable M = physics_params(c).materials;
-  for_each_site(c, [&](const Sites&, const int*, std::uint8_t kind) { (M.is_fluid(kind) ? n.fluid : n.wall)++; });
+  // Walls: every site outside the interior.
+  std::int64_t all = 1, interior = 1;
+  for (int a = 0; a < d; ++a) {
+    all *= s.hi[a] - s.lo[a];
+    interior *= s.n[a];
+  }
+  n.wall = all - interior;
+
+  IndexBox inner_all;
+  for (int a = 0; a < d; ++a) inner_all.hi[a] = s.n[a];
+  std::vector<IndexBox> boxes;
+  auto in_box_along = [&](const Box& b, int a, IndexBox& out) {
+    site_interval(
+        s.n[a], [&](std::int64_t i) { return !(s.coord(a, static_cast<int>(i)) < b.min[a]); },
+        [&](std::int64_t i) { return !(s.coord(a, static_cast<int>(i)) > b.max[a]); }, out.lo[a], out.hi[a]);
+  };
+  for (auto& solid : c.solids) {
+    IndexBox box;
+    box.kind = SiteKind::Wall;
+    for (int a = 0; a < d; ++a) in_box_along(solid.box, a, box);
+    if (solid.hollow) {
+      // classify(): empty where the depth below every face but the floor exceeds the layers.
+      IndexBox core = box;
+      core.kind = SiteKind::Empty;
+      const double layers = c.wall_layers * c.dp;
+      for (int a = 0; a < d; ++a) {
+        std::int64_t lo = 0, hi = 0;
+        site_interval(
+            s.n[a],
+            [&](std::int64_t i) { return s.coord(a, static_cast<int>(i)) - solid.box.min[a] + (a == d - 1 ? 1e30 : 0.0) > layers; },
+            [&](std::int64_t i) { return solid.box.max[a] - s.coord(a, static_cast<int>(i)) > layers; }, lo, hi);
+        core.lo[a] = std::max(core.lo[a], lo);
+        core.hi[a] = std::min(core.hi[a], hi);
+      }
+      if (!core.empty(d)) boxes.push_back(core);
+    }
+    if (!box.empty(d)) boxes.push_back(box);
+  }
+  for (auto& block : c.fluid_blocks) {
+    IndexBox box;
+    box.kind = SiteKind::Fluid;
+    for (int a = 0; a < d; ++a) in_box_along(block, a, box);
+    if (!box.empty(d)) boxes.push_back(box);
+  }
+  if (c.wet_bed > 0) {
+    IndexBox bed = inner_all;
+    bed.kind = SiteKind::Fluid;
+    const int v = d - 1;
+    site_interval(
+        s.n[v], [](std::int64_t) { return true; },
+        [&](std::int64_t i) { return s.coord(v, static_cast<int>(i)) - c.tank_origin[v] < c.wet_bed; }, bed.lo[v], bed.hi[v]);
+    if (!bed.empty(d)) boxes.push_back(bed);
+  }
+  std::vector<const IndexBox*> rules;
+  for (auto& b : boxes) rules.push_back(&b);
+  if (interior > 0) count_first_match(rules, inner_all, 0, d, n);
   return n;
 }
 
@@ -211,6 +403,10 @@ ParticleStore generate_particles(const Case& c) {
   g = std::sqrt(g);
   std::size_t i = 0;
   for_each_site(c, [&](const Sites& s, const int* idx, std::uint8_t kind) {
+    if (i >= p.size()) {  // a miscount: reported below, never written past the arrays
+      ++i;
+      return;
+    }
     for (int a = 0; a < c.dim; ++a) p.pos[a][i] = static_cast<float>(s.coord(a, idx[a]));
     p.material[i] = kind;
     p.id[i] = static_cast<std::uint32_t>(i);
@@ -227,6 +423,7 @@ ParticleStore generate_particles(const Case& c) {
     }
     ++i;
   });
+  if (i != p.size()) throw std::logic_error("generate_particles: the site loop disagrees with count_particles");
   if (P.materials.multiphase()) layered_hydrostatic_density(c, P, p);
   p.set_owned(p.size());
   return p;

@@ -2,7 +2,9 @@
 // Case -> particles on the lattice (i + 1/2) dp: fluid blocks, wet bed, solids (hollow shells of
 // wall particles) and the tank's wall layers; and the global cell lattice that holds them.
 #include <cstdint>
+#include <string>
 
+#include "../domain/particle_checks.hpp"
 #include "../grid/lattice.hpp"
 #include "../particles/particle_store.hpp"
 #include "case.hpp"
@@ -16,7 +18,17 @@ struct ParticleCounts {
 };
 
 Lattice make_lattice(const Case& c);
-// Counts without allocating (spate info on the paper's 12M-particle case).
+// Where fluid may leave the domain for good (open top, headroom): escaped(), particle_checks.hpp.
+OpenSides open_sides(const Case& c);
+// What makes the particle set of a case (dimensions, dp, tank, fluid blocks, wet bed, solids), one
+// "key: value" line each, exact; and its 64-bit FNV-1a hash in hex. A checkpoint stores the hash:
+// a restart from the checkpoint of another case is refused even when the counts agree.
+std::string geometry_signature(const Case& c);
+std::string geometry_hash(const Case& c);
+
+// How deep x lies below face `face` (2 axis + (0 lower, 1 upper side)) of box b.
+double face_depth(const Box& b, const double x[3], int face);
+// Counts without allocating, in closed form (spate info answers at once at any dp).
 ParticleCounts count_particles(const Case& c);
 // All particles, ids 0..n-1 in generation order, all owned.
 ParticleStore generate_particles(const Case& c);

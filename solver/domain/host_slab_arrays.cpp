@@ -161,6 +161,21 @@ void HostSlabArrays::refresh_images(ImagePart part) {
   }
 }
 
+std::vector<std::uint32_t> HostSlabArrays::remove_escaped(const OpenSides& open) {
+  std::vector<std::uint32_t> ids;
+  std::vector<std::uint8_t> gone(store_.owned(), 0);
+  for (std::size_t i = 0; i < store_.owned(); ++i) {
+    float x[3] = {0, 0, 0};
+    for (int a = 0; a < store_.dim(); ++a) x[a] = store_.pos[a][i];
+    if (escaped(open, store_.dim(), store_.material[i], x)) gone[i] = 1, ids.push_back(store_.id[i]);
+  }
+  if (ids.empty()) return ids;
+  store_.remove_owned_if(gone);
+  keys_.resize(store_.size());
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
 std::uint32_t HostSlabArrays::wrap_and_find_position_fault(const Lattice& L) {
   std::uint32_t lowest = kNoFault;
   for (std::size_t i = 0; i < store_.owned(); ++i) {

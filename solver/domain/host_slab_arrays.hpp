@@ -34,6 +34,7 @@ class HostSlabArrays : public SlabArrays {
   void make_images(const CellGrid& geometry, int axis) override;
   void record_halo_slots(std::size_t left, std::size_t right) override;
   void refresh_images(ImagePart part) override;
+  std::vector<std::uint32_t> remove_escaped(const OpenSides& open) override;
   std::uint32_t wrap_and_find_position_fault(const Lattice& L) override;
   std::uint32_t find_unhealthy(const HealthLimits& limits) override;
 

@@ -37,6 +37,31 @@ SPATE_HD PositionFault position_fault(const Lattice& L, float x, int axis) {
   return inside ? PositionFault::None : PositionFault::Outside;
 }
 
+// The open sides of the domain, where fluid may leave for good (a splash over the walls of an
+// open-top tank, or higher than the headroom above it). Such particles are removed and counted,
+// as DualSPHysics does, and the run goes on; anything else that leaves the domain (through a wall,
+// through the floor or a closed lid), or a NaN, remains an instability.
+struct OpenSides {
+  bool open = false;     // the tank has an open top
+  int vertical = 2;      // dim - 1
+  float top = 0.0f;      // the top of the tank walls
+  float ceiling = 0.0f;  // top + headroom: the top of the domain
+  float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};  // outer faces of the wall layers (periodic axes: +-infinity)
+  std::uint8_t fluids = 1;  // materials [0, fluids) are fluids (MaterialTable): only they leave
+};
+
+// A fluid particle (material) above the walls that is past their outer faces, or above the
+// ceiling: gone. NaN coordinates compare false everywhere: they stay a fault.
+SPATE_HD bool escaped(const OpenSides& o, int dim, std::uint8_t material, const float pos[3]) {
+  if (!o.open || material >= o.fluids) return false;
+  const float z = pos[o.vertical];
+  if (!(z > o.top)) return false;
+  if (z > o.ceiling) return true;
+  for (int a = 0; a < dim; ++a)
+    if (a != o.vertical && (pos[a] < o.lo[a] || pos[a] > o.hi[a])) return true;
+  return false;
+}
+
 // The health check of a fluid particle: finite state and density within [min, max] x rho0 of its
 // material.
 struct HealthLimits {

@@ -90,6 +90,11 @@ class SlabArrays {
   // refreshed before the halo arrives; halo images after it.
   virtual void refresh_images(ImagePart part) = 0;
 
+  // Removes the owned fluid particles that left through an open side (escaped(), particle_checks.hpp)
+  // and returns their ids in increasing order. The ghosts are dropped too (they are stale after
+  // the predictor anyway); the order of the particles kept may change (the next sort restores it).
+  virtual std::vector<std::uint32_t> remove_escaped(const OpenSides& open) = 0;
+
   // Device reductions with the host's predicates (particle_checks.hpp). Wraps the owned positions
   // on periodic axes and returns the lowest id whose position is faulty (kNoFault if none).
   virtual std::uint32_t wrap_and_find_position_fault(const Lattice& L) = 0;

@@ -2,9 +2,9 @@
 
 #include <sys/resource.h>
 
-#include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "output_file.hpp"
 #include "provenance.hpp"
 #include "version.hpp"
 
@@ -58,11 +58,14 @@ void write_summary(const std::filesystem::path& path, const Case& c, const Physi
   j["last_checkpoint"] = r.last_checkpoint.string();
   j["insitu_failures"] = r.insitu_failures;
   j["steering"] = {{"accepted", r.steering_accepted}, {"rejected", r.steering_rejected}, {"stopped", r.stopped_by_steering}};
+  j["removed_particles"] = r.removed;
+  j["removed_fraction"] = r.particles.fluid > 0 ? static_cast<double>(r.removed) / static_cast<double>(r.particles.fluid) : 0.0;
+  j["removed_first_ids"] = r.removed_first_ids;
   j["exit_status"] = r.exit_status;
   j["exit_code"] = r.exit_code;
   if (!r.message.empty()) j["message"] = r.message;
-  std::filesystem::create_directories(path.parent_path());
-  std::ofstream(path) << j.dump(2) << '\n';
+  if (path.has_parent_path()) create_output_folder(path.parent_path());
+  write_file_atomically(path, j.dump(2) + "\n");
 }
 
 }  // namespace spate

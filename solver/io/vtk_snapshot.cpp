@@ -1,10 +1,12 @@
 #include "vtk_snapshot.hpp"
 
 #include "../physics/materials.hpp"
+#include "output_file.hpp"
 
 #include <zlib.h>
 
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -89,16 +91,6 @@ std::string compress(const std::vector<char>& raw) {
   std::string out(reinterpret_cast<const char*>(header.data()), header.size() * sizeof(std::uint64_t));
   for (auto& p : packed) out += p;
   return out;
-}
-
-void write_atomically(const std::filesystem::path& path, const std::string& text) {
-  const std::filesystem::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    if (!out) throw std::runtime_error(tmp.string() + ": cannot write");
-  }
-  std::filesystem::rename(tmp, path);
 }
 
 std::string read_file(const std::filesystem::path& path) {
@@ -203,8 +195,8 @@ void write_vtp_piece(const std::filesystem::path& path, ParticleStore& p, int sl
   std::string text = xml.str();
   for (auto& b : blobs) text += b;
   text += "\n</AppendedData>\n</VTKFile>\n";
-  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
-  write_atomically(path, text);
+  if (path.has_parent_path()) create_output_folder(path.parent_path());
+  write_file_atomically(path, text);
 }
 
 void write_vtm(const std::filesystem::path& path, const std::vector<std::string>& piece_files, const FieldData& field_data) {
@@ -221,7 +213,7 @@ void write_vtm(const std::filesystem::path& path, const std::vector<std::string>
     xml << "</FieldData>\n";
   }
   xml << "</VTKFile>\n";
-  write_atomically(path, xml.str());
+  write_file_atomically(path, xml.str());
 }
 
 ParticleStore read_vtp_piece(const std::filesystem::path& path, int dim) {
@@ -303,7 +295,12 @@ std::vector<std::pair<double, std::string>> read_pvd(const std::filesystem::path
   const std::regex entry("timestep=\"([^\"]+)\"[^>]*file=\"([^\"]+)\"");
   for (std::string line; std::getline(in, line);) {
     std::smatch m;
-    if (std::regex_search(line, m, entry)) entries.emplace_back(std::stod(m[1]), m[2]);
+    if (!std::regex_search(line, m, entry)) continue;
+    // The index is read back as found: an entry whose time does not parse is dropped.
+    const std::string text = m[1];
+    char* end = nullptr;
+    const double t = std::strtod(text.c_str(), &end);
+    if (end != text.c_str() && *end == '\0') entries.emplace_back(t, m[2]);
   }
   return entries;
 }
@@ -315,7 +312,7 @@ void PvdIndex::add(double time, const std::string& relative_file) {
   xml << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n<Collection>\n";
   for (auto& [t, f] : entries_) xml << "  <DataSet timestep=\"" << t << "\" group=\"\" part=\"0\" file=\"" << f << "\"/>\n";
   xml << "</Collection>\n</VTKFile>\n";
-  write_atomically(path_, xml.str());
+  write_file_atomically(path_, xml.str());
 }
 
 void PvdIndex::load_existing(double up_to_time) {

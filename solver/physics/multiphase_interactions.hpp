@@ -21,8 +21,10 @@
 //    interface pressure a Riemann-solver scheme (Rezavand et al. 2020) starts from.
 //  - Laminar viscosity, eq. 8 with the harmonic mean 2 mu_i mu_j / (mu_i + mu_j) of the two
 //    phases' viscosities (Hu & Adams 2006), and the particles' own volumes.
-//  - Density diffusion (delta-SPH) only between particles of the same fluid: across an interface
-//    it would smear the density jump.
+//  - Density diffusion (delta-SPH, or the Riemann solver's pressure diffusion) and the Riemann
+//    flux's dissipation (momentum.flux riemann) only between particles of the same fluid: across
+//    an interface they would smear the density jump, and their rho0 c0 is one fluid's. The
+//    Riemann wall term (finish_fluid_rates) acts as with one fluid, with i's rho0 and c0.
 //  - Walls: a wall particle is seen by fluid i as a particle of i's own fluid at the wall's
 //    normalised density rho_w / rho0_ref (the reference fluid's equation of state gave rho_w,
 //    Adami; materials.hpp), so its volume m/rho is the same for every phase, its impedance and
@@ -55,9 +57,7 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
   const bool j_is_fluid = P.is_fluid(j.material);
   const float j_fluid = j_is_fluid ? 1.0f : 0.0f;
   const PairKinematics<Dim> pk = pair_kinematics<Kernel, Dim>(P, i, j, j_fluid);
-  const Vec<Dim>& r = pk.r;
   const float r2 = pk.r2, F = pk.F, inv_r2_eta = pk.inv_r2_eta, vr = pk.vr;
-  const Vec<Dim>& v_ij_visc = pk.v_ij_visc;
   const float same_fluid = j.material == i.material ? 1.0f : 0.0f;  // walls never match a fluid
   // A wall stands in for a particle of i's fluid at the wall's normalised density (see above).
   const float wall_scale = M.rho0 / P.materials.wall_fluid().rho0;
@@ -71,13 +71,17 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
 
   // Eq. 6, normalised continuity with the neighbour's volume.
   float drho = i.rho * volume_j * vr * F;
-  // Density diffusion within i's fluid only (the terms of fluid_pair_terms, times same_fluid).
-  drho += density_diffusion<Gamma7>(P, M, same_fluid, i.rho, j.rho, r, r2, F, inv_r2_eta, volume_j);
+  // Density diffusion and the Riemann options within i's fluid only (the terms of
+  // fluid_pair_terms, times same_fluid).
+  drho += density_diffusion<Gamma7>(P, M, same_fluid, i.rho, j.rho, pk.g_dot_rji, r2, F, inv_r2_eta, volume_j);
+  const RiemannPairTerms riemann = riemann_pair_terms<Dim>(P, M, same_fluid, i, j, pk, volume_j);
+  drho += riemann.density_rate;
 
-  // Eq. 7 with the acoustic interface pressure: p_i + p_j -> 2 p*_ij.
+  // Eq. 7 with the acoustic interface pressure: p_i + p_j -> 2 p*_ij (plus, with momentum.flux
+  // riemann, the limiter's dissipation between particles of one fluid).
   const float z_i = i.rho * M.c0;
   const float z_j = rho_j * c_j;
-  const float p_pair = 2.0f * (z_j * i.p + z_i * j.p) / (z_i + z_j);
+  const float p_pair = 2.0f * (z_j * i.p + z_i * j.p) / (z_i + z_j) + riemann.p_dissipation;
   // Monaghan (1992) artificial viscosity with the pair's mean sound speed and density.
   const float mu_ij = P.h * (vr < 0.0f ? vr : 0.0f) * inv_r2_eta;
   const float pi_ij = -P.artificial_viscosity * (M.c0 + c_j) * mu_ij / (i.rho + rho_j);
@@ -87,18 +91,13 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
   const float mu_pair = mu_sum > 0.0f ? 2.0f * M.viscosity * mu_j / mu_sum : 0.0f;
   const float laminar = mu_pair / M.mass * (volume_i * volume_i + volume_j * volume_j) * (r2 * F) * inv_r2_eta;
 
-  FluidRates<Dim> out;
-  SPATE_UNROLL for (int k = 0; k < Dim; ++k) out.acc[k] = radial * r[k] + laminar * v_ij_visc[k];
-  out.density_rate = drho;
-  return out;
+  return pair_rates<Dim>(pk, radial, laminar, drho, j_fluid, volume_j);
 }
 
 template <class Kernel, int Dim, bool Gamma7>
 SPATE_HD void accumulate_multiphase_pair(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
                                          const ParticleState<Dim>& j, FluidRates<Dim>& out) {
-  const FluidRates<Dim> t = multiphase_pair_terms<Kernel, Dim, Gamma7>(P, M, i, j, neighbour_fluid(P, j.material));
-  SPATE_UNROLL for (int k = 0; k < Dim; ++k) out.acc[k] += t.acc[k];
-  out.density_rate += t.density_rate;
+  add_pair_rates(out, multiphase_pair_terms<Kernel, Dim, Gamma7>(P, M, i, j, neighbour_fluid(P, j.material)));
 }
 
 }  // namespace spate

@@ -39,6 +39,16 @@ struct WallState {
   Vec<Dim> v;  // extrapolated no-slip velocity
 };
 
+// The pressure the fluid around a wall point implies there (s.w > 0), before any clipping: the
+// kernel-weighted fluid pressure extrapolated to the point along the hydrostatic gradient. It is
+// also what a wall-pressure sensor reads at a point of its disc (sim/probes.cpp).
+template <int Dim>
+SPATE_HD float adami_pressure(const PhysicsParams& P, const WallSums<Dim>& s) {
+  float g_dot = 0.0f;
+  for (int k = 0; k < Dim; ++k) g_dot += (P.gravity[k] + P.body_force[k]) * s.rho_r_w[k];
+  return (s.pw + g_dot) / s.w;
+}
+
 // Negative wall pressures would glue fluid to walls at a free surface; they are clipped to zero.
 // The density comes from the equation of state of the fluid the wall bounds (materials.hpp).
 template <int Dim>
@@ -46,9 +56,7 @@ SPATE_HD WallState<Dim> finish_wall(const PhysicsParams& P, const WallSums<Dim>&
   const FluidMaterial& M = P.materials.wall_fluid();
   WallState<Dim> out{0.0f, M.rho0, zero_vec<Dim>()};
   if (s.w <= 0.0f) return out;
-  float g_dot = 0.0f;
-  for (int k = 0; k < Dim; ++k) g_dot += (P.gravity[k] + P.body_force[k]) * s.rho_r_w[k];
-  const float p = (s.pw + g_dot) / s.w;
+  const float p = adami_pressure(P, s);
   out.p = p > 0.0f ? p : 0.0f;
   out.rho = tait_density(out.p, M);
   for (int k = 0; k < Dim; ++k) out.v[k] = -s.v_w[k] / s.w;

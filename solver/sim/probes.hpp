@@ -1,37 +1,62 @@
 #pragma once
 // Probes written as CSV time series (probes/<name>.csv): pressure at a point (Shepard average of the
-// fluid, or of one phase), water height at a gauge, total pressure force on a named solid,
-// surge-front position, centroid and mean velocity of a phase.
-// Sampling is collective; every value is independent of the split (owner-computed or exact).
+// fluid, or of one phase), wall pressure on a sensor disc, water height at a gauge, pressure force
+// on a named solid or one of its faces, surge-front position, centroid and mean velocity of a
+// phase. Sampling is collective; every value is independent of the split (owner-computed or
+// exact). What each probe measures: docs/cases.md, "probes".
 // The same code samples a run's saved snapshots and checkpoints afterwards (spate post).
 //
 // CSV format (docs/cases.md, scripts parse it): a header line `time[s],step,<column>[<unit>],...`,
 // then one row per sample; the first column is the simulated time in seconds.
 #include <cstdint>
+#include <deque>
 #include <filesystem>
-#include <fstream>
 #include <limits>
-#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "../case/case.hpp"
+#include "../io/output_file.hpp"
 #include "slab_worker.hpp"
 
 namespace spate {
 
+// The trailing moving average of a sampled signal over a window of time, as the (piecewise-linear)
+// signal's mean over [t - window, t]; while fewer than `window` seconds have been sampled, the mean
+// over what has been. A sensor averaging over its window this way reports a peak about half a
+// window late and lower than the instantaneous one, like a laboratory sensor sampled or filtered
+// at that rate.
+class MovingAverage {
+ public:
+  explicit MovingAverage(double window = 0.0) : window_(window) {}
+  // Adds the sample (t, v) (t after every earlier sample) and returns the mean up to t.
+  double add(double t, double v);
+
+ private:
+  double window_;
+  std::deque<std::pair<double, double>> samples_;
+};
+
 class ProbeSet {
  public:
-  // `writer`: this slab writes the files. `append`: continue existing files (restart).
-  ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, bool append);
+  // `writer`: this slab writes the files. `resume_step`: continue existing files after a restart
+  // from that step (their rows of later steps, written by the run that went on past the
+  // checkpoint, are dropped); none: start them afresh.
+  ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, std::optional<std::int64_t> resume_step);
   // Collective over all slabs. Returns the sampled row values in probe order (for tests).
   std::vector<std::vector<double>> sample(double time, std::int64_t step, SlabWorker& w);
   bool empty() const { return probes_.empty(); }
 
  private:
+  struct Probe {
+    ProbeSpec spec;
+    std::vector<Vec3d> points;  // wall_pressure: where the disc samples the fluid
+    MovingAverage average;      // wall_pressure with a window
+  };
   const Case& case_;
-  std::vector<ProbeSpec> probes_;
-  std::vector<std::unique_ptr<std::ofstream>> files_;
+  std::vector<Probe> probes_;
+  std::vector<AppendFile> files_;
 };
 
 // The probe's value columns with their units, as in its CSV header ("pressure[Pa]", "vx[m/s]", ...).
@@ -58,5 +83,13 @@ double local_front(SlabWorker& w, int axis, double lowest = -std::numeric_limits
 // water at least min_depth deep has a particle centre at floor + min_depth - dp/2 or above
 // (-infinity for min_depth 0: every fluid particle).
 double front_level(const ProbeSpec& front, const Case& c);
+// Where a wall-pressure sensor samples the fluid: points on its disc (in 2D a segment of length
+// `diameter` along the face) on a square lattice of spacing at most dp/4, the centre alone for a
+// point sensor; the same order on every slab.
+std::vector<Vec3d> sensor_points(const ProbeSpec& sensor, int dim, double dp);
+// The wall pressure at each of `points` that this slab owns (NaN at the others): the Adami pressure
+// the fluid within reach implies at that point of the wall (physics/wall_boundary.hpp), not clipped;
+// 0 where no fluid is within reach (a dry part of the sensor).
+std::vector<double> sample_wall_pressure(SlabWorker& w, const std::vector<Vec3d>& points);
 
 }  // namespace spate

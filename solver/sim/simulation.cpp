@@ -5,7 +5,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -28,6 +30,8 @@
 #include "../comm/mpi_transport.hpp"
 #endif
 #include "../io/checkpoint.hpp"
+#include "../io/output_file.hpp"
+#include "memory_estimate.hpp"
 #include "../io/vtk_snapshot.hpp"
 #include "../particles/particle_pack.hpp"
 #include "probes.hpp"
@@ -51,6 +55,73 @@ bool balancing_pass_due(std::int64_t taken, std::int64_t step, std::int64_t ever
 }
 
 std::string step_name(std::int64_t step) { return fmt::format("step_{:08d}", step); }
+
+// The first time after `time` on the grid k * interval (k whole), in closed form: a loop adding the
+// interval would never get past `time` when the interval is below its resolution. Such an interval
+// (or one shorter than the time step) means every step.
+double next_on_grid(double time, double interval) {
+  const double next = (std::floor(time / interval + 1e-9) + 1) * interval;
+  return std::isfinite(next) && next > time ? next : std::nextafter(time, INFINITY);
+}
+
+std::atomic<int> stop_signal{0};
+constexpr std::size_t kRemovedIdsKept = 10;  // removed ids named in summary.json
+
+// What every slab learns at the end of a step (one collective): the faulty particle with the
+// lowest id, the fluid removed through open sides (ids, increasing) and the signal that asked for
+// a stop (0: none; the largest number if several, so that every rank agrees).
+struct StepReport {
+  std::optional<ParticleFault> fault;
+  std::vector<std::uint32_t> removed;
+  int stop_signal = 0;
+};
+
+StepReport share_report(SlabTransport& t, const std::optional<ParticleFault>& fault, const std::vector<std::uint32_t>& removed,
+                        int stop) {
+  Bytes mine;
+  auto put = [&](const void* data, std::size_t size) {
+    const char* c = static_cast<const char*>(data);
+    mine.insert(mine.end(), c, c + size);
+  };
+  const std::uint32_t id = fault ? fault->id : 0xffffffffu;
+  const std::uint32_t text = fault ? static_cast<std::uint32_t>(fault->what.size()) : 0;
+  const std::uint32_t count = static_cast<std::uint32_t>(removed.size());
+  const std::uint8_t flags = fault ? 1 : 0;
+  const std::int32_t signal = stop;
+  put(&flags, 1);
+  put(&signal, 4);
+  put(&id, 4);
+  put(&text, 4);
+  if (fault) put(fault->what.data(), text);
+  put(&count, 4);
+  put(removed.data(), removed.size() * 4);
+  StepReport r;
+  for (const Bytes& b : t.allgather(mine)) {
+    std::size_t at = 0;
+    auto get = [&](void* out, std::size_t size) {
+      if (at + size > b.size()) throw std::logic_error("step report: short message");
+      std::memcpy(out, b.data() + at, size);
+      at += size;
+    };
+    std::uint8_t f = 0;
+    std::int32_t their_signal = 0;
+    std::uint32_t their_id = 0, their_text = 0, their_count = 0;
+    get(&f, 1);
+    get(&their_signal, 4);
+    get(&their_id, 4);
+    get(&their_text, 4);
+    std::string what(their_text, '\0');
+    get(what.data(), their_text);
+    get(&their_count, 4);
+    const std::size_t first = r.removed.size();
+    r.removed.resize(first + their_count);
+    get(r.removed.data() + first, their_count * 4ul);
+    r.stop_signal = std::max(r.stop_signal, static_cast<int>(their_signal));
+    if ((f & 1) && (!r.fault || their_id < r.fault->id)) r.fault = ParticleFault{their_id, what};
+  }
+  std::sort(r.removed.begin(), r.removed.end());
+  return r;
+}
 
 // Everything the worker threads of this process share. Written by the writer slab only.
 struct Shared {
@@ -138,7 +209,7 @@ class Progress {
  public:
   Progress(bool enabled, std::int64_t particles)
       : enabled_(enabled && spdlog::should_log(spdlog::level::info)), particles_(particles), tty_(isatty(STDOUT_FILENO)) {}
-  void update(std::int64_t steps, double time, double end_time, double start_time, bool force = false) {
+  void update(std::int64_t steps, double time, double end_time, double start_time, std::int64_t removed = 0, bool force = false) {
     if (!enabled_) return;
     const auto now = Clock::now();
     const double since = std::chrono::duration<double>(now - last_).count();
@@ -148,8 +219,9 @@ class Progress {
     const double sps = wall > 0 ? steps / wall : 0.0;
     const double done = (time - start_time) / std::max(1e-300, end_time - start_time);
     const double eta = done > 0 ? wall * (1 - done) / done : 0.0;
-    const std::string line = fmt::format("t = {:.5f} s  step {}  {:.2f} steps/s  {:.3g} particle-steps/s  ETA {:.0f} s",
-                                         time, steps, sps, sps * particles_, eta);
+    std::string line = fmt::format("t = {:.5f} s  step {}  {:.2f} steps/s  {:.3g} particle-steps/s  ETA {:.0f} s", time, steps,
+                                   sps, sps * particles_, eta);
+    if (removed > 0) line += fmt::format("  removed {}", removed);
     if (tty_) {
       std::printf("\r%s   ", line.c_str());
       std::fflush(stdout);
@@ -192,7 +264,7 @@ class Worker {
       return;
     }
   }
-  Worker(Shared& s, SlabTransport& t) : s_(s), t_(t), w_(s.lattice, s.params, t) {}
+  Worker(Shared& s, SlabTransport& t) : s_(s), t_(t), w_(s.lattice, s.params, t) { w_.set_open_sides(open_sides(s.c)); }
 
   void run() {
     omp_set_num_threads(s_.omp_threads);
@@ -216,7 +288,7 @@ class Worker {
     t_.barrier();
     w_.prepare(!s_.restarted);
 
-    ProbeSet probes(s_.c, s_.opts.out_dir, writer, s_.restarted);
+    ProbeSet probes(s_.c, s_.opts.out_dir, writer, s_.restarted ? std::optional<std::int64_t>(s_.start.step) : std::nullopt);
     PvdIndex pvd(s_.opts.out_dir / "particles.pvd");
     double time = s_.start.time;
     std::int64_t step = s_.start.step;
@@ -226,8 +298,9 @@ class Worker {
     const double end_time = s_.opts.until.value_or(s_.c.end_time);
     const int checkpoint_every = s_.opts.checkpoint_every.value_or(s_.c.checkpoint_every);
     const double out_dt = s_.c.output_interval;
-    double next_output = out_dt > 0 ? (s_.restarted ? (std::floor(time / out_dt + 1e-9) + 1) * out_dt : time) : INFINITY;
-    double next_probe = s_.restarted ? time + s_.c.probe_interval : time;
+    const double probe_dt = s_.c.probe_interval;  // 0: every step
+    double next_output = out_dt > 0 ? (s_.restarted ? next_on_grid(time, out_dt) : time) : INFINITY;
+    double next_probe = probe_dt > 0 && s_.restarted ? next_on_grid(time, probe_dt) : time;
     std::int64_t taken = 0;
     std::int64_t last_snapshot = -1;
     const auto t0 = Clock::now();
@@ -236,18 +309,16 @@ class Worker {
     std::filesystem::path last_checkpoint;
     std::vector<double> imbalance_log;
 
+    // At most one probe row and one snapshot per step, whatever the intervals.
     auto output = [&](bool final_step) {
-      if (!probes.empty() && (s_.c.probe_interval <= 0 || time >= next_probe - 1e-12 || final_step)) {
+      if (!probes.empty() && (probe_dt <= 0 || time >= next_probe - 1e-9 * probe_dt || final_step)) {
         probes.sample(time, step, w_);
-        // (probe_interval 0 samples every step: no schedule to advance; stepping by a tiny interval
-        // instead would loop for ever.)
-        if (s_.c.probe_interval > 0)
-          while (next_probe <= time + 1e-12) next_probe += s_.c.probe_interval;
+        if (probe_dt > 0) next_probe = next_on_grid(time, probe_dt);
       }
       if (out_dt > 0 && (time >= next_output - 1e-9 * out_dt || (final_step && last_snapshot != step))) {
         write_snapshot(pvd, time, step, "snapshots");
         last_snapshot = step;
-        while (next_output <= time + 1e-9 * out_dt) next_output += out_dt;
+        next_output = next_on_grid(time, out_dt);
       }
     };
 
@@ -263,12 +334,12 @@ class Worker {
     }
     steer.checkpoint_now = steer.stop = false;
     w_.set_params(params);
-    std::ofstream steering_log;
+    AppendFile steering_log;
     if (writer && s_.opts.steering) {
-      steering_log.open(s_.opts.out_dir / "steering.log", std::ios::trunc);
-      steering_log << "# spate steering log: <step> <time> <name> <values>; replay with --steering-log\n"
-                   << history_text(s_.steering_history);
-      steering_log.flush();
+      const auto path = s_.opts.out_dir / "steering.log";
+      write_file_atomically(path, "# spate steering log: <step> <time> <name> <values>; replay with --steering-log\n" +
+                                      history_text(s_.steering_history));
+      steering_log = AppendFile(path, false);
     }
     // Step boundary: poll the source on slab 0, share, validate and apply everywhere identically.
     auto steer_now = [&]() {
@@ -288,14 +359,28 @@ class Worker {
         if (writer) {
           s_.steering_history.push_back(change);
           ++s_.result.steering_accepted;
-          steering_log << to_log_line(change) << '\n';
-          steering_log.flush();
+          steering_log.append(to_log_line(change) + "\n");
           spdlog::info("steering: {} applied from step {}", to_log_line(change), step + 1);
         }
       }
       w_.set_params(params);
     };
     steer_now();
+    // Fluid removed through open sides (open_sides(), particle_checks.hpp), with the restart's.
+    std::int64_t removed = s_.start.removed;
+    const double removed_limit = s_.c.max_removed_fraction * static_cast<double>(s_.result.particles.fluid);
+    std::int64_t next_removal_warning = 1;
+    int interrupted = 0;
+    // What a summary written after a failure will say about how far the run got (the reporter).
+    auto record_progress = [&]() {
+      if (!reporter) return;
+      s_.result.steps = taken;
+      s_.result.final_step = step;
+      s_.result.simulated_time = time;
+      s_.result.last_checkpoint = last_checkpoint;
+      s_.result.removed = removed;
+    };
+    record_progress();
     while (true) {
       if (steer.stop) {
         s_.result.stopped_by_steering = true;
@@ -310,11 +395,38 @@ class Worker {
         ++step;
         break;
       }
+      const double before = time;
       time += dt;
       ++step;
       ++taken;
-      if (auto fault = first_fault(t_, w_.health(static_cast<float>(s_.c.density_min_ratio), static_cast<float>(s_.c.density_max_ratio)))) {
-        unstable = describe(*fault, step, time);
+      record_progress();
+      const StepReport report =
+          share_report(t_, w_.health(static_cast<float>(s_.c.density_min_ratio), static_cast<float>(s_.c.density_max_ratio)),
+                       w_.removed_ids(), stop_signal.load());
+      if (!report.removed.empty()) {
+        removed += static_cast<std::int64_t>(report.removed.size());
+        if (reporter && s_.result.removed_first_ids.size() < kRemovedIdsKept)
+          for (std::uint32_t id : report.removed)
+            if (s_.result.removed_first_ids.size() < kRemovedIdsKept) s_.result.removed_first_ids.push_back(id);
+        // One warning at the first removal and at every tenfold of the total after it.
+        if (removed >= next_removal_warning) {
+          if (writer) warn_removed(report.removed, removed, step, time);
+          while (next_removal_warning <= removed) next_removal_warning *= 10;
+        }
+      }
+      if (report.fault) {
+        unstable = describe(*report.fault, step, time);
+        break;
+      }
+      if (static_cast<double>(removed) > removed_limit) {
+        unstable = fmt::format("step {}, t = {:.6g} s: {} fluid particles ({:.3g} % of the fluid) have left the domain through "
+                               "its open sides, more than tank.max_removed_fraction = {} allows",
+                               step, time, removed, 100.0 * static_cast<double>(removed) / static_cast<double>(s_.result.particles.fluid),
+                               s_.c.max_removed_fraction);
+        break;
+      }
+      if (!(time > before)) {
+        unstable = fmt::format("step {}, t = {:.17g} s: the time step {} s no longer advances the simulated time", step, time, dt);
         break;
       }
       dt = next_time_step();
@@ -322,15 +434,18 @@ class Worker {
         unstable = fmt::format("step {}, t = {:.6g} s: the time step collapsed to {}", step, time, dt);
         break;
       }
-      const bool last = s_.opts.steps ? taken >= *s_.opts.steps : time >= end_time - 1e-12;
+      interrupted = report.stop_signal;
+      const bool last = interrupted || (s_.opts.steps ? taken >= *s_.opts.steps : time >= end_time - 1e-12);
       output(last);
       in_situ(step, time);  // before steering: the design applies steering after each in-situ step
       steer_now();
       if ((checkpoint_every > 0 && step % checkpoint_every == 0) || steer.checkpoint_now) {
-        last_checkpoint = write_checkpoint_now(time, step, dt);
+        last_checkpoint = write_checkpoint_now(time, step, dt, removed);
         steer.checkpoint_now = false;
       }
-      progress.update(taken, time, end_time, s_.start.time);
+      record_progress();
+      progress.update(taken, time, end_time, s_.start.time, removed);
+      if (interrupted) break;
     }
     progress.finish();
     const double stepping_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
@@ -338,8 +453,9 @@ class Worker {
     if (!unstable.empty()) {
       write_snapshot(pvd, time, step, "diagnostic", /*index=*/false);
     } else if (last_checkpoint.empty() || !last_checkpoint.filename().string().ends_with(step_name(step) + ".h5")) {
-      last_checkpoint = write_checkpoint_now(time, step, dt);
+      last_checkpoint = write_checkpoint_now(time, step, dt, removed);
     }
+    record_progress();
     const auto counts = w_.slab_particle_counts();
     std::vector<double> busy;
     {
@@ -378,11 +494,29 @@ class Worker {
         r.exit_status = "unstable";
         r.message = unstable + "; diagnostic snapshot in " + (s_.opts.out_dir / "diagnostic").string() +
                     (last_checkpoint.empty() ? "" : "; last good checkpoint " + last_checkpoint.string());
+      } else if (interrupted) {
+        r.exit_code = 128 + interrupted;
+        r.exit_status = "interrupted";
+        r.message = fmt::format("stopped by signal {} ({}) at step {}, t = {:.6g} s; final checkpoint {}", interrupted,
+                                interrupted == SIGINT ? "SIGINT" : interrupted == SIGTERM ? "SIGTERM" : "signal", step, time,
+                                last_checkpoint.string());
       }
     }
   }
 
  private:
+  void warn_removed(const std::vector<std::uint32_t>& ids, std::int64_t total, std::int64_t step, double time) const {
+    std::string list;
+    for (std::size_t k = 0; k < ids.size() && k < 5; ++k) list += (k ? ", " : "") + std::to_string(ids[k]);
+    if (ids.size() > 5) list += ", ...";
+    const bool one = ids.size() == 1;
+    spdlog::warn("step {}, t = {:.6g} s: {} fluid particle{} left the domain through its open sides and {} removed (id{} {}); {} "
+                 "removed so far ({:.3g} % of the fluid, tank.max_removed_fraction {})",
+                 step, time, ids.size(), one ? "" : "s", one ? "was" : "were", one ? "" : "s", list, total,
+                 100.0 * static_cast<double>(total) / static_cast<double>(std::max<std::int64_t>(1, s_.result.particles.fluid)),
+                 s_.c.max_removed_fraction);
+  }
+
   // In situ: every local slab stops at a barrier, the process's first local slab hands the views
   // of all local slabs to the sink, and nobody moves on until the pipelines are done with the
   // (zero-copy) arrays.
@@ -427,13 +561,21 @@ class Worker {
     spdlog::debug("snapshot of step {} (t = {:.6g} s): {}", step, time, (dir / (step_name(step) + ".vtm")).string());
   }
 
-  std::filesystem::path write_checkpoint_now(double time, std::int64_t step, double dt) {
+  std::filesystem::path write_checkpoint_now(double time, std::int64_t step, double dt, std::int64_t removed) {
     // The writer's process is the one that holds slab 0.
     GatheredParticles all = gather_to_writer(w_, s_.workers, s_.workers_first_slab == 0);
     const auto dir = s_.opts.out_dir / "checkpoints";
     const auto path = dir / ("checkpoint_" + step_name(step) + ".h5");
     if (t_.slab() == 0) {
-      CheckpointMeta meta{step, time, dt, s_.c.name, s_.c.source_yaml, history_text(s_.steering_history)};
+      CheckpointMeta meta;
+      meta.step = step;
+      meta.time = time;
+      meta.dt = dt;
+      meta.case_name = s_.c.name;
+      meta.case_yaml = s_.c.source_yaml;
+      meta.steering_log = history_text(s_.steering_history);
+      meta.removed = removed;
+      meta.geometry_hash = geometry_hash(s_.c);
       std::vector<std::vector<FieldRef>> fields;
       for (auto* slab : all.slabs) fields.push_back(slab->fields());
       write_checkpoint(path, meta, s_.c.dim, all.by_id.size(), [&](std::size_t k, char* out) {
@@ -464,8 +606,11 @@ class Worker {
         ++k;
         continue;
       }
-      std::filesystem::remove(written_[k].first);
-      std::filesystem::remove(xdmf_sidecar(written_[k].first));
+      // An old checkpoint that cannot be removed costs space, not results: said, not fatal.
+      std::error_code ec;
+      std::filesystem::remove(written_[k].first, ec);
+      if (!ec) std::filesystem::remove(xdmf_sidecar(written_[k].first), ec);
+      if (ec) spdlog::warn("{}: cannot remove an old checkpoint: {}", written_[k].first.string(), ec.message());
       spdlog::debug("checkpoint {} removed (retention)", written_[k].first.string());
       written_.erase(written_.begin() + static_cast<std::ptrdiff_t>(k));
     }
@@ -481,6 +626,8 @@ class Worker {
 
 Simulation::Simulation(Case c, RunOptions options) : case_(std::move(c)), options_(std::move(options)) {}
 
+void request_stop(int signal) noexcept { stop_signal.store(signal); }
+
 RunResult Simulation::run() {
   Shared s(case_, options_);
   s.lattice = make_lattice(case_);
@@ -495,20 +642,38 @@ RunResult Simulation::run() {
       throw InputError(fmt::format("--backend cuda: {}", e.what()));
     }
   }
+  const ProcessGroup& group = process_group();
+  // R ranks x D devices: global slab = rank * D + local device (docs/decomposition.md).
+  const int local_slabs = options_.devices;
+  const int slabs = group.ranks * local_slabs;
+  s.layout = SlabLayout::uniform(s.lattice.cells[0], slabs);
+  if (s.layout.narrowest() < kMinColumnsPerSlab) {
+    const std::string split = group.ranks > 1 ? fmt::format("{} ranks x --devices {} = {} slabs", group.ranks, local_slabs, slabs)
+                                              : fmt::format("--devices {}", slabs);
+    throw InputError(fmt::format("{}: the domain is {} cells long in x; every slab needs at least {} cells, so at most {} slabs",
+                                 split, s.lattice.cells[0], kMinColumnsPerSlab, s.lattice.cells[0] / kMinColumnsPerSlab));
+  }
+  // Nothing is allocated before the run is known to fit (docs/cli.md, memory).
+  try {
+    require_memory_for(case_, group.ranks, group.ranks_on_node);
+    if (options_.backend == "cuda") require_device_memory_for(case_, options_.devices);
+  } catch (const CaseError& e) {
+    throw InputError(e.what());
+  }
   const ParticleCounts expected = count_particles(case_);
   if (options_.restart) {
     try {
-      s.start = read_checkpoint(*options_.restart, s.initial);
+      s.start = read_checkpoint(*options_.restart, s.initial, &case_);
     } catch (const std::exception& e) {
       throw InputError(e.what());
     }
-    if (s.initial.dim() != case_.dim || static_cast<std::int64_t>(s.initial.size()) != expected.total())
-      throw InputError(fmt::format("{}: checkpoint holds {} {}D particles (case '{}'); {} generates {} {}D particles",
-                                   options_.restart->string(), s.initial.size(), s.initial.dim(), s.start.case_name,
-                                   case_.file, expected.total(), case_.dim));
     s.restarted = true;
     try {
-      s.steering_history = parse_log(s.start.steering_log, options_.restart->string() + " (steering_log)");
+      s.steering_history = parse_log(s.start.steering_log, options_.restart->string() + " (attribute steering_log)", case_.dim);
+      if (!s.steering_history.empty() && s.steering_history.back().step > s.start.step)
+        throw std::runtime_error(options_.restart->string() + " (attribute steering_log): a change at step " +
+                                 std::to_string(s.steering_history.back().step) + ", after the checkpoint's step " +
+                                 std::to_string(s.start.step));
     } catch (const std::exception& e) {
       throw InputError(e.what());
     }
@@ -516,19 +681,8 @@ RunResult Simulation::run() {
     s.initial = generate_particles(case_);
   }
   s.result.particles = expected;
-  // R ranks x D devices: global slab = rank * D + local device (docs/decomposition.md).
-  const ProcessGroup& group = process_group();
-  const int local_slabs = options_.devices;
-  const int slabs = group.ranks * local_slabs;
-  s.layout = SlabLayout::uniform(s.lattice.cells[0], slabs);
-  if (s.layout.narrowest() >= kMinColumnsPerSlab && slabs > 1 && case_.balanced_start)
+  if (slabs > 1 && case_.balanced_start)
     s.layout = balanced_layout(column_costs(s.initial, s.lattice, s.params.materials), slabs, kMinColumnsPerSlab);  // start balanced
-  if (s.layout.narrowest() < kMinColumnsPerSlab) {
-    const std::string split = group.ranks > 1 ? fmt::format("{} ranks x --devices {} = {} slabs", group.ranks, local_slabs, slabs)
-                                              : fmt::format("--devices {}", slabs);
-    throw InputError(fmt::format("{}: the domain is {} cells long in x; every slab needs at least {} cells, so at most {} slabs",
-                                 split, s.lattice.cells[0], kMinColumnsPerSlab, s.lattice.cells[0] / kMinColumnsPerSlab));
-  }
   // --threads counts the threads of this process; by default the cores are shared among the
   // ranks on this machine, then among the device workers (at least one thread each).
   const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -536,13 +690,17 @@ RunResult Simulation::run() {
   s.omp_threads = std::max(1, threads / local_slabs);
   s.local_slabs = local_slabs;
   s.workers.assign(local_slabs, nullptr);
-  std::filesystem::create_directories(options_.out_dir);
-  // The effective case (file plus --set), for spate post and for the record.
-  if (group.rank == 0) {
-    const auto path = options_.out_dir / "case.yaml", tmp = options_.out_dir / "case.yaml.tmp";
-    std::ofstream(tmp) << "# The effective case of the run in this folder (" << case_.file << " with --set applied), written by spate run.\n"
-                       << case_.source_yaml << "\n";
-    std::filesystem::rename(tmp, path);
+  // The output folder is the last input checked: an unusable one is bad input (exit 2). From here
+  // on every outcome ends in a result and a summary.json.
+  try {
+    create_output_folder(options_.out_dir);
+    AtomicFile probe(options_.out_dir / ".spate_write_test");  // removed again: nothing committed
+    // The effective case (file plus --set), for spate post and for the record.
+    if (group.rank == 0)
+      write_file_atomically(options_.out_dir / "case.yaml", "# The effective case of the run in this folder (" + case_.file +
+                                                                " with --set applied), written by spate run.\n" + case_.source_yaml + "\n");
+  } catch (const OutputError& e) {
+    throw InputError(fmt::format("--out {}: the output folder is not usable: {}", options_.out_dir.string(), e.what()));
   }
 
   std::unique_ptr<LocalSlabs> local;
@@ -558,7 +716,7 @@ RunResult Simulation::run() {
       Worker(s, *t).run();
     } catch (const PeerFailure&) {
       local->abandon();
-    } catch (const std::exception&) {
+    } catch (...) {
       errors[d] = std::current_exception();
       local->abandon();
     }
@@ -571,13 +729,37 @@ RunResult Simulation::run() {
   for (auto& th : pool) th.join();
   for (int d = 0; d < local_slabs; ++d) {
     if (!errors[d]) continue;
+    RunResult& r = s.result;
+    const std::string where = group.ranks > 1 ? fmt::format("slab {} (rank {}): ", s.workers_first_slab + d, group.rank) : "";
     try {
       std::rethrow_exception(errors[d]);
     } catch (const InputError&) {
       throw;
+    } catch (const OutputError& e) {
+      r.exit_code = 5;
+      r.exit_status = "output_failed";
+      r.message = where + "an output could not be written: " + e.what();
+    } catch (const std::filesystem::filesystem_error& e) {
+      r.exit_code = 5;
+      r.exit_status = "output_failed";
+      r.message = where + "an output could not be written: " + e.what();
+    } catch (const std::bad_alloc&) {
+      r.exit_code = 6;
+      r.exit_status = "out_of_memory";
+      r.message = where + fmt::format("out of memory (the estimate for this run was {}; other processes may have taken memory since)",
+                                      format_bytes(static_cast<double>(estimate_run_memory(case_, group.ranks, group.ranks_on_node).bytes)));
     } catch (const std::exception& e) {
-      throw std::runtime_error(group.ranks > 1 ? fmt::format("slab {} (rank {}): {}", s.workers_first_slab + d, group.rank, e.what()) : e.what());
+      r.exit_code = 4;
+      r.exit_status = "internal_error";
+      r.message = where + "internal error: " + e.what();
+    } catch (...) {
+      r.exit_code = 4;
+      r.exit_status = "internal_error";
+      r.message = where + "internal error: an exception that is not a std::exception";
     }
+    r.message += fmt::format(" (at step {}, t = {:.6g} s{})", r.final_step, r.simulated_time,
+                             r.last_checkpoint.empty() ? "" : "; last checkpoint " + r.last_checkpoint.string());
+    break;
   }
   return s.result;
 }

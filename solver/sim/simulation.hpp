@@ -1,7 +1,9 @@
 #pragma once
 // The time loop: sets up the slabs (one worker thread per device), runs steps, reduces the time
-// step, samples probes, writes snapshots, checkpoints and the summary. Exit statuses: 0 done,
-// 3 unstable (bad input, 2, is raised before a Simulation exists).
+// step, samples probes, writes snapshots, checkpoints and the summary. Bad input (exit 2) is
+// thrown before the output folder exists; anything that happens after it ends in a RunResult
+// (done, unstable, interrupted, or the failure of an output, of memory or of the code), so that a
+// summary.json can always be written.
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -33,8 +35,8 @@ struct RunOptions {
 };
 
 struct RunResult {
-  int exit_code = 0;                      // 0 done, 3 unstable
-  std::string exit_status = "done";       // "done" | "unstable"
+  int exit_code = 0;                      // 0 done, 3 unstable, 4 internal error, 5 output failed, 6 out of memory, 128 + signal
+  std::string exit_status = "done";       // "done" | "unstable" | "internal_error" | "output_failed" | "out_of_memory" | "interrupted"
   std::string message;
   std::int64_t steps = 0;                 // steps taken in this run
   std::int64_t final_step = 0;
@@ -55,6 +57,8 @@ struct RunResult {
   std::vector<std::string> insitu_failures;
   std::int64_t steering_accepted = 0, steering_rejected = 0;
   bool stopped_by_steering = false;
+  std::int64_t removed = 0;                       // fluid removed through open sides, since t = 0
+  std::vector<std::uint32_t> removed_first_ids;   // the first few of them
 };
 
 class Simulation {
@@ -71,5 +75,9 @@ class Simulation {
 struct InputError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+// Asks a running simulation to stop at the next step boundary, write its final checkpoint and
+// summary and end with exit code 128 + signal (async-signal-safe: the SIGINT/SIGTERM handler).
+void request_stop(int signal) noexcept;
 
 }  // namespace spate

@@ -193,6 +193,24 @@ std::optional<ParticleFault> SlabWorker::wrap_and_check_domain(bool wrap) {
   return fault;
 }
 
+void SlabWorker::remove_escaped() {
+  removed_.clear();
+  if (!open_.open) return;
+  const ParticleStore& p = particles_;
+  std::vector<std::uint8_t> gone;
+  for (std::size_t i = 0; i < p.owned(); ++i) {
+    float x[3] = {0, 0, 0};
+    for (int a = 0; a < lattice_.dim; ++a) x[a] = p.pos[a][i];
+    if (!escaped(open_, lattice_.dim, p.material[i], x)) continue;
+    if (gone.empty()) gone.assign(p.owned(), 0);
+    gone[i] = 1;
+    removed_.push_back(p.id[i]);
+  }
+  if (removed_.empty()) return;
+  particles_.remove_owned_if(gone);
+  std::sort(removed_.begin(), removed_.end());
+}
+
 // Between steps the host store holds the owned particles' whole state (health checks, probes, output
 // and the next rebuild read it), whichever backend computed it.
 std::optional<ParticleFault> SlabWorker::step(float dt) {
@@ -201,6 +219,7 @@ std::optional<ParticleFault> SlabWorker::step(float dt) {
     // the particles, so that the message is the host's).
     kernels_->predict(particles_, params_, dt);
     host_stale_ = true;
+    removed_ = r->remove_escaped(open_);
     const std::uint32_t bad = r->wrap_and_find_position_fault(lattice_);
     if (auto fault = first_fault(transport_, position_fault_message(bad))) return fault;
     rebuild();
@@ -210,6 +229,7 @@ std::optional<ParticleFault> SlabWorker::step(float dt) {
   }
   kernels_->predict(particles_, params_, dt);
   kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
+  remove_escaped();
   if (auto fault = first_fault(transport_, wrap_and_check_domain())) return fault;
   rebuild();
   compute_rates();

@@ -46,8 +46,13 @@ class SlabWorker {
   // Sort and halos only, for particles read back from a snapshot or checkpoint: they keep the
   // pressures and wall states they were saved with, so probes sample them exactly as the run did.
   void prepare_saved();
-  // One full step of size dt. Returns a fault if a particle left the domain (before rates).
+  // One full step of size dt. Fluid that left through an open side (set_open_sides) is removed
+  // first (removed_ids()); returns a fault if a particle left the domain otherwise (before rates).
   std::optional<ParticleFault> step(float dt);
+  // Where fluid may leave the domain for good (default: nowhere; every exit is a fault).
+  void set_open_sides(const OpenSides& open) { open_ = open; }
+  // The ids this slab removed in the last step, increasing.
+  const std::vector<std::uint32_t>& removed_ids() const { return removed_; }
   // NaN/infinity or density outside [min, max] x rho0 among owned particles.
   std::optional<ParticleFault> health(float min_ratio, float max_ratio);
   float local_time_step(const TimeStepControl& c) const;
@@ -90,6 +95,7 @@ class SlabWorker {
   void compute_rates();  // EOS, walls, fluid rates
   void refresh_halo();   // the ghosts' Refresh fields, through the host store
   std::optional<ParticleFault> wrap_and_check_domain(bool wrap = true);
+  void remove_escaped();  // host store
   // The device-resident path (kernels_->resident() set): the same step on the backend's arrays.
   SlabArrays* resident() const { return kernels_->resident(); }
   void sync_host();
@@ -111,6 +117,8 @@ class SlabWorker {
   std::unique_ptr<StepKernels> kernels_;
   std::int64_t crossings_ = 0, handovers_ = 0, face_moves_ = 0;
   bool faces_moved_ = false;
+  OpenSides open_;
+  std::vector<std::uint32_t> removed_;
 };
 
 // Estimated work per x column of the owned particles (fluid 7 in the fluid phase, wall 1 in the wall

@@ -1,6 +1,10 @@
 #include "steering.hpp"
 
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -69,33 +73,81 @@ std::string to_log_line(const SteeringChange& c) {
   return s.str();
 }
 
-std::vector<SteeringChange> parse_log(const std::string& text, const std::string& file) {
+namespace {
+
+// A whole token as a number (strtod/strtoll: "inf" and "nan" read as such; a value beyond the
+// double range is an error, not infinity).
+bool to_double(const std::string& token, double& out, bool& out_of_range) {
+  errno = 0;
+  char* end = nullptr;
+  out = std::strtod(token.c_str(), &end);
+  out_of_range = errno == ERANGE && std::fabs(out) > 1.0;
+  return end != token.c_str() && *end == '\0';
+}
+
+bool to_int64(const std::string& token, std::int64_t& out) {
+  errno = 0;
+  char* end = nullptr;
+  const long long v = std::strtoll(token.c_str(), &end, 10);
+  out = v;
+  return end != token.c_str() && *end == '\0' && errno != ERANGE;
+}
+
+}  // namespace
+
+std::vector<SteeringChange> parse_log(const std::string& text, const std::string& file, std::optional<int> dim) {
   std::vector<SteeringChange> out;
   std::istringstream in(text);
   int line_no = 0;
   for (std::string line; std::getline(in, line);) {
     ++line_no;
+    auto fail = [&](const std::string& what) -> std::runtime_error {
+      return std::runtime_error(file + ":" + std::to_string(line_no) + ": " + what);
+    };
     const auto hash = line.find('#');
     if (hash != std::string::npos) line.resize(hash);
     std::istringstream s(line);
+    std::vector<std::string> tokens;
+    for (std::string t; s >> t;) tokens.push_back(t);
+    if (tokens.empty()) continue;  // blank or comment line
+    if (tokens.size() < 3) throw fail("expected '<step> <time> <name> <values>'");
     SteeringChange c;
-    if (!(s >> c.step)) continue;  // blank or comment line
-    if (!(s >> c.time >> c.name)) throw std::runtime_error(file + ":" + std::to_string(line_no) + ": expected '<step> <time> <name> <values>'");
-    for (double v; s >> v;) c.value.push_back(v);
-    if (!s.eof()) throw std::runtime_error(file + ":" + std::to_string(line_no) + ": a value is not a number");
-    if (!out.empty() && c.step < out.back().step)
-      throw std::runtime_error(file + ":" + std::to_string(line_no) + ": steps must not decrease");
+    bool range = false;
+    if (!to_int64(tokens[0], c.step) || c.step < 0) throw fail("'" + tokens[0] + "' is not a step number (a whole number >= 0)");
+    if (!to_double(tokens[1], c.time, range) || range || !std::isfinite(c.time) || c.time < 0)
+      throw fail("'" + tokens[1] + "' is not a simulated time (a finite number >= 0)");
+    c.name = tokens[2];
+    for (std::size_t k = 3; k < tokens.size(); ++k) {
+      double v = 0;
+      if (!to_double(tokens[k], v, range)) throw fail("'" + tokens[k] + "' is not a number");
+      if (range) throw fail(tokens[k] + " is out of range for a double");
+      c.value.push_back(v);
+    }
+    // A recorded log holds only changes that were accepted: anything the live check would reject
+    // is a damaged or edited log.
+    if (dim)
+      if (auto why = validate(c, *dim)) throw fail(*why);
+    if (!out.empty() && c.step < out.back().step) throw fail("steps must not decrease");
     out.push_back(std::move(c));
   }
   return out;
 }
 
-std::vector<SteeringChange> read_log(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot read the steering log");
+std::vector<SteeringChange> read_log(const std::string& path, int dim) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw std::runtime_error(path + ": cannot read the steering log (it is a folder)");
+  // A steering log holds a line per change: megabytes of it are not one.
+  constexpr std::uintmax_t kLargest = 16u << 20;
+  if (std::filesystem::is_regular_file(path, ec) && std::filesystem::file_size(path, ec) > kLargest)
+    throw std::runtime_error(path + ": too large for a steering log (more than 16 MiB)");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot read the steering log (" + std::strerror(errno) + ")");
   std::stringstream s;
   s << in.rdbuf();
-  return parse_log(s.str(), path);
+  if (in.bad()) throw std::runtime_error(path + ": cannot read the steering log");
+  const std::string text = s.str();
+  if (text.find('\0') != std::string::npos) throw std::runtime_error(path + ": not a steering log (binary data)");
+  return parse_log(text, path, dim);
 }
 
 std::vector<SteeringChange> SteeringReplay::poll(std::int64_t step, double) {

@@ -44,9 +44,11 @@ void apply(const SteeringChange& change, SteeringTarget& target);
 
 // One line per change: "<step> <time> <name> <v0> [<v1> <v2>]", '#' starts a comment.
 std::string to_log_line(const SteeringChange& change);
-// Throws std::runtime_error naming the file and line when a line cannot be read.
-std::vector<SteeringChange> parse_log(const std::string& text, const std::string& file);
-std::vector<SteeringChange> read_log(const std::string& path);
+// Throws std::runtime_error naming the file and line when a line cannot be read; given the case's
+// dimension, also when a change is one that validate() rejects (a recorded log, or the history in
+// a checkpoint, holds only accepted changes: anything else is damaged input).
+std::vector<SteeringChange> parse_log(const std::string& text, const std::string& file, std::optional<int> dim = std::nullopt);
+std::vector<SteeringChange> read_log(const std::string& path, int dim);
 
 // Where steering requests come from. Polled by one thread per process at step boundaries; what it
 // returns is shared with every slab before anyone applies it.

@@ -117,8 +117,9 @@ def check_summary(out, split, steps):
     counts = s["device_particles"]
     if len(counts) != ranks * devices:
         fail(f"{out}: {len(counts)} device_particles entries for {ranks * devices} slabs")
-    if sum(counts) != s["particles"]["total"]:
-        fail(f"{out}: device_particles add up to {sum(counts)}, not {s['particles']['total']}")
+    remaining = s["particles"]["total"] - s.get("removed_particles", 0)
+    if sum(counts) != remaining:
+        fail(f"{out}: device_particles add up to {sum(counts)}, not {remaining}")
     if ranks * devices > 1 and s["ghost_particles"] <= 0:
         fail(f"{out}: no ghost particles with {ranks * devices} slabs")
     snapshots = out / "snapshots"
@@ -156,6 +157,14 @@ def check_paraview(pvbatch, out, total, slabs):
     print(f"  ParaView opens {out.name}/particles.pvd as one dataset: {points} points in {blocks} partitions")
 
 
+def check_removed(args, out):
+    """--expect-removed: fluid was removed through open sides (and as many in every run)."""
+    removed = summary(out).get("removed_particles", 0)
+    if args.expect_removed and removed <= 0:
+        fail(f"{out}: no fluid removed through open sides")
+    return removed
+
+
 def cmd_splits(args):
     """Runs every split and compares every pair of final checkpoints, including runs already in
     <work> from another test (the MPI splits compare with the in-process ones)."""
@@ -166,8 +175,10 @@ def cmd_splits(args):
     for split in args.splits:
         out, _ = spate.run(split_name(split), split, ["--steps", str(args.steps)])
         s = check_summary(out, split, args.steps)
+        check_removed(args, out)
         print(f"  {split_name(split)}: device_particles {s['device_particles']}, imbalance {s['imbalance']:.3f}, "
-              f"ghosts {s['ghost_particles']}, migrated {s.get('migrated_particles')}, face moves {s.get('face_moves')}")
+              f"ghosts {s['ghost_particles']}, migrated {s.get('migrated_particles')}, face moves {s.get('face_moves')}, "
+              f"removed {s.get('removed_particles', 0)}")
     if args.pvbatch:
         last = args.splits[-1]
         out = spate.work / split_name(last)
@@ -179,6 +190,9 @@ def cmd_splits(args):
             fail(f"{split_name(split)} did not leave a summary")
     if len(runs) < 2:
         fail("fewer than two runs to compare")
+    removed = {check_removed(args, p) for p in runs}
+    if len(removed) != 1:
+        fail(f"the splits removed different numbers of particles: {sorted(removed)}")
     for a, b in itertools.combinations(runs, 2):
         spate.compare(final_checkpoint(a), final_checkpoint(b))
     print(f"PASS: {len(runs)} splits ({', '.join(p.name for p in runs)}) bit-identical after {args.steps} steps")
@@ -196,12 +210,22 @@ def cmd_restart(args):
     if not middle.exists():
         fail(f"{middle} missing")
     reference = final_checkpoint(out)
+    if args.expect_removed:
+        with open(out / "summary.json") as f:
+            total = json.load(f)["removed_particles"]
+        # The checkpoint half way must already count some: the restart has to carry them on.
+        import h5py
+        with h5py.File(middle, "r") as f:
+            if int(f.attrs["removed_particles"]) <= 0:
+                fail(f"{middle}: no removed particles recorded yet (choose more --steps)")
     for split in args.splits[1:]:
         cont, _ = spate.run(f"restart_{split_name(first)}_as_{split_name(split)}", split,
                             ["--steps", str(args.steps - half), "--restart", str(middle)])
         s = summary(cont)
         if s["final_step"] != args.steps:
             fail(f"{cont}: ended at step {s['final_step']}, expected {args.steps}")
+        if args.expect_removed and s["removed_particles"] != total:
+            fail(f"{cont}: {s['removed_particles']} removed in all, the uninterrupted run {total}")
         spate.compare(reference, final_checkpoint(cont))
     print(f"PASS: restarting a {first[0]}x{first[1]} checkpoint at step {half} as "
           f"{', '.join(f'{r}x{d}' for r, d in args.splits[1:])} continues bit-identically")
@@ -318,6 +342,7 @@ def main():
     ap.add_argument("--fresh", action="store_true", help="splits: empty the work folder first")
     ap.add_argument("--pvbatch", default="", help="check that ParaView opens the last split's snapshots as one dataset")
     ap.add_argument("--too-many", type=int, default=64, help="a device count with fewer than 3 cells per slab")
+    ap.add_argument("--expect-removed", action="store_true", help="splits, restart: fluid leaves through open sides")
     ap.add_argument("--mismatched-set", action="append", default=[],
                     help="case override that makes a checkpoint which does not fit the case (bad-input)")
     args = ap.parse_args()

@@ -110,6 +110,8 @@ TEST(CaseLoader, MinimalCaseGetsDefaults) {
   EXPECT_DOUBLE_EQ(c.cfl, 0.2);
   EXPECT_EQ(c.density_mode, DensityMode::Continuity);
   EXPECT_EQ(c.diffusion, DensityDiffusion::Fourtakas);
+  EXPECT_EQ(c.flux, MomentumFlux::Central);
+  EXPECT_TRUE(c.tension);
   EXPECT_EQ(c.wall_layers, 3);
   EXPECT_TRUE(c.open_top);
   EXPECT_EQ(c.balance_every, 100);
@@ -123,6 +125,20 @@ TEST(CaseLoader, MinimalCaseGetsDefaults) {
   EXPECT_FLOAT_EQ(P.support2, 4.0f * 0.013f * 0.013f);
   EXPECT_FLOAT_EQ(P.materials.fluid[0].mass, 1000.0f * 0.01f * 0.01f);
   EXPECT_FLOAT_EQ(P.materials.fluid[0].tait_b, P.materials.fluid[0].c0 * P.materials.fluid[0].c0 * 1000.0f / 7.0f);
+}
+
+// The impact options of issue 11 (docs/physics.md, "Impact pressures").
+TEST(CaseLoader, RiemannAndTensionKeysAreRead) {
+  const Case c = parse_case(kMinimal2D, "tiny.yaml",
+                            {"density.diffusion=riemann", "momentum.flux=riemann", "momentum.riemann_limiter=2", "fluid.tension=false"});
+  EXPECT_EQ(c.diffusion, DensityDiffusion::Riemann);
+  EXPECT_EQ(c.flux, MomentumFlux::Riemann);
+  EXPECT_DOUBLE_EQ(c.riemann_limiter, 2.0);
+  EXPECT_FALSE(c.tension);
+  const PhysicsParams P = physics_params(c);
+  EXPECT_EQ(P.flux, MomentumFlux::Riemann);
+  EXPECT_FLOAT_EQ(P.riemann_limiter, 2.0f);
+  EXPECT_FALSE(P.tension);
 }
 
 TEST(CaseLoader, EveryKeyIsRead) {
@@ -268,12 +284,47 @@ TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
        {"fluid_blocks[0].min", "'centre' and 'radius' only"}},
       {"wet bed of an unknown fluid", {"wet_bed={depth: 0.02, fluid: air}"}, {"wet_bed.fluid", "no fluid named 'air'"}},
       {"probe on a missing solid", {"probes=[{name: f, type: force, solid: nope}]"}, {"probes[0].solid", "no solid named 'nope'"}},
+      {"force on a face that a 2D box has not",
+       {"solids=[{name: s, min: [0.15, 0], max: [0.18, 0.05]}]", "probes=[{name: f, type: force, solid: s, face: z+}]"},
+       {"probes[0].face", "'z+' is not a face", "x-, x+, y-, y+"}},
+      {"wall sensor off every face", {"probes=[{name: s, type: wall_pressure, position: [0.1, 0.05]}]"},
+       {"probes[0].position", "must lie on a face"}},
+      {"wall sensor on an edge", {"probes=[{name: s, type: wall_pressure, position: [0, 0]}]"}, {"probes[0].position", "edge", "normal"}},
+      {"wall sensor facing the wall", {"probes=[{name: s, type: wall_pressure, position: [0, 0.02], normal: [-1, 0]}]"},
+       {"probes[0].normal", "is not the normal"}},
+      {"wall sensor of negative size", {"probes=[{name: s, type: wall_pressure, position: [0, 0.02], diameter: -1}]"},
+       {"probes[0].diameter", ">= 0"}},
+      {"wall sensor with a negative window", {"probes=[{name: s, type: wall_pressure, position: [0, 0.02], window: -1}]"},
+       {"probes[0].window", ">= 0"}},
+      {"unknown momentum flux", {"momentum.flux=upwind"}, {"'momentum.flux'", "central", "riemann"}},
+      {"negative Riemann limiter", {"momentum.riemann_limiter=-1"}, {"'momentum.riemann_limiter'", ">= 0"}},
+      {"tension not a boolean", {"fluid.tension=maybe"}, {"'fluid.tension'"}},
   };
   for (const BadCase& b : cases) {
     const std::string message = error_of(kMinimal2D, b.overrides);
     for (const std::string& part : b.expected)
       EXPECT_NE(message.find(part), std::string::npos) << b.what << ": '" << part << "' not in: " << message;
   }
+}
+
+// A wall sensor takes the normal of the face it lies on (pointing into the fluid; for a solid, out of
+// it) and is moved onto the face the particles make when the case puts it within dp/2 of it.
+TEST(CaseLoader, WallSensorFindsItsFace) {
+  const Case c = parse_case(kMinimal2D, "case.yaml",
+                            {"solids=[{name: s, min: [0.15, 0], max: [0.18, 0.05]}]",
+                             "probes=[{name: end, type: wall_pressure, position: [0.2004, 0.03], diameter: 0.004, window: 0.001},"
+                             " {name: floor, type: wall_pressure, position: [0.1, 0]}, {name: solid, type: wall_pressure, position: [0.15, 0.02]},"
+                             " {name: top, type: wall_pressure, position: [0.15, 0.05], normal: [0, 2]}, {name: f, type: force, solid: s, face: x-}]"});
+  ASSERT_EQ(c.probes.size(), 5u);
+  EXPECT_EQ(c.probes[0].type, ProbeType::WallPressure);
+  EXPECT_DOUBLE_EQ(c.probes[0].position[0], 0.2);
+  EXPECT_DOUBLE_EQ(c.probes[0].normal[0], -1.0);
+  EXPECT_DOUBLE_EQ(c.probes[0].diameter, 0.004);
+  EXPECT_DOUBLE_EQ(c.probes[0].window, 0.001);
+  EXPECT_DOUBLE_EQ(c.probes[1].normal[1], 1.0);
+  EXPECT_DOUBLE_EQ(c.probes[2].normal[0], -1.0);
+  EXPECT_DOUBLE_EQ(c.probes[3].normal[1], 1.0);  // the corner of the solid, resolved by the normal
+  EXPECT_EQ(c.probes[4].face, 0);
 }
 
 TEST(CaseLoader, MissingRequiredKeys) {

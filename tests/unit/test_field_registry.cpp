@@ -124,7 +124,13 @@ TEST(FieldRegistry, AnEntryAloneCarriesATestFieldThroughHaloMigrationCheckpointS
   all.permute(0, order);
   all.set_owned(all.size());
   const auto file = dir / "checkpoint.h5";
-  write_checkpoint(file, CheckpointMeta{}, all);
+  // A checkpoint is read as input: it needs a real header (a time step, the case it belongs to).
+  CheckpointMeta meta;
+  meta.dt = 1e-4;
+  meta.case_name = c.name;
+  meta.case_yaml = c.source_yaml;
+  meta.geometry_hash = geometry_hash(c);
+  write_checkpoint(file, meta, all);
   bool listed = false;
   for (auto& d : checkpoint_datasets(c.dim)) listed = listed || d.name == "tracer";
   EXPECT_TRUE(listed);

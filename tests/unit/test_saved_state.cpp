@@ -33,12 +33,16 @@ std::string text_of(const std::filesystem::path& p) {
 }
 
 // The tiny case's particles with a distinct value in every exported field.
+Case saved_case(int dim) {
+  return parse_case(dim == 3 ? "name: t3\ndimensions: 3\ndp: 0.005\ntime: {end: 1}\ntank: {size: [0.1, 0.03, 0.05]}\n"
+                               "fluid_blocks: [{min: [0, 0, 0], max: [0.05, 0.03, 0.03]}]\n"
+                             : "name: t2\ndimensions: 2\ndp: 0.005\ntime: {end: 1}\ntank: {size: [0.1, 0.05]}\n"
+                               "fluid_blocks: [{min: [0, 0], max: [0.05, 0.03]}]\n",
+                    "saved.yaml");
+}
+
 ParticleStore particles(int dim) {
-  const Case c = parse_case(dim == 3 ? "name: t3\ndimensions: 3\ndp: 0.005\ntime: {end: 1}\ntank: {size: [0.1, 0.03, 0.05]}\n"
-                                       "fluid_blocks: [{min: [0, 0, 0], max: [0.05, 0.03, 0.03]}]\n"
-                                     : "name: t2\ndimensions: 2\ndp: 0.005\ntime: {end: 1}\ntank: {size: [0.1, 0.05]}\n"
-                                       "fluid_blocks: [{min: [0, 0], max: [0.05, 0.03]}]\n",
-                            "saved.yaml");
+  const Case c = saved_case(dim);
   ParticleStore p = generate_particles(c);
   for (std::size_t i = 0; i < p.size(); ++i) {
     p.pressure[i] = 100.0f + 0.5f * static_cast<float>(i);
@@ -116,6 +120,12 @@ TEST(SavedState, CheckpointKeepsDerivedFieldsAndHasAnXdmfSidecar) {
   CheckpointMeta meta;
   meta.step = 7;
   meta.time = 0.25;
+  // A checkpoint is read as input: a real time step and the case it belongs to.
+  const Case c = saved_case(3);
+  meta.dt = 1e-4;
+  meta.case_name = c.name;
+  meta.case_yaml = c.source_yaml;
+  meta.geometry_hash = geometry_hash(c);
   write_checkpoint(dir / "checkpoint_step_00000007.h5", meta, p);
   const CheckpointMeta read = read_checkpoint(dir / "checkpoint_step_00000007.h5", back);
   EXPECT_TRUE(read.derived_saved);

@@ -61,7 +61,7 @@ void correct(ParticleStore& p, const PhysicsParams& P, float dt) {
   for (std::int64_t i = 0; i < n; ++i) {
     if (!P.is_fluid(p.material[i])) continue;
     for (int k = 0; k < d; ++k) spate::correct(p.vel[k][i], p.acc[k][i], p.acc_prev[k][i], dt);
-    if (continuity) spate::correct(p.density[i], p.density_rate[i], p.density_rate_prev[i], dt);
+    if (continuity) correct_density(p.density[i], p.density_rate[i], p.density_rate_prev[i], dt, density_floor(P, p.material[i]));
   }
 }
 
@@ -69,7 +69,7 @@ void equation_of_state(ParticleStore& p, const PhysicsParams& P) {
   const auto n = static_cast<std::int64_t>(p.size());
 #pragma omp parallel for schedule(static) if (n > kCheapGrain)
   for (std::int64_t i = 0; i < n; ++i)
-    if (P.is_fluid(p.material[i])) p.pressure[i] = tait_pressure(p.density[i], P.materials.of(p.material[i]));
+    if (P.is_fluid(p.material[i])) p.pressure[i] = fluid_pressure(P, P.materials.of(p.material[i]), p.density[i]);
 }
 
 void summation_density(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
@@ -118,6 +118,23 @@ struct NeighbourBatch {
     if (multiphase) mass.resize(n), c0.resize(n), viscosity.resize(n);
   }
 };
+
+// Neighbour n of a chunk (len of them) added to lane n mod kLanes of (vector, scalar) partial sums.
+template <int Dim>
+inline void add_lanes(float (&vec)[Dim][kLanes], float (&scalar)[kLanes], const float (&tvec)[Dim][kChunk],
+                      const float (&tscalar)[kChunk], int len) {
+  int s = 0;
+  for (; s + kLanes <= len; s += kLanes) {
+    for (int l = 0; l < kLanes; ++l) {
+      SPATE_UNROLL for (int k = 0; k < Dim; ++k) vec[k][l] += tvec[k][s + l];
+      scalar[l] += tscalar[s + l];
+    }
+  }
+  for (int l = 0; s + l < len; ++l) {
+    SPATE_UNROLL for (int k = 0; k < Dim; ++k) vec[k][l] += tvec[k][s + l];
+    scalar[l] += tscalar[s + l];
+  }
+}
 
 template <class Kernel, int Dim, bool Gamma7, bool Multiphase>
 void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params, std::uint32_t first_cell,
@@ -182,6 +199,10 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
         // then neighbour n added to lane n mod kLanes.
         float acc[Dim][kLanes] = {};
         float drho[kLanes] = {};
+        // The wall sums for the Riemann wall term (finish_fluid_rates), only when it is on.
+        const bool wall_sums = P.flux == MomentumFlux::Riemann;
+        float wall_gradient[Dim][kLanes] = {};
+        float wall_weight[kLanes] = {};
         for (int s0 = 0; s0 < count; s0 += kChunk) {
           const int len = std::min(kChunk, count - s0);
           const std::uint32_t* chunk = index + s0;
@@ -196,7 +217,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
             gather(batch.c0.data(), chunk, len, jc0);
             gather(batch.viscosity.data(), chunk, len, jmu);
           }
-          float tacc[Dim][kChunk], tdrho[kChunk];
+          float tacc[Dim][kChunk], tdrho[kChunk], twall[Dim][kChunk], tweight[kChunk];
           for (int n = 0; n < len; ++n) {
             ParticleState<Dim> sj;
             SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.x[k] = jf[kRecX + k][n], sj.v[k] = jf[kRecV + k][n];
@@ -206,27 +227,20 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
             FluidRates<Dim> t;
             if constexpr (Multiphase) t = multiphase_pair_terms<Kernel, Dim, Gamma7>(P, M, si, sj, NeighbourFluid{jmass[n], jc0[n], jmu[n]});
             else t = fluid_pair_terms<Kernel, Dim, Gamma7>(P, M, si, sj);
-            SPATE_UNROLL for (int k = 0; k < Dim; ++k) tacc[k][n] = t.acc[k];
+            SPATE_UNROLL for (int k = 0; k < Dim; ++k) tacc[k][n] = t.acc[k], twall[k][n] = t.wall_gradient[k];
             tdrho[n] = t.density_rate;
+            tweight[n] = t.wall_weight;
           }
-          int s = 0;
-          for (; s + kLanes <= len; s += kLanes) {
-            for (int l = 0; l < kLanes; ++l) {
-              SPATE_UNROLL for (int k = 0; k < Dim; ++k) acc[k][l] += tacc[k][s + l];
-              drho[l] += tdrho[s + l];
-            }
-          }
-          for (int l = 0; s + l < len; ++l) {
-            SPATE_UNROLL for (int k = 0; k < Dim; ++k) acc[k][l] += tacc[k][s + l];
-            drho[l] += tdrho[s + l];
-          }
+          add_lanes<Dim>(acc, drho, tacc, tdrho, len);
+          if (wall_sums) add_lanes<Dim>(wall_gradient, wall_weight, twall, tweight, len);
         }
         FluidRates<Dim> rates;
         for (int l = 0; l < kLanes; ++l) {
-          SPATE_UNROLL for (int k = 0; k < Dim; ++k) rates.acc[k] += acc[k][l];
+          SPATE_UNROLL for (int k = 0; k < Dim; ++k) rates.acc[k] += acc[k][l], rates.wall_gradient[k] += wall_gradient[k][l];
           rates.density_rate += drho[l];
+          rates.wall_weight += wall_weight[l];
         }
-        add_body_forces(P, rates);
+        finish_fluid_rates(P, M, si, rates);
         SPATE_UNROLL for (int k = 0; k < Dim; ++k) ps.acc[k][i] = rates.acc[k];
         ps.density_rate[i] = P.density_mode == DensityMode::Continuity ? rates.density_rate : 0.0f;
       }

@@ -42,16 +42,16 @@ __global__ void predict_kernel(DeviceFields d, int dim, std::uint32_t n, float d
   if (continuity) predict_density(d.density[i], d.density_rate_prev[i], dt);
 }
 
-__global__ void correct_kernel(DeviceFields d, int dim, std::uint32_t n, float dt, bool continuity, std::uint8_t fluids) {
+__global__ void correct_kernel(DeviceFields d, int dim, std::uint32_t n, float dt, bool continuity, PhysicsParams P) {
   const std::uint32_t i = thread_index();
-  if (i >= n || d.material[i] >= fluids) return;
+  if (i >= n || !P.is_fluid(d.material[i])) return;
   for (int k = 0; k < dim; ++k) correct(d.vel[k][i], d.acc[k][i], d.acc_prev[k][i], dt);
-  if (continuity) correct(d.density[i], d.density_rate[i], d.density_rate_prev[i], dt);
+  if (continuity) correct_density(d.density[i], d.density_rate[i], d.density_rate_prev[i], dt, density_floor(P, d.material[i]));
 }
 
 __global__ void eos_kernel(DeviceFields d, std::uint32_t n, PhysicsParams P) {
   const std::uint32_t i = thread_index();
-  if (i < n && P.is_fluid(d.material[i])) d.pressure[i] = tait_pressure(d.density[i], P.materials.of(d.material[i]));
+  if (i < n && P.is_fluid(d.material[i])) d.pressure[i] = fluid_pressure(P, P.materials.of(d.material[i]), d.density[i]);
 }
 
 // One thread per owned particle running one of the shared per-particle bodies
@@ -122,7 +122,7 @@ class CudaKernels final : public StepKernels {
   void correct(ParticleStore&, const PhysicsParams& P, float dt) override {
     arrays_.select();
     launch(owned(), correct_kernel, arrays_.fields(), arrays_.dim(), owned32(), dt, P.density_mode == DensityMode::Continuity,
-           P.materials.fluids);
+           P);
   }
   void equation_of_state(ParticleStore&, const PhysicsParams& P) override {
     arrays_.select();

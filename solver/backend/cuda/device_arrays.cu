@@ -9,6 +9,7 @@
 #include <cub/device/device_reduce.cuh>
 #include <cub/device/device_scan.cuh>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
@@ -163,6 +164,15 @@ __global__ void position_fault_kernel(DeviceFields d, Lattice L, std::uint32_t n
     bad = bad || position_fault(L, d.pos[a][i], a) != PositionFault::None;
   }
   out[i] = bad ? d.id[i] : kNone;
+}
+
+// 1 for an owned fluid particle that left through an open side, else 0.
+__global__ void escaped_flag_kernel(DeviceFields d, int dim, OpenSides o, std::uint32_t n, std::uint32_t* flags) {
+  const std::uint32_t i = thread_index();
+  if (i >= n) return;
+  float x[3] = {0, 0, 0};
+  for (int a = 0; a < dim; ++a) x[a] = d.pos[a][i];
+  flags[i] = escaped(o, dim, d.material[i], x) ? 1u : 0u;
 }
 
 // Per particle: its id if it is not below `bound`, else kNoFault.
@@ -486,6 +496,20 @@ std::vector<std::uint32_t> DeviceSlabArrays::table_entries(const TableRead& read
   return out;
 }
 
+// The exclusive prefix sum of n 0/1 flags (a compaction's target slots) and their total, read back.
+std::size_t DeviceSlabArrays::scan_flags(const std::uint32_t* flags, std::uint32_t* prefix, std::size_t n) {
+  std::size_t bytes = 0;
+  check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, flags, prefix, static_cast<int>(n), compute_.get()), "cub::DeviceScan");
+  check(cub::DeviceScan::ExclusiveSum(cub_scratch(bytes), bytes, flags, prefix, static_cast<int>(n), compute_.get()), "cub::DeviceScan");
+  check(cudaMemcpyAsync(result_host_.data(), prefix + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_.get()), "flag count");
+  check(cudaMemcpyAsync(result_host_.data() + 4, flags + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_.get()), "flag count");
+  check(cudaStreamSynchronize(compute_.get()), "flag count");
+  std::uint32_t last_prefix, last_flag;
+  std::memcpy(&last_prefix, result_host_.data(), 4);
+  std::memcpy(&last_flag, result_host_.data() + 4, 4);
+  return std::size_t{last_prefix} + last_flag;
+}
+
 // ---- neighbour payload --------------------------------------------------------------------------
 
 // Fields of `set` of particles from[0 .. count) written to slots [to, to + count), shifted.
@@ -639,18 +663,9 @@ void DeviceSlabArrays::append_images(const CellGrid& geometry, int axis, int lay
   std::uint32_t* prefix = sort_values_[1].as<std::uint32_t>();
   launch(compute_.get(), n, layer_flag_kernel, static_cast<const float*>(fields().pos[0]), static_cast<const float*>(fields().pos[axis]), L,
          axis, layer, geometry.owned_lo(), geometry.owned_hi(), local, flags, u32(n));
-  std::size_t bytes = 0;
-  check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, flags, prefix, static_cast<int>(n), compute_.get()), "cub::DeviceScan");
-  check(cub::DeviceScan::ExclusiveSum(cub_scratch(bytes), bytes, flags, prefix, static_cast<int>(n), compute_.get()), "cub::DeviceScan");
   std::uint32_t* list = image_source_[axis].as<std::uint32_t>() + images_[axis];
+  const std::size_t count = scan_flags(flags, prefix, n);
   launch(compute_.get(), n, compact_kernel, static_cast<const std::uint32_t*>(flags), static_cast<const std::uint32_t*>(prefix), list, u32(n));
-  check(cudaMemcpyAsync(result_host_.data(), prefix + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_.get()), "image count");
-  check(cudaMemcpyAsync(result_host_.data() + 4, flags + n - 1, sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_.get()), "image count");
-  check(cudaStreamSynchronize(compute_.get()), "image count");
-  std::uint32_t last_prefix, last_flag;
-  std::memcpy(&last_prefix, result_host_.data(), 4);
-  std::memcpy(&last_flag, result_host_.data() + 4, 4);
-  const std::size_t count = last_prefix + last_flag;
   reserve(size_ + count);
   gather_fields(FieldSet::Ghost, list, count, size_, periodic_shift(L, axis, layer == 0));
   zero_fields_outside(FieldSet::Ghost, size_, count);
@@ -696,6 +711,37 @@ void DeviceSlabArrays::refresh_images(ImagePart part) {
 }
 
 // ---- checks -------------------------------------------------------------------------------------
+
+// A flag per particle and a scan give the count (one small read-back per step); only when some
+// particle escaped, their ids come back and the others are kept by a sort on the flag.
+std::vector<std::uint32_t> DeviceSlabArrays::remove_escaped(const OpenSides& open) {
+  select();
+  const std::size_t n = owned_;
+  if (n == 0 || !open.open) return {};
+  std::uint32_t* flags = sort_values_[0].as<std::uint32_t>();
+  std::uint32_t* prefix = sort_values_[1].as<std::uint32_t>();
+  launch(compute_.get(), n, escaped_flag_kernel, fields(), dim_, open, u32(n), flags);
+  const std::size_t count = scan_flags(flags, prefix, n);
+  if (count == 0) return {};
+  // Their ids: indices by compaction, ids gathered, copied back.
+  std::uint32_t* list = scratch_.as<std::uint32_t>();
+  std::uint32_t* ids = sort_keys_[0].as<std::uint32_t>();
+  launch(compute_.get(), n, compact_kernel, static_cast<const std::uint32_t*>(flags), static_cast<const std::uint32_t*>(prefix), list, u32(n));
+  launch(compute_.get(), count, gather_kernel<std::uint32_t>, static_cast<const std::uint32_t*>(fields().id),
+         static_cast<const std::uint32_t*>(list), ids, u32(count));
+  result_host_.reserve(count * sizeof(std::uint32_t));
+  check(cudaMemcpyAsync(result_host_.data(), ids, count * sizeof(std::uint32_t), cudaMemcpyDeviceToHost, compute_.get()), "escaped ids");
+  check(cudaStreamSynchronize(compute_.get()), "escaped ids");
+  std::vector<std::uint32_t> out(count);
+  std::memcpy(out.data(), result_host_.data(), count * sizeof(std::uint32_t));
+  std::sort(out.begin(), out.end());
+  // The flag as the sort key: the particles kept come first (by id), the escaped last, cut off.
+  check(cudaMemcpyAsync(keys(), flags, n * sizeof(std::uint32_t), cudaMemcpyDeviceToDevice, compute_.get()), "escaped keys");
+  key_count_ = 2;
+  sort_by_key(0, n);
+  truncate(n - count);
+  return out;
+}
 
 std::uint32_t DeviceSlabArrays::wrap_and_find_position_fault(const Lattice& L) {
   select();

@@ -143,6 +143,7 @@ class DeviceSlabArrays final : public SlabArrays, private DeviceCopies {
   void make_images(const CellGrid& geometry, int axis) override;
   void record_halo_slots(std::size_t left, std::size_t right) override;
   void refresh_images(ImagePart part) override;
+  std::vector<std::uint32_t> remove_escaped(const OpenSides& open) override;
   std::uint32_t wrap_and_find_position_fault(const Lattice& L) override;
   std::uint32_t find_unhealthy(const HealthLimits& limits) override;
 
@@ -169,6 +170,7 @@ class DeviceSlabArrays final : public SlabArrays, private DeviceCopies {
   int index_of(int field, int component) const;
   void reserve(std::size_t n);  // particle slots, keeping [0, size_)
   void* cub_scratch(std::size_t bytes);
+  std::size_t scan_flags(const std::uint32_t* flags, std::uint32_t* prefix, std::size_t n);
   // DeviceCopies, for HaloExchange: cudaMemcpy*Async on the copy stream.
   int device() const override { return device_; }
   bool peer_both_ways(int other) override;
