@@ -101,6 +101,36 @@ fig.savefig(images / "validation_poiseuille.png", dpi=110)
 print(f"poiseuille: centreline at t = {t[-1]:.2f} s: {u[-1]:.4g} m/s, analytic {F * L * L / (8 * nu):.4g} m/s, "
       f"error {100 * (u[-1] / (F * L * L / (8 * nu)) - 1):+.2f}%")
 
+# Two fluids at rest (oil over water): pressures against the exact hydrostatic values, the water's
+# surface under the oil and the oil's centroid.
+exact = {"p_oil": 800 * g * 0.1, "p_water": 800 * g * 0.2 + 1000 * g * 0.2}
+fig, (ax, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+for name, p_exact in exact.items():
+    t, p = probe(work / f"two_layer_hydrostatic_2d/probes/{name}.csv", "pressure")
+    ax.plot(t, [pi / p_exact for pi in p], label=f"{name} (exact {p_exact:.1f} Pa)")
+    late = [pi for ti, pi in zip(t, p) if 0.5 <= ti <= 1.0]
+    print(f"two layers {name}: mean over 0.5 s <= t <= 1 s {sum(late) / len(late):.1f} Pa, exact {p_exact:.1f} Pa, "
+          f"error {100 * (sum(late) / len(late) / p_exact - 1):+.2f}%")
+ax.axhline(1.0, color="k", lw=0.8)
+ax.axhspan(0.99, 1.01, color="g", alpha=0.1)
+ax.set_ylim(0.95, 1.05)
+ax.set_xlabel("t [s]")
+ax.set_ylabel("p / p_exact")
+ax.legend()
+ax.grid(alpha=0.3)
+t, h = probe(work / "two_layer_hydrostatic_2d/probes/interface.csv", "height")
+ax2.plot(t, h, label="water surface under the oil (height gauge, phase water)")
+t, yc = probe(work / "two_layer_hydrostatic_2d/probes/oil_centroid.csv", "y")
+ax2.plot(t, yc, label="oil centroid y")
+ax2.axhline(0.3, color="k", lw=0.6, ls=":")
+ax2.axhline(0.4, color="k", lw=0.6, ls=":")
+ax2.set_ylim(0.28, 0.42)
+ax2.set_xlabel("t [s]")
+ax2.set_ylabel("y [m]")
+ax2.legend(fontsize=8)
+ax2.grid(alpha=0.3)
+fig.tight_layout()
+fig.savefig(images / "validation_two_layer.png", dpi=110)
 
 # Impact pressures against Lobovsky et al. (2014) and Buchner (2002): each scheme's sensor (through
 # its window, as the case's sensors average) and the experiment through the same window

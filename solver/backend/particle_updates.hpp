@@ -8,12 +8,14 @@
 #include "../grid/cell_grid_view.hpp"
 #include "../particles/particle_access.hpp"
 #include "../physics/fluid_interactions.hpp"
+#include "../physics/multiphase_interactions.hpp"
 #include "../physics/wall_boundary.hpp"
 
 namespace spate {
 
-// Acceleration and density rate of fluid particle i (zero rates for walls).
-template <class Kernel, int Dim, bool Gamma7, class Fields>
+// Acceleration and density rate of fluid particle i (zero rates for walls). Multiphase: the pair
+// terms of multiphase_interactions.hpp with each neighbour's own fluid.
+template <class Kernel, int Dim, bool Gamma7, bool Multiphase, class Fields>
 SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
   if (!P.is_fluid(f.material[i])) {
     SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = 0.0f;
@@ -27,8 +29,13 @@ SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, 
   // paying for the pair terms (which would add exactly zero for them).
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
     for (std::uint32_t j = jb; j < je; ++j) {
-      if (distance_squared<Dim>(si.x, f.pos, j) < P.support2)
-        accumulate_fluid_pair<Kernel, Dim, Gamma7>(P, M, si, load_state<Dim>(f, j), rates);
+      if (distance_squared<Dim>(si.x, f.pos, j) < P.support2) {
+        if constexpr (Multiphase) {
+          accumulate_multiphase_pair<Kernel, Dim, Gamma7>(P, M, si, load_state<Dim>(f, j), rates);
+        } else {
+          accumulate_fluid_pair<Kernel, Dim, Gamma7>(P, M, si, load_state<Dim>(f, j), rates);
+        }
+      }
     }
   });
   finish_fluid_rates(P, M, si, rates);

@@ -288,6 +288,64 @@ bool overlap(const Box& a, const Box& b, int dim, double tol) {
   return true;
 }
 
+// One fluid material (the `fluid:` section or an entry of `fluids:`).
+void read_fluid(Section& f, FluidSpec& fluid, bool name_required) {
+  fluid.name = name_required ? f.text("name") : f.text("name", std::string("water"));
+  if (fluid.name.empty()) f.fail(f.raw("name"), "name", "must not be empty");
+  fluid.density = f.number("density", 1000.0);
+  if (!(fluid.density > 0)) f.fail(f.raw("density"), "density", "must be > 0");
+  fluid.viscosity = f.number("viscosity", 1.0e-3);
+  if (fluid.viscosity < 0) f.fail(f.raw("viscosity"), "viscosity", "must be >= 0");
+  if (f.has("sound_speed") && !(f.raw("sound_speed").IsScalar() && f.raw("sound_speed").Scalar() == "auto")) {
+    fluid.sound_speed = f.number("sound_speed");
+    if (!(*fluid.sound_speed > 0)) f.fail(f.raw("sound_speed"), "sound_speed", "must be > 0 or 'auto'");
+  }
+  fluid.tait_exponent = f.number("tait_exponent", 7.0);
+  if (!(fluid.tait_exponent >= 1 && fluid.tait_exponent <= 10))
+    f.fail(f.raw("tait_exponent"), "tait_exponent", "must be between 1 and 10 (7 for water)");
+  fluid.background_pressure = f.number("background_pressure", 0.0);
+  if (fluid.background_pressure < 0) f.fail(f.raw("background_pressure"), "background_pressure", "must be >= 0");
+}
+
+// The index of the fluid named by `key` (the first fluid when the key is absent).
+int fluid_index(Section& s, const std::string& key, const Case& c) {
+  if (!s.has(key)) return 0;
+  const std::string name = s.text(key);
+  std::string names;
+  for (std::size_t k = 0; k < c.fluids.size(); ++k) {
+    if (c.fluids[k].name == name) return static_cast<int>(k);
+    names += (names.empty() ? "" : ", ") + c.fluids[k].name;
+  }
+  s.fail(s.raw(key), key, "no fluid named '" + name + "' (fluids: " + names + ")");
+}
+
+// A fluid block: a box (min, max) or a disc/sphere (centre, radius), of the fluid it names, with
+// an optional sinusoidal top face (top_wave).
+FluidBlock read_fluid_block(Section& f, const Case& c) {
+  const int d = c.dim;
+  FluidBlock b;
+  if (f.has("radius") || f.has("centre")) {
+    for (const char* key : {"min", "max", "top_wave"})
+      if (f.has(key)) f.fail(f.raw(key), key, "a disc/sphere block has 'centre' and 'radius' only");
+    b.centre = f.vector("centre", d);
+    b.radius = f.number("radius");
+    if (!(b.radius > 0)) f.fail(f.raw("radius"), "radius", "must be > 0");
+    for (int k = 0; k < d; ++k) b.min[k] = b.centre[k] - b.radius, b.max[k] = b.centre[k] + b.radius;
+  } else {
+    static_cast<Box&>(b) = read_box(f, d);
+    if (auto w = f.child("top_wave")) {
+      b.wave_amplitude = w->number("amplitude");
+      b.wavelength = w->number("wavelength");
+      if (!(b.wavelength > 0)) w->fail(w->raw("wavelength"), "wavelength", "must be > 0");
+      if (!(std::fabs(b.wave_amplitude) < b.max[d - 1] - b.min[d - 1]))
+        w->fail(w->raw("amplitude"), "amplitude", "its magnitude must be below the block's height");
+      w->finish();
+    }
+  }
+  b.fluid = fluid_index(f, "fluid", c);
+  return b;
+}
+
 // Why `name` cannot be a file name (case names name the default output folder out/<name>, probe
 // names their probes/<name>.csv), or nothing when it can: no path separators, no '..' or hidden
 // names, no control characters, not an option.
@@ -398,23 +456,34 @@ Case read(Section& root, const std::string& file) {
   g_default[d - 1] = -9.81;
   c.gravity = root.vector("gravity", d, g_default);
 
+  // Fluids: `fluid:` (one), or a `fluids:` list of materials (several phases); `fluid:` then keeps
+  // only the case-wide artificial_viscosity, body_force and tension.
+  const bool listed = root.has("fluids");
+  if (listed) {
+    auto entries = root.list("fluids");
+    if (entries.empty()) root.fail(root.raw("fluids"), "fluids", "expected a list of at least one fluid");
+    if (entries.size() > static_cast<std::size_t>(kMaxFluids))
+      root.fail(root.raw("fluids"), "fluids", "at most " + std::to_string(kMaxFluids) + " fluids");
+    c.fluids.clear();
+    for (auto& e : entries) {
+      FluidSpec fluid;
+      read_fluid(e, fluid, /*name_required=*/true);
+      for (auto& other : c.fluids)
+        if (other.name == fluid.name) e.fail(e.raw("name"), "name", "fluid '" + fluid.name + "' is defined twice");
+      e.finish();
+      c.fluids.push_back(fluid);
+    }
+  }
   {
     auto f = root.optional_child("fluid");
-    FluidSpec& fluid = c.fluids[0];
-    fluid.name = f.text("name", std::string("water"));
-    fluid.density = f.number("density", 1000.0);
-    if (!(fluid.density > 0)) f.fail(f.raw("density"), "density", "must be > 0");
-    fluid.viscosity = f.number("viscosity", 1.0e-3);
-    if (fluid.viscosity < 0) f.fail(f.raw("viscosity"), "viscosity", "must be >= 0");
-    if (f.has("sound_speed") && !(f.raw("sound_speed").IsScalar() && f.raw("sound_speed").Scalar() == "auto")) {
-      fluid.sound_speed = f.number("sound_speed");
-      if (!(*fluid.sound_speed > 0)) f.fail(f.raw("sound_speed"), "sound_speed", "must be > 0 or 'auto'");
+    if (!listed) {
+      read_fluid(f, c.fluids[0], /*name_required=*/false);
+    } else {
+      for (const char* key : {"name", "density", "viscosity", "sound_speed", "tait_exponent", "background_pressure"})
+        if (f.has(key))
+          f.fail(f.raw(key), key, "with a 'fluids' list each fluid's properties go in its entry; 'fluid' keeps only "
+                                  "artificial_viscosity, body_force and tension");
     }
-    fluid.tait_exponent = f.number("tait_exponent", 7.0);
-    if (!(fluid.tait_exponent >= 1 && fluid.tait_exponent <= 10))
-      f.fail(f.raw("tait_exponent"), "tait_exponent", "must be between 1 and 10 (7 for water)");
-    fluid.background_pressure = f.number("background_pressure", 0.0);
-    if (fluid.background_pressure < 0) f.fail(f.raw("background_pressure"), "background_pressure", "must be >= 0");
     c.artificial_viscosity = f.number("artificial_viscosity", 0.0);
     if (c.artificial_viscosity < 0) f.fail(f.raw("artificial_viscosity"), "artificial_viscosity", "must be >= 0");
     c.body_force = f.vector("body_force", d, Vec3d{0, 0, 0});
@@ -518,13 +587,23 @@ Case read(Section& root, const std::string& file) {
   const Vec3d tank_hi{c.tank_origin[0] + c.tank_size[0], c.tank_origin[1] + c.tank_size[1], c.tank_origin[2] + c.tank_size[2]};
   const double tol = 1e-9;
   for (auto& f : root.list("fluid_blocks")) {
-    Box b = read_box(f, d);
+    const FluidBlock b = read_fluid_block(f, c);
     f.finish();
-    if (!inside(b, c.tank_origin, tank_hi, d, tol)) f.fail(f.node(), "max", "fluid block lies (partly) outside the tank");
+    if (!inside(b, c.tank_origin, tank_hi, d, tol))
+      f.fail(f.node(), b.radius > 0 ? "radius" : "max", "fluid block lies (partly) outside the tank");
     c.fluid_blocks.push_back(b);
   }
-  c.wet_bed = root.number("wet_bed", 0.0);
-  if (c.wet_bed < 0 || c.wet_bed >= c.tank_size[d - 1]) root.fail(root.raw("wet_bed"), "wet_bed", "depth must be >= 0 and below the tank top");
+  // wet_bed: a depth (of the first fluid), or {depth, fluid}.
+  if (root.has("wet_bed") && root.raw("wet_bed").IsMap()) {
+    auto bed = *root.child("wet_bed");
+    c.wet_bed = bed.number("depth");
+    c.wet_bed_fluid = fluid_index(bed, "fluid", c);
+    if (c.wet_bed < 0 || c.wet_bed >= c.tank_size[d - 1]) bed.fail(bed.raw("depth"), "depth", "must be >= 0 and below the tank top");
+    bed.finish();
+  } else {
+    c.wet_bed = root.number("wet_bed", 0.0);
+    if (c.wet_bed < 0 || c.wet_bed >= c.tank_size[d - 1]) root.fail(root.raw("wet_bed"), "wet_bed", "depth must be >= 0 and below the tank top");
+  }
   std::set<std::string> solid_names;
   for (auto& s : root.list("solids")) {
     SolidSpec spec;
@@ -551,7 +630,17 @@ Case read(Section& root, const std::string& file) {
       if (other.name == probe.name) p.fail(p.raw("name"), "name", "probe '" + probe.name + "' is defined twice");
     probe.type = p.choice<ProbeType>("type", ProbeType::Pressure,
                                      {{"pressure", ProbeType::Pressure}, {"velocity", ProbeType::Velocity}, {"height", ProbeType::Height},
-                                      {"force", ProbeType::Force}, {"front", ProbeType::Front}, {"wall_pressure", ProbeType::WallPressure}});
+                                      {"force", ProbeType::Force}, {"front", ProbeType::Front}, {"wall_pressure", ProbeType::WallPressure},
+                                      {"centroid", ProbeType::Centroid}});
+    // A phase (fluid) to measure: required by a centroid, optional for a point or a gauge.
+    const bool phased = probe.type == ProbeType::Pressure || probe.type == ProbeType::Velocity ||
+                        probe.type == ProbeType::Height || probe.type == ProbeType::Centroid;
+    if (probe.type == ProbeType::Centroid && !p.has("phase")) p.text("phase");  // reports it as required
+    if (p.has("phase")) {
+      if (!phased) p.fail(p.raw("phase"), "phase", "only pressure, velocity, height and centroid probes take a phase");
+      probe.phase = fluid_index(p, "phase", c);
+      probe.phase_name = c.fluids[probe.phase].name;
+    }
     switch (probe.type) {
       case ProbeType::Pressure:
       case ProbeType::Velocity: probe.position = p.vector("position", d); break;
@@ -571,6 +660,7 @@ Case read(Section& root, const std::string& file) {
         }
         break;
       case ProbeType::WallPressure: read_wall_sensor(p, c, probe); break;
+      case ProbeType::Centroid: break;
       case ProbeType::Front: {
         const std::string axis = p.text("axis", std::string("x"));
         probe.axis = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;
@@ -714,6 +804,7 @@ PhysicsParams physics_params(const Case& c) {
                                       static_cast<float>(f.tait_exponent), static_cast<float>(f.viscosity),
                                       static_cast<float>(f.density * std::pow(c.dp, c.dim)),
                                       static_cast<float>(f.background_pressure));
+    if (P.materials.fluid[k].tait_b > P.materials.fluid[P.materials.reference].tait_b) P.materials.reference = static_cast<std::uint8_t>(k);
   }
   P.tension = c.tension;
   P.artificial_viscosity = static_cast<float>(c.artificial_viscosity);

@@ -25,13 +25,21 @@ inline bool all_fluids_gamma7(const PhysicsParams& P) {
   return true;
 }
 
-// As dispatch_kernel_dim, for the fluid pair loop: f.template operator()<Kernel, Dim, Gamma7>().
+// As dispatch_kernel_dim, for the fluid pair loop: f.template operator()<Kernel, Dim, Gamma7,
+// Multiphase>(). Multiphase (several fluids) selects the interface-consistent pair terms
+// (multiphase_interactions.hpp); one fluid keeps the single-phase loop, unchanged.
 template <class F>
 void dispatch_pair_loop(const PhysicsParams& P, F&& f) {
   const bool gamma7 = all_fluids_gamma7(P);
+  const bool multiphase = P.materials.multiphase();
   dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-    if (gamma7) f.template operator()<Kernel, Dim, true>();
-    else f.template operator()<Kernel, Dim, false>();
+    if (multiphase) {
+      if (gamma7) f.template operator()<Kernel, Dim, true, true>();
+      else f.template operator()<Kernel, Dim, false, true>();
+    } else {
+      if (gamma7) f.template operator()<Kernel, Dim, true, false>();
+      else f.template operator()<Kernel, Dim, false, false>();
+    }
   });
 }
 

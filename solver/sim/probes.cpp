@@ -27,9 +27,13 @@ bool owns_point(SlabWorker& w, const Vec3d& at) {
   return w.grid().owns_column(column);
 }
 
-// Shepard sums of `field` (nullptr: weights only) around a point this slab owns.
+// Whether particle material m counts for a probe of `phase` (a fluid; -1: every fluid).
+bool in_phase(const PhysicsParams& P, std::uint8_t m, int phase) { return phase < 0 ? P.is_fluid(m) : m == phase; }
+
+// Shepard sums of `field` (nullptr: weights only) around a point this slab owns, over the fluid
+// particles of `phase` (-1: every fluid).
 template <class Kernel, int Dim>
-ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const FieldVector<float>* field) {
+ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const FieldVector<float>* field, int phase) {
   ParticleStore& p = w.particles();
   const Lattice& L = w.lattice();
   Vec<Dim> x;
@@ -41,7 +45,7 @@ ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const FieldVector<float
   ShepardSums<Dim> s;
   w.grid().view().for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t j = b; j < e; ++j)
-      if (w.params().is_fluid(p.material[j]))
+      if (in_phase(w.params(), p.material[j], phase))
         accumulate_shepard<Kernel, Dim>(w.params(), x, load_vec<Dim>(p.pos, j), p.density[j], p.material[j], field ? (*field)[j] : 0.0f, s);
   });
   return s;
@@ -49,23 +53,23 @@ ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const FieldVector<float
 
 }  // namespace
 
-double sample_pressure(SlabWorker& w, const Vec3d& at) {
+double sample_pressure(SlabWorker& w, const Vec3d& at, int phase) {
   if (!owns_point(w, at)) return kNaN;
   double out = 0.0;
   dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
-    const auto s = shepard<Kernel, Dim>(w, at, &w.particles().pressure);
+    const auto s = shepard<Kernel, Dim>(w, at, &w.particles().pressure, phase);
     out = s.weight > 0 ? s.value / s.weight : 0.0;
   });
   return out;
 }
 
-std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at) {
+std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at, int phase) {
   const int d = w.lattice().dim;
   std::vector<double> v(d, kNaN);
   if (!owns_point(w, at)) return v;
   dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
     for (int k = 0; k < Dim; ++k) {
-      const auto s = shepard<Kernel, Dim>(w, at, &w.particles().vel[k]);
+      const auto s = shepard<Kernel, Dim>(w, at, &w.particles().vel[k], phase);
       v[k] = s.weight > 0 ? s.value / s.weight : 0.0;
     }
   });
@@ -93,7 +97,7 @@ double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c) {
   dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
     auto fill = [&](int k) {
       at[v] = z(k);
-      return shepard<Kernel, Dim>(w, at, nullptr).weight;
+      return shepard<Kernel, Dim>(w, at, nullptr, gauge.phase).weight;
     };
     // Sample k is wet, k + 1 dry: where the straight line between them crosses 0.5.
     auto crossing = [&](int k, double wet, double dry) { return z(k) + (wet - 0.5) / (wet - dry) * (z(k + 1) - z(k)) - floor; };
@@ -217,6 +221,28 @@ double local_front(SlabWorker& w, int axis, double lowest) {
   return front;
 }
 
+std::vector<double> sample_centroid(SlabWorker& w, int phase) {
+  // Exact integer sums of fixed-point coordinates and velocities (2^-28 m, 2^-28 m/s: below a
+  // float's resolution at 1 m), so that the centroid does not depend on the split or the order.
+  constexpr double kScale = 268435456.0;  // 2^28
+  const ParticleStore& p = w.particles();
+  const int d = p.dim();
+  std::vector<std::int64_t> sums(1 + 2 * d, 0);
+  for (std::size_t i = 0; i < p.owned(); ++i) {
+    if (!in_phase(w.params(), p.material[i], phase)) continue;
+    ++sums[0];
+    for (int k = 0; k < d; ++k) {
+      sums[1 + k] += std::llround(p.pos[k][i] * kScale);
+      sums[1 + d + k] += std::llround(p.vel[k][i] * kScale);
+    }
+  }
+  w.transport().sum(sums);
+  std::vector<double> row(2 * d, kNaN);
+  if (sums[0] > 0)
+    for (int k = 0; k < 2 * d; ++k) row[k] = static_cast<double>(sums[1 + k]) / kScale / static_cast<double>(sums[0]);
+  return row;
+}
+
 namespace {
 
 // Pressure force of the fluid on every owned particle of material `kind` (a solid), as
@@ -310,6 +336,10 @@ std::vector<std::string> probe_columns(const ProbeSpec& p, int dim) {
     case ProbeType::Height: columns.push_back("height[m]"); break;
     case ProbeType::Force: components("f", dim == 2 ? "N/m" : "N"); break;  // 2D: per metre of depth
     case ProbeType::Front: columns.push_back("front[m]"); break;
+    case ProbeType::Centroid:
+      for (int k = 0; k < dim; ++k) columns.push_back(std::string(axes[k]) + "[m]");
+      components("v", "m/s");
+      break;
   }
   return columns;
 }
@@ -321,15 +351,18 @@ std::string probe_description(const ProbeSpec& p, int dim) {
     return s + ") m";
   };
   const char* axes[3] = {"x", "y", "z"};
+  const std::string of_phase = p.phase >= 0 ? " of " + p.phase_name : "";
   switch (p.type) {
-    case ProbeType::Pressure: return "pressure at " + point(dim);
+    case ProbeType::Pressure: return "pressure" + of_phase + " at " + point(dim);
     case ProbeType::WallPressure:
       return fmt::format("wall pressure on a sensor of diameter {:g} mm", 1e3 * p.diameter) + " at " + point(dim) +
              (p.window > 0 ? fmt::format(", {:g} ms mean", 1e3 * p.window) : "");
-    case ProbeType::Velocity: return "velocity at " + point(dim);
+    case ProbeType::Velocity: return "velocity" + of_phase + " at " + point(dim);
     case ProbeType::Height:
-      return (dim == 2 ? fmt::format("water height at x = {:g} m", p.position[0]) : "water height at (x, y) = " + point(2)) +
+      return (p.phase >= 0 ? p.phase_name : std::string("water")) +
+             (dim == 2 ? fmt::format(" height at x = {:g} m", p.position[0]) : " height at (x, y) = " + point(2)) +
              (p.connected ? " (connected column)" : "");
+    case ProbeType::Centroid: return "centroid and mean velocity of " + p.phase_name;
     case ProbeType::Force:
       return "pressure force on solid '" + p.solid + "'" + (p.face >= 0 ? fmt::format(" face {}{}", p.face % 2 ? "+" : "-", axes[p.face / 2]) : "");
     case ProbeType::Front:
@@ -429,8 +462,8 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
       case ProbeType::Height: {
         // Exactly one slab owns the point and has numbers; the others send NaN.
         std::vector<double> mine;
-        if (p.type == ProbeType::Velocity) mine = sample_velocity(w, p.position);
-        else mine.push_back(p.type == ProbeType::Pressure ? sample_pressure(w, p.position) : sample_height(w, p, case_));
+        if (p.type == ProbeType::Velocity) mine = sample_velocity(w, p.position, p.phase);
+        else mine.push_back(p.type == ProbeType::Pressure ? sample_pressure(w, p.position, p.phase) : sample_height(w, p, case_));
         row = owners_values(t, mine);
         break;
       }
@@ -454,6 +487,7 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
         break;
       }
       case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis, front_level(p, case_)))); break;
+      case ProbeType::Centroid: row = sample_centroid(w, p.phase); break;
     }
     rows.push_back(row);
   }

@@ -1,8 +1,9 @@
 #pragma once
 // Probes written as CSV time series (probes/<name>.csv): pressure at a point (Shepard average of the
-// fluid), wall pressure on a sensor disc, water height at a gauge, pressure force on a named solid or
-// one of its faces, surge-front position. Sampling is collective; every value is independent of the
-// split (owner-computed or exact). What each probe measures: docs/cases.md, "probes".
+// fluid, or of one phase), wall pressure on a sensor disc, water height at a gauge, pressure force
+// on a named solid or one of its faces, surge-front position, centroid and mean velocity of a
+// phase. Sampling is collective; every value is independent of the split (owner-computed or
+// exact). What each probe measures: docs/cases.md, "probes".
 // The same code samples a run's saved snapshots and checkpoints afterwards (spate post).
 //
 // CSV format (docs/cases.md, scripts parse it): a header line `time[s],step,<column>[<unit>],...`,
@@ -65,12 +66,16 @@ std::string probe_header(const ProbeSpec& p, int dim);
 // What and where, for plot titles: "pressure at (0.89, 0.305, 0.02) m", "force on solid 'column'".
 std::string probe_description(const ProbeSpec& p, int dim);
 
-// Single probe evaluations on one slab (exposed for tests). NaN when this slab does not own the point.
-double sample_pressure(SlabWorker& w, const Vec3d& at);
+// Single probe evaluations on one slab (exposed for tests). NaN when this slab does not own the
+// point. `phase`: only that fluid's particles count (-1: every fluid).
+double sample_pressure(SlabWorker& w, const Vec3d& at, int phase = -1);
 // Shepard-averaged fluid velocity (dim components), NaN components when not owned.
-std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at);
-// Water height above the tank floor at a gauge (the probe's position and `connected`).
+std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at, int phase = -1);
+// Water height above the tank floor at a gauge (the probe's position, `connected` and `phase`).
 double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c);
+// Collective: the centroid (dim coordinates) and mean velocity (dim components) of the particles of
+// fluid `phase` on all slabs (equal masses within a phase); NaN when it has none.
+std::vector<double> sample_centroid(SlabWorker& w, int phase);
 // Furthest fluid particle along `axis` whose vertical coordinate is at least `lowest`; -infinity
 // when there is none on this slab.
 double local_front(SlabWorker& w, int axis, double lowest = -std::numeric_limits<double>::infinity());

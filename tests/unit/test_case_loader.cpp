@@ -207,8 +207,34 @@ TEST(CaseLoader, SetAutoRestoresAdaptiveValues) {
   EXPECT_FALSE(c.fluids[0].sound_speed.has_value());
 }
 
+// Several fluids: the `fluids` list, blocks and the wet bed naming theirs, disc and wavy blocks.
+TEST(CaseLoader, SeveralFluidsAndTheBlocksThatNameThem) {
+  const Case c = parse_case(kMinimal2D, "case.yaml",
+                            {"fluids=[{name: water}, {name: oil, density: 800, viscosity: 0.05, background_pressure: 10}]",
+                             "fluid_blocks=[{fluid: oil, centre: [0.1, 0.05], radius: 0.02}, "
+                             "{min: [0, 0], max: [0.2, 0.06], top_wave: {amplitude: 0.01, wavelength: 0.2}}]",
+                             "wet_bed={depth: 0.01, fluid: oil}"});
+  ASSERT_EQ(c.fluids.size(), 2u);
+  EXPECT_EQ(c.fluids[1].name, "oil");
+  EXPECT_DOUBLE_EQ(c.fluids[1].density, 800.0);
+  EXPECT_DOUBLE_EQ(c.fluids[1].background_pressure, 10.0);
+  ASSERT_EQ(c.fluid_blocks.size(), 2u);
+  EXPECT_EQ(c.fluid_blocks[0].fluid, 1);
+  EXPECT_DOUBLE_EQ(c.fluid_blocks[0].radius, 0.02);
+  EXPECT_DOUBLE_EQ(c.fluid_blocks[0].min[0], 0.08);
+  EXPECT_EQ(c.fluid_blocks[1].fluid, 0);
+  EXPECT_DOUBLE_EQ(c.fluid_blocks[1].wave_amplitude, 0.01);
+  EXPECT_EQ(c.wet_bed_fluid, 1);
+  EXPECT_DOUBLE_EQ(c.wet_bed, 0.01);
+  const PhysicsParams P = physics_params(c);
+  EXPECT_EQ(P.materials.fluids, 2);
+  EXPECT_TRUE(P.materials.multiphase());
+  EXPECT_EQ(P.materials.reference, 0) << "the stiffest fluid (water) gives the walls their density";
+  EXPECT_FLOAT_EQ(P.materials.of(1).rho0, 800.0f);
+}
+
 TEST(CaseLoader, LoadCaseReadsShippedCases) {
-  for (const char* name : {"dam_break_2d.yaml", "dam_break_column_3d.yaml"}) {
+  for (const char* name : {"dam_break_2d.yaml", "dam_break_column_3d.yaml", "two_layer_hydrostatic_2d.yaml"}) {
     const Case c = load_case(test::source_dir() + "/cases/" + name);
     EXPECT_FALSE(c.name.empty()) << name;
     EXPECT_FALSE(c.fluid_blocks.empty()) << name;
@@ -248,6 +274,15 @@ TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
       {"negative headroom", {"tank.headroom=-1"}, {"'tank.headroom'", ">= 0"}},
       {"probe defined twice", {"probes=[{name: p, position: [0.01, 0.01]}, {name: p, position: [0.02, 0.01]}]"},
        {"probes[1].name", "defined twice"}},
+      {"block of an unknown fluid", {"fluid_blocks=[{fluid: oil, min: [0, 0], max: [0.05, 0.06]}]"},
+       {"fluid_blocks[0].fluid", "no fluid named 'oil'", "fluids: water"}},
+      {"fluid defined twice", {"fluids=[{name: a}, {name: a}]"}, {"fluids[1].name", "defined twice"}},
+      {"fluid without a name", {"fluids=[{density: 800}]"}, {"fluids[0].name", "required"}},
+      {"fluid properties beside a fluids list", {"fluids=[{name: a}]", "fluid.density=900"},
+       {"'fluid.density'", "each fluid's properties go in its entry"}},
+      {"disc block with min", {"fluid_blocks=[{centre: [0.05, 0.05], radius: 0.02, min: [0, 0]}]"},
+       {"fluid_blocks[0].min", "'centre' and 'radius' only"}},
+      {"wet bed of an unknown fluid", {"wet_bed={depth: 0.02, fluid: air}"}, {"wet_bed.fluid", "no fluid named 'air'"}},
       {"probe on a missing solid", {"probes=[{name: f, type: force, solid: nope}]"}, {"probes[0].solid", "no solid named 'nope'"}},
       {"force on a face that a 2D box has not",
        {"solids=[{name: s, min: [0.15, 0], max: [0.18, 0.05]}]", "probes=[{name: f, type: force, solid: s, face: z+}]"},

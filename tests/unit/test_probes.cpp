@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <thread>
 
 #include "case/case.hpp"
 #include "case/generator.hpp"
@@ -62,6 +63,43 @@ TEST(ProbeFiles, HeadersCarryUnits) {
   EXPECT_EQ(probe_header(p, 2), "time[s],step,pressure[Pa]");
   p.window = 0.01;  // the averaged reading, then the instantaneous one
   EXPECT_EQ(probe_header(p, 3), "time[s],step,pressure[Pa],pressure_instant[Pa]");
+  p.type = ProbeType::Centroid;
+  EXPECT_EQ(probe_header(p, 2), "time[s],step,x[m],y[m],vx[m/s],vy[m/s]");
+}
+
+// The centroid of a phase: the mean position and velocity of that fluid's particles only, and the
+// same on one slab as on three (exact integer sums).
+TEST(CentroidProbe, MeanOfOnePhaseIndependentOfTheSplit) {
+  const Case c = parse_case(kTank, "probes.yaml",
+                            {"fluids=[{name: water}, {name: oil, density: 800}]",
+                             "fluid_blocks=[{fluid: oil, min: [0.1, 0], max: [0.2, 0.02]}, {min: [0, 0], max: [0.05, 0.03]}]"});
+  ParticleStore p = generate_particles(c);
+  for (std::size_t i = 0; i < p.size(); ++i) p.vel[0][i] = p.material[i] == 1 ? 0.5f : -1.0f;
+  Slab one(c, p);
+  auto row = sample_centroid(one.w, 1);
+  ASSERT_EQ(row.size(), 4u);
+  EXPECT_NEAR(row[0], 0.15, 1e-6);   // oil: x in [0.1, 0.2]
+  EXPECT_NEAR(row[1], 0.01, 1e-6);   //      y in [0, 0.02]
+  EXPECT_NEAR(row[2], 0.5, 1e-6);    // its velocity only, not the water's
+  EXPECT_NEAR(row[3], 0.0, 1e-12);
+  const auto water = sample_centroid(one.w, 0);
+  EXPECT_NEAR(water[0], 0.025, 1e-6);
+  EXPECT_NEAR(water[2], -1.0, 1e-6);
+
+  const Lattice L = make_lattice(c);
+  InProcessHub hub(3);
+  std::vector<std::unique_ptr<SlabTransport>> t;
+  std::vector<std::unique_ptr<SlabWorker>> w;
+  for (int s = 0; s < 3; ++s) {
+    t.push_back(hub.endpoint(s, false));
+    w.push_back(std::make_unique<SlabWorker>(L, physics_params(c), *t[s]));
+    w[s]->take_share(p, SlabLayout::uniform(L.cells[0], 3));
+  }
+  std::vector<std::vector<double>> rows(3);
+  std::vector<std::thread> threads;
+  for (int s = 0; s < 3; ++s) threads.emplace_back([&, s] { rows[s] = sample_centroid(*w[s], 1); });
+  for (auto& th : threads) th.join();
+  for (int s = 0; s < 3; ++s) EXPECT_EQ(rows[s], row) << "slab " << s;
 }
 
 // Lifting the water by a fraction of the dp/4 sampling step lifts the reading by as much: the

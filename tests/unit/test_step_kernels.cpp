@@ -150,11 +150,11 @@ class GpuOrderKernels final : public ResidentKernels {
     ParticleStore& p = store();
     const CellGridView v = arrays_.grid().view();
     const Lattice& L = arrays_.grid().lattice();
-    dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7>() {
+    dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase>() {
       for (std::size_t i = range.first; i < range.end(); ++i) {
         int g[3] = {0, 0, 0};
         for (int a = 0; a < Dim; ++a) g[a] = L.cell_of(p.pos[a][i], a);
-        update_fluid_rates<Kernel, Dim, Gamma7>(P, v, p, static_cast<std::uint32_t>(i), g);
+        update_fluid_rates<Kernel, Dim, Gamma7, Multiphase>(P, v, p, static_cast<std::uint32_t>(i), g);
       }
     });
   }
@@ -287,6 +287,9 @@ std::vector<CheckedCase> gpu_checked_cases() {
        50},
       {"summation", load("dam_break_2d.yaml", {"density.mode=summation"}), 100},
       {"riemann", load("dam_break_2d.yaml", {"density.diffusion=riemann", "momentum.flux=riemann", "fluid.tension=false"}), 300},
+      // Several fluids: the multiphase pair terms, the GPU's per-particle loop against the CPU's
+      // batched one (oil over water, viscosities 50 times apart).
+      {"two_fluids", load("two_layer_hydrostatic_2d.yaml", {"probes=[]"}), 100},
   };
 }
 

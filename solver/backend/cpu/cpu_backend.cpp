@@ -13,6 +13,7 @@
 #include "../../physics/dispatch.hpp"
 #include "../../physics/eos.hpp"
 #include "../../physics/fluid_interactions.hpp"
+#include "../../physics/multiphase_interactions.hpp"
 #include "../../physics/integrator.hpp"
 #include "../../physics/wall_boundary.hpp"
 
@@ -102,16 +103,19 @@ struct NeighbourBatch {
   // Candidates of the current cell.
   std::vector<float> x[Dim], v[Dim], rho, p, r2;
   std::vector<std::uint8_t> material;
+  // Several fluids: each candidate's fluid mass, sound speed and viscosity (NeighbourFluid).
+  std::vector<float> mass, c0, viscosity;
   // Neighbours of the current particle: candidate numbers, then the pair terms per neighbour.
   std::vector<std::uint32_t> index;
   std::vector<NeighbourRecord> record;
   int capacity = 0;
-  void reserve(int n) {
+  void reserve(int n, bool multiphase = false) {
     capacity = n;
     record.resize(n);
     for (int k = 0; k < Dim; ++k) x[k].resize(n), v[k].resize(n);
     rho.resize(n), p.resize(n), r2.resize(n), index.resize(n);
     material.resize(n);
+    if (multiphase) mass.resize(n), c0.resize(n), viscosity.resize(n);
   }
 };
 
@@ -132,7 +136,7 @@ inline void add_lanes(float (&vec)[Dim][kLanes], float (&scalar)[kLanes], const 
   }
 }
 
-template <class Kernel, int Dim, bool Gamma7>
+template <class Kernel, int Dim, bool Gamma7, bool Multiphase>
 void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params, std::uint32_t first_cell,
                          std::uint32_t last_cell) {
   const PhysicsParams P = params;  // a local copy: the vectoriser must see that nothing aliases it
@@ -161,7 +165,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
       grid.global_coords(static_cast<std::uint32_t>(c), g);
       int candidates = 0;
       v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) { candidates += static_cast<int>(je - jb); });
-      if (candidates + kSelectSlack > batch.capacity) batch.reserve(candidates + kSelectSlack);
+      if (candidates + kSelectSlack > batch.capacity) batch.reserve(candidates + kSelectSlack, Multiphase);
       float* cx[Dim];
       SPATE_UNROLL for (int k = 0; k < Dim; ++k) cx[k] = batch.x[k].data();
       float* cr2 = batch.r2.data();
@@ -174,6 +178,12 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
         SPATE_UNROLL for (int k = 0; k < Dim; ++k) std::copy_n(ps.pos[k].data() + jb, len, cx[k] + m);
         std::copy_n(ps.material.data() + jb, len, ckind + m);
         for (int q = 0; q < len; ++q) fill_record<Dim>(ps, jb + q, record[m + q]);
+        if constexpr (Multiphase) {
+          for (int q = 0; q < len; ++q) {
+            const NeighbourFluid f = neighbour_fluid(P, ckind[m + q]);
+            batch.mass[m + q] = f.mass, batch.c0[m + q] = f.c0, batch.viscosity[m + q] = f.viscosity;
+          }
+        }
         m += len;
       });
       for (std::uint32_t i = b; i < e; ++i) {
@@ -201,6 +211,12 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
           gather_records(record, chunk, len, fields);
           std::uint8_t jkind[kChunk];
           gather(ckind, chunk, len, jkind);
+          [[maybe_unused]] float jmass[Multiphase ? kChunk : 1], jc0[Multiphase ? kChunk : 1], jmu[Multiphase ? kChunk : 1];
+          if constexpr (Multiphase) {
+            gather(batch.mass.data(), chunk, len, jmass);
+            gather(batch.c0.data(), chunk, len, jc0);
+            gather(batch.viscosity.data(), chunk, len, jmu);
+          }
           float tacc[Dim][kChunk], tdrho[kChunk], twall[Dim][kChunk], tweight[kChunk];
           for (int n = 0; n < len; ++n) {
             ParticleState<Dim> sj;
@@ -208,7 +224,9 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
             sj.rho = jf[kRecRho][n];
             sj.p = jf[kRecP][n];
             sj.material = jkind[n];
-            const FluidRates<Dim> t = fluid_pair_terms<Kernel, Dim, Gamma7>(P, M, si, sj);
+            FluidRates<Dim> t;
+            if constexpr (Multiphase) t = multiphase_pair_terms<Kernel, Dim, Gamma7>(P, M, si, sj, NeighbourFluid{jmass[n], jc0[n], jmu[n]});
+            else t = fluid_pair_terms<Kernel, Dim, Gamma7>(P, M, si, sj);
             SPATE_UNROLL for (int k = 0; k < Dim; ++k) tacc[k][n] = t.acc[k], twall[k][n] = t.wall_gradient[k];
             tdrho[n] = t.density_rate;
             tweight[n] = t.wall_weight;
@@ -306,8 +324,8 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
 
 void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P, std::uint32_t first_cell,
                  std::uint32_t last_cell) {
-  dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7>() {
-    fluid_rates_batched<Kernel, Dim, Gamma7>(p, grid, P, first_cell, last_cell);
+  dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase>() {
+    fluid_rates_batched<Kernel, Dim, Gamma7, Multiphase>(p, grid, P, first_cell, last_cell);
   });
 }
 

@@ -68,11 +68,11 @@ struct WallStatePass {
     update_wall_state<Kernel, Dim>(P, v, d, i, g);
   }
 };
-template <bool Gamma7>
+template <bool Gamma7, bool Multiphase>
 struct FluidRatesPass {
   template <class Kernel, int Dim>
   __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
-    update_fluid_rates<Kernel, Dim, Gamma7>(P, v, d, i, g);
+    update_fluid_rates<Kernel, Dim, Gamma7, Multiphase>(P, v, d, i, g);
   }
 };
 
@@ -135,8 +135,14 @@ class CudaKernels final : public StepKernels {
     neighbour_pass<WallStatePass>(P, ParticleRange{0, owned()});
   }
   void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
-    if (all_fluids_gamma7(P)) neighbour_pass<FluidRatesPass<true>>(P, range);
-    else neighbour_pass<FluidRatesPass<false>>(P, range);
+    const bool gamma7 = all_fluids_gamma7(P);
+    if (P.materials.multiphase()) {
+      if (gamma7) neighbour_pass<FluidRatesPass<true, true>>(P, range);
+      else neighbour_pass<FluidRatesPass<false, true>>(P, range);
+    } else {
+      if (gamma7) neighbour_pass<FluidRatesPass<true, false>>(P, range);
+      else neighbour_pass<FluidRatesPass<false, false>>(P, range);
+    }
   }
   float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
     arrays_.select();
