@@ -8,7 +8,14 @@ find_package(nlohmann_json REQUIRED)
 find_package(OpenSSL REQUIRED COMPONENTS Crypto)
 find_package(ZLIB REQUIRED)
 find_package(spdlog REQUIRED)
-# spate plot runs scripts/plot_probes.py (matplotlib) with this Python.
+# spate plot runs scripts/plot_probes.py (matplotlib) with this Python, and the tests their scripts
+# (h5py, numpy). The Debian packages scripts/install-deps installs for them are importable by the
+# system's interpreter only: a pyenv or venv python3 first on the PATH (as on the CI machines) lacks
+# them, and with it the robustness tests were skipped and h5py-based checks failed. So the system's
+# /usr/bin/python3 is preferred unless one is given (-DPython3_EXECUTABLE=...).
+if(NOT DEFINED Python3_EXECUTABLE AND EXISTS /usr/bin/python3)
+  set(Python3_EXECUTABLE /usr/bin/python3)
+endif()
 find_package(Python3 COMPONENTS Interpreter)
 find_package(CLI11 CONFIG QUIET)
 if(NOT CLI11_FOUND)

@@ -21,6 +21,8 @@
 #                                    data's range at each step)
 #   SPATE_FREE_SURFACE_DATA=1        also write the coloured surface (3D, .vtp) or water region
 #                                    (2D, .vtu) with its values: insitu/free_surface_<step>.vt?
+#   SPATE_FREE_SURFACE_PHASE=k       with several fluids, the surface of fluid k (default 0, the
+#                                    first: the water under air or oil)
 # Case constants come from the dataset's field data (dp, dimensions), put there by spate.
 # The colour map belongs to this script alone (a separate colour map): other pipelines in the same
 # run cannot change it.
@@ -121,6 +123,12 @@ def _build_scene():
     """Once, from the first step's data: the grid, the static geometry and the camera."""
     dim = int(_constant("dimensions", 3))
     dp = _constant("dp", 0.01)
+    # Materials 0 .. fluids-1 are fluids (phases), the walls follow. The surface drawn is that of
+    # phase SPATE_FREE_SURFACE_PHASE (default 0, the first fluid: the water under air).
+    fluids = int(_constant("fluids", 1))
+    phase = int(os.environ.get("SPATE_FREE_SURFACE_PHASE", "0"))
+    fluid.LowerThreshold = fluid.UpperThreshold = min(max(phase, 0), fluids - 1)
+    walls.LowerThreshold = fluids
     walls.UpdatePipeline()
     fluid_all.UpdatePipeline()
     wb = walls.GetDataInformation().GetBounds()  # tank with its wall layers (walls never move)
@@ -168,7 +176,7 @@ def _build_scene():
         outline_shown.AmbientColor = outline_shown.DiffuseColor = [0.15, 0.15, 0.15]
         outline_shown.LineWidth = 2.0
         kinds = walls.GetDataInformation().GetPointDataInformation().GetArrayInformation("kind").GetComponentRange(0)
-        for kind in range(2, int(kinds[1]) + 1):
+        for kind in range(fluids + 1, int(kinds[1]) + 1):
             solid = Threshold(registrationName="solid_%d" % kind, Input=walls)
             solid.Scalars = ["POINTS", "kind"]
             solid.LowerThreshold = kind

@@ -1,5 +1,7 @@
 #include "extract_index.hpp"
 
+#include "io/output_file.hpp"
+
 #include <fcntl.h>
 #include <sys/inotify.h>
 #include <unistd.h>
@@ -76,7 +78,7 @@ std::vector<std::string> ExtractIndex::drain(bool keep_new_folders) {
       }
       if (!(e->mask & (IN_CLOSE_WRITE | IN_MOVED_TO))) continue;
       const std::string name = e->name;
-      if (path == this->path() || name.ends_with(".tmp") || name.find(".tmp.") != std::string::npos) continue;
+      if (path == this->path() || is_temporary_name(name) || name.find(".tmp.") != std::string::npos) continue;
       written.push_back(path.lexically_relative(out_).string());
     }
   }
@@ -101,22 +103,11 @@ std::string ExtractIndex::write(bool force) {
   std::string text = "step,time[s],pipeline,file\n";
   for (auto& [step, pipeline, file, time] : rows) text += fmt::format("{},{:.10g},{},{}\n", step, time, csv(pipeline), csv(file));
   const auto target = path();
-  const auto tmp = target.parent_path() / fmt::format(".index.csv.{}.tmp", getpid());
-  std::error_code ec;
-  std::filesystem::create_directories(target.parent_path(), ec);
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) {
-      std::filesystem::remove(tmp, ec);
-      return fmt::format("{}: cannot write the in-situ index", target.string());
-    }
-  }
-  std::filesystem::rename(tmp, target, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    return fmt::format("{}: cannot write the in-situ index: {}", target.string(), ec.message());
+  try {
+    create_output_folder(target.parent_path());
+    write_file_atomically(target, text);
+  } catch (const OutputError& e) {
+    return fmt::format("cannot write the in-situ index: {}", e.what());
   }
   written_ = now;
   dirty_ = false;

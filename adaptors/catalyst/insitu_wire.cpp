@@ -72,6 +72,7 @@ nlohmann::json slabs_to_json(const std::vector<SlabView>& slabs) {
     s["slab_count"] = v.slab_count;
     s["dim"] = v.dim;
     s["owned"] = v.owned;
+    s["fluids"] = v.fluids;
     s["pos"] = {address(v.pos[0]), address(v.pos[1]), address(v.pos[2])};
     s["arrays"] = nlohmann::json::array();
     for (const SlabArray& a : v.arrays)
@@ -94,6 +95,7 @@ std::vector<SlabView> slabs_from_json(const nlohmann::json& slabs, std::intptr_t
     v.slab_count = s.at("slab_count").get<int>();
     v.dim = s.at("dim").get<int>();
     v.owned = s.at("owned").get<std::size_t>();
+    v.fluids = s.value("fluids", 1);
     for (int k = 0; k < 3; ++k) v.pos[k] = pointer<float>(s.at("pos").at(k), shift);
     for (const auto& a : s.at("arrays")) {
       SlabArray array;

@@ -12,6 +12,7 @@
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkSOADataArrayTemplate.h>
+#include <vtkSignedCharArray.h>
 #include <vtkTypeInt32Array.h>
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnsignedIntArray.h>
@@ -50,6 +51,7 @@ struct ParticleDataset::Partition {
     xyz->SetNumberOfComponents(3);
     xyz->SetName("Points");
     device->SetName("device");
+    phase->SetName("phase");
     points->SetData(xyz);
     poly->SetPoints(points);
   }
@@ -102,6 +104,17 @@ struct ParticleDataset::Partition {
       const int owner = v.slab;
       device->SetArray(reserve_filled(device_ids, v.owned, [owner](auto& b) { std::fill(b.begin(), b.end(), owner); }), n, 1);
     });
+    // Several fluids: the phase of each particle, derived from its material (one byte a particle,
+    // refilled every call: particles are re-sorted every step).
+    if (v.fluids > 1) {
+      const SlabArray* kind = v.array("kind");
+      attach(phase, "phase", [&] {
+        phase_ids.resize(std::max<std::size_t>(v.owned, 1));
+        const auto* m = kind ? kind->values<std::uint8_t>() : nullptr;
+        for (std::size_t i = 0; i < v.owned; ++i) phase_ids[i] = m ? phase_of(m[i], v.fluids) : std::int8_t{-1};
+        phase->SetArray(phase_ids.data(), n, 1);
+      });
+    }
 
     // One vertex cell per particle, so that every representation (not only Point Gaussian) and
     // every writer sees the particles. Offsets 0..n and connectivity 0..n-1 depend only on n.
@@ -117,11 +130,13 @@ struct ParticleDataset::Partition {
   vtkNew<vtkSOADataArrayTemplate<float>> xyz;
   std::map<std::string, vtkSmartPointer<vtkDataArray>> arrays;  // by exported name
   vtkNew<vtkIntArray> device;
+  vtkNew<vtkSignedCharArray> phase;
   vtkNew<vtkTypeInt32Array> offsets;
   vtkNew<vtkTypeInt32Array> connectivity;
   vtkNew<vtkCellArray> verts;
   std::vector<float> zeros;
   std::vector<int> device_ids;
+  std::vector<signed char> phase_ids;
   std::vector<vtkTypeInt32> offset_ids;
   std::vector<vtkTypeInt32> connectivity_ids;
 };

@@ -157,8 +157,20 @@ std::unique_ptr<catalyst::CatalystSink> make_catalyst_sink(catalyst::CatalystOpt
 }
 #endif
 
-int run_command(const RunArgs& a) {
+namespace {
+
+// Where a run that ends early leaves its summary.json: the output folder as soon as it is known
+// (--out at once, out/<case name> once the case is read).
+struct RunRecord {
+  std::filesystem::path out_dir;
+  std::string case_name;
+  bool summary_written = false;
+};
+
+int run_case(const RunArgs& a, RunRecord& record) {
   Case c = load(a.case_file, a.overrides);
+  record.case_name = c.name;
+  if (a.out.empty()) record.out_dir = std::filesystem::path("out") / c.name;
   check_backend(a.backend);
   const std::vector<std::string> warnings = warn_thin_features(c);
   // In situ: the command line replaces the case file's `insitu:` section.
@@ -190,7 +202,7 @@ int run_command(const RunArgs& a) {
     throw BadInput(fmt::format("--checkpoint-keep-every {}: must be >= 0 (0: none)", *a.checkpoint_keep_every));
 
   RunOptions o;
-  o.out_dir = a.out.empty() ? std::filesystem::path("out") / c.name : std::filesystem::path(a.out);
+  o.out_dir = record.out_dir;
   if (a.steps) o.steps = *a.steps;
   o.until = a.until;
   o.threads = a.threads;
@@ -272,7 +284,7 @@ int run_command(const RunArgs& a) {
   } catch (const catalyst::InSituLoadError& e) {
     bad_input = e.what();
     r.exit_code = 2;
-    r.exit_status = "bad input";
+    r.exit_status = "bad_input";
     r.message = bad_input;
     r.insitu_failures = insitu->failures();
 #endif
@@ -307,6 +319,7 @@ int run_command(const RunArgs& a) {
   // deliver its outputs (exit 5) unless it had failed already.
   try {
     write_summary(o.out_dir / "summary.json", c, physics_params(c), r, x);
+    record.summary_written = true;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     if (r.exit_code == 0 || r.exit_code == 3) r.exit_code = 5;
@@ -325,6 +338,36 @@ int run_command(const RunArgs& a) {
                  o.out_dir.string());
   }
   return r.exit_code;
+}
+
+}  // namespace
+
+int run_command(const RunArgs& a) {
+  // Every run that got past argument parsing leaves a summary.json, whatever happened: here the
+  // runs that ended before the simulation could write its own (bad input, exit 2, or an internal
+  // error, exit 4), wherever the output folder is known and usable. The exception goes on to main().
+  RunRecord record;
+  if (!a.out.empty()) record.out_dir = a.out;
+  auto leave_summary = [&](const char* status, int code, const std::string& message) {
+    if (record.summary_written || record.out_dir.empty() || process_group().rank != 0) return;
+    try {
+      write_refusal_summary(record.out_dir / "summary.json", record.case_name, a.case_file, status, code, message);
+    } catch (const std::exception& e) {
+      spdlog::debug("no summary.json for this run: {}", e.what());  // e.g. --out is a file: said already
+    }
+  };
+  try {
+    return run_case(a, record);
+  } catch (const BadInput& e) {
+    leave_summary("bad_input", 2, e.what());
+    throw;
+  } catch (const std::filesystem::filesystem_error& e) {
+    leave_summary("bad_input", 2, e.what());
+    throw;
+  } catch (const std::exception& e) {
+    leave_summary("internal_error", 4, std::string("internal error: ") + e.what());
+    throw;
+  }
 }
 
 int info_command(const InfoArgs& a) {

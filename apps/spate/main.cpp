@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -25,8 +26,12 @@ namespace {
 // Under mpirun every rank ends the same way. Bad input and internal errors may strike one rank
 // only, while its peers wait in a collective: MPI_Abort ends them all (no hang). Outcomes every
 // rank agrees on (done, differences, unstable) finalise MPI normally.
+// Bad input is mostly found by every rank at once; rank 0 writes the refusal's summary.json, so the
+// others give it a moment before they end the job.
 int finish(int code) {
-  if (spate::process_group().ranks > 1 && (code == 2 || (code >= 4 && code <= 6))) spate::abort_process_group(code);
+  const auto& group = spate::process_group();
+  if (group.ranks > 1 && code == 2 && group.rank != 0) std::this_thread::sleep_for(std::chrono::seconds(1));
+  if (group.ranks > 1 && (code == 2 || (code >= 4 && code <= 6))) spate::abort_process_group(code);
   spate::finalize_process_group();
   return code;
 }

@@ -169,7 +169,7 @@ int post_command(const PostArgs& a) {
 #ifdef SPATE_WITH_CATALYST
     if (pipelines) {
       std::vector<SlabView> views;
-      for (std::size_t k = 0; k < state.pieces.size(); ++k) views.push_back(slab_view(state.pieces[k], state.slabs[k], state.slab_count));
+      for (std::size_t k = 0; k < state.pieces.size(); ++k) views.push_back(slab_view(state.pieces[k], state.slabs[k], state.slab_count, static_cast<int>(c.fluids.size())));
       pipelines->execute(state.step, state.time, views);
     }
 #endif

@@ -9,6 +9,7 @@
 #include "../particles/particle_access.hpp"
 #include "../physics/fluid_interactions.hpp"
 #include "../physics/integrator.hpp"
+#include "../physics/multiphase_interactions.hpp"
 #include "../physics/wall_boundary.hpp"
 
 namespace spate {
@@ -28,8 +29,10 @@ SPATE_HD void predict_particle(const PhysicsParams& P, Fields& f, std::uint32_t 
   if (P.density_mode == DensityMode::Continuity) predict_density(f.density[i], f.density_rate_prev[i], dt);
 }
 
-// Acceleration and density rate of fluid particle i (zero rates for walls).
-template <class Kernel, int Dim, bool Gamma7, bool MovingWalls, class Fields>
+// Acceleration and density rate of fluid particle i (zero rates for walls). Multiphase: the pair
+// terms of multiphase_interactions.hpp with each neighbour's own fluid. MovingWalls: walls carry
+// their prescribed velocity into continuity (ParticleState::w).
+template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, class Fields>
 SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
   if (!P.is_fluid(f.material[i])) {
     SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = 0.0f;
@@ -46,11 +49,15 @@ SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, 
       if (distance_squared<Dim>(si.x, f.pos, j) < P.support2) {
         ParticleState<Dim> sj = load_state<Dim>(f, j);
         if constexpr (MovingWalls) sj.w = boundary_velocity<Dim>(P, sj);
-        accumulate_fluid_pair<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj, rates);
+        if constexpr (Multiphase) {
+          accumulate_multiphase_pair<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj, rates);
+        } else {
+          accumulate_fluid_pair<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj, rates);
+        }
       }
     }
   });
-  add_body_forces(P, rates);
+  finish_fluid_rates(P, M, si, rates);
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = rates.acc[k];
   f.density_rate[i] = P.density_mode == DensityMode::Continuity ? rates.density_rate : 0.0f;
 }

@@ -24,6 +24,18 @@ struct Box {
   Vec3d max{0, 0, 0};
 };
 
+// A block of one fluid at rest at t = 0: a box, or a disc (2D) / sphere (3D) when `radius` > 0
+// (min and max are then its bounding box), optionally with a sinusoidal top face. Where blocks
+// overlap, the first listed holds the site (a bubble listed before the water around it).
+struct FluidBlock : Box {
+  int fluid = 0;               // index into Case::fluids
+  Vec3d centre{0, 0, 0};       // disc/sphere centre
+  double radius = 0.0;         // > 0: a disc/sphere instead of a box
+  // top_wave: the top face at max_v + amplitude sin(2 pi (x - min_x) / wavelength) (0: flat).
+  double wave_amplitude = 0.0;
+  double wavelength = 0.0;
+};
+
 struct SolidSpec {
   std::string name;
   Box box;
@@ -31,21 +43,30 @@ struct SolidSpec {
   int motion = -1;     // index into Case::motions, or -1: static
 };
 
-enum class ProbeType { Pressure, Velocity, Height, Force, Front };
+enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid };
 
 struct ProbeSpec {
   std::string name;
   ProbeType type = ProbeType::Pressure;
-  Vec3d position{0, 0, 0};  // pressure/velocity: the point; height: the gauge (x, y) in 3D, (x) in 2D
+  Vec3d position{0, 0, 0};  // pressure/velocity: the point; height: the gauge (x, y) in 3D, (x) in 2D;
+                            // wall_pressure: the centre of the sensing disc, on a wall or solid face
   std::string solid;        // force: the solid's name
+  int face = -1;            // force: -1 the whole solid, else one face: 2 axis + (0 lower, 1 upper side)
   int axis = 0;             // front: the axis along which the front advances
+  Vec3d normal{0, 0, 0};    // wall_pressure: unit normal of the face, pointing into the fluid
+  double diameter = 0.0;    // wall_pressure: diameter of the sensing disc [m] (0: a point)
+  double window = 0.0;      // wall_pressure: moving-average window [s] (0: none)
   bool connected = false;   // height: the top of the water column standing on the floor (spray above ignored)
   double min_depth = 0.0;   // front: only water at least this deep counts (a bore over a wet bed)
   int follow = -1;          // pressure, velocity, height: moves with this motion (Case::motions), -1: fixed
+  // pressure, velocity, height, centroid: only this fluid's particles (index into Case::fluids;
+  // -1: every fluid); `phase_name` its name, for descriptions.
+  int phase = -1;
+  std::string phase_name;
 };
 
-// A fluid (a material, physics/materials.hpp). The case's `fluid:` section is fluid 0; every fluid
-// block and the wet bed are made of it.
+// A fluid (a material, physics/materials.hpp): the case's `fluid:` section, or each entry of its
+// `fluids:` list (several phases); fluid blocks and the wet bed name theirs (the first by default).
 struct FluidSpec {
   std::string name = "water";
   double density = 1000.0;               // rest density rho0 [kg/m3]
@@ -64,11 +85,14 @@ struct Case {
   double smoothing_ratio = 1.3;
   KernelType kernel = KernelType::WendlandC2;
 
-  std::vector<FluidSpec> fluids{FluidSpec{}};  // material k is fluids[k] (one today)
+  std::vector<FluidSpec> fluids{FluidSpec{}};  // material k is fluids[k]
   double artificial_viscosity = 0.0;
+  bool tension = true;  // false: fluid pressures clipped at 0 (eos.hpp fluid_pressure)
   DensityMode density_mode = DensityMode::Continuity;
   DensityDiffusion diffusion = DensityDiffusion::Fourtakas;
   double delta = 0.1;
+  MomentumFlux flux = MomentumFlux::Central;
+  double riemann_limiter = 3.0;
   Vec3d gravity{0, 0, -9.81};
   Vec3d body_force{0, 0, 0};
 
@@ -92,8 +116,9 @@ struct Case {
   // Prescribed wall motions (motion.hpp), of the tank and of solids; at most kMaxMotions.
   std::vector<MotionSpec> motions;
 
-  std::vector<Box> fluid_blocks;
+  std::vector<FluidBlock> fluid_blocks;
   double wet_bed = 0.0;  // depth of still water on the rest of the floor
+  int wet_bed_fluid = 0; // its fluid (index into fluids)
   std::vector<SolidSpec> solids;
   std::vector<ProbeSpec> probes;
 

@@ -12,12 +12,17 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "case.hpp"
+#include "../io/input_file.hpp"
 
 namespace spate {
 
 namespace {
+
+// A case file is a page of YAML; 16 MiB of it is not one (nor is /dev/zero).
+constexpr std::size_t kLargestCaseFile = std::size_t{16} << 20;
 
 // Edits (insert, delete, substitute, swap two neighbours) between a and b: the optimal string
 // alignment distance, so that the usual typo `edn` is one edit from `end`.
@@ -283,6 +288,64 @@ bool overlap(const Box& a, const Box& b, int dim, double tol) {
   return true;
 }
 
+// One fluid material (the `fluid:` section or an entry of `fluids:`).
+void read_fluid(Section& f, FluidSpec& fluid, bool name_required) {
+  fluid.name = name_required ? f.text("name") : f.text("name", std::string("water"));
+  if (fluid.name.empty()) f.fail(f.raw("name"), "name", "must not be empty");
+  fluid.density = f.number("density", 1000.0);
+  if (!(fluid.density > 0)) f.fail(f.raw("density"), "density", "must be > 0");
+  fluid.viscosity = f.number("viscosity", 1.0e-3);
+  if (fluid.viscosity < 0) f.fail(f.raw("viscosity"), "viscosity", "must be >= 0");
+  if (f.has("sound_speed") && !(f.raw("sound_speed").IsScalar() && f.raw("sound_speed").Scalar() == "auto")) {
+    fluid.sound_speed = f.number("sound_speed");
+    if (!(*fluid.sound_speed > 0)) f.fail(f.raw("sound_speed"), "sound_speed", "must be > 0 or 'auto'");
+  }
+  fluid.tait_exponent = f.number("tait_exponent", 7.0);
+  if (!(fluid.tait_exponent >= 1 && fluid.tait_exponent <= 10))
+    f.fail(f.raw("tait_exponent"), "tait_exponent", "must be between 1 and 10 (7 for water)");
+  fluid.background_pressure = f.number("background_pressure", 0.0);
+  if (fluid.background_pressure < 0) f.fail(f.raw("background_pressure"), "background_pressure", "must be >= 0");
+}
+
+// The index of the fluid named by `key` (the first fluid when the key is absent).
+int fluid_index(Section& s, const std::string& key, const Case& c) {
+  if (!s.has(key)) return 0;
+  const std::string name = s.text(key);
+  std::string names;
+  for (std::size_t k = 0; k < c.fluids.size(); ++k) {
+    if (c.fluids[k].name == name) return static_cast<int>(k);
+    names += (names.empty() ? "" : ", ") + c.fluids[k].name;
+  }
+  s.fail(s.raw(key), key, "no fluid named '" + name + "' (fluids: " + names + ")");
+}
+
+// A fluid block: a box (min, max) or a disc/sphere (centre, radius), of the fluid it names, with
+// an optional sinusoidal top face (top_wave).
+FluidBlock read_fluid_block(Section& f, const Case& c) {
+  const int d = c.dim;
+  FluidBlock b;
+  if (f.has("radius") || f.has("centre")) {
+    for (const char* key : {"min", "max", "top_wave"})
+      if (f.has(key)) f.fail(f.raw(key), key, "a disc/sphere block has 'centre' and 'radius' only");
+    b.centre = f.vector("centre", d);
+    b.radius = f.number("radius");
+    if (!(b.radius > 0)) f.fail(f.raw("radius"), "radius", "must be > 0");
+    for (int k = 0; k < d; ++k) b.min[k] = b.centre[k] - b.radius, b.max[k] = b.centre[k] + b.radius;
+  } else {
+    static_cast<Box&>(b) = read_box(f, d);
+    if (auto w = f.child("top_wave")) {
+      b.wave_amplitude = w->number("amplitude");
+      b.wavelength = w->number("wavelength");
+      if (!(b.wavelength > 0)) w->fail(w->raw("wavelength"), "wavelength", "must be > 0");
+      if (!(std::fabs(b.wave_amplitude) < b.max[d - 1] - b.min[d - 1]))
+        w->fail(w->raw("amplitude"), "amplitude", "its magnitude must be below the block's height");
+      w->finish();
+    }
+  }
+  b.fluid = fluid_index(f, "fluid", c);
+  return b;
+}
+
 // Why `name` cannot be a file name (case names name the default output folder out/<name>, probe
 // names their probes/<name>.csv), or nothing when it can: no path separators, no '..' or hidden
 // names, no control characters, not an option.
@@ -378,6 +441,101 @@ MotionSpec read_motion(Section& m, const Case& c, const std::string& body, const
   return spec;
 }
 
+// "x-" -> 0, "x+" -> 1, "y-" -> 2, ... (2 axis + side); -1 for anything else.
+int face_index(const std::string& name, int dim) {
+  if (name.size() != 2 || (name[1] != '-' && name[1] != '+')) return -1;
+  const int axis = name[0] == 'x' ? 0 : name[0] == 'y' ? 1 : name[0] == 'z' ? 2 : -1;
+  if (axis < 0 || axis >= dim) return -1;
+  return 2 * axis + (name[1] == '+' ? 1 : 0);
+}
+
+// The tank's upper corner as its particles make it: its extents rounded to whole dp.
+Vec3d particle_tank_max(const Case& c) {
+  Vec3d hi{0, 0, 0};
+  for (int k = 0; k < c.dim; ++k) hi[k] = c.tank_origin[k] + static_cast<double>(std::lround(c.tank_size[k] / c.dp)) * c.dp;
+  return hi;
+}
+
+// A wall-pressure sensor sits on a face that fluid can touch: an interior face of the tank (not
+// along a periodic axis, not the open top) or a face of a solid box. Its normal points into the
+// fluid; given, it must be that face's normal; left out, the face must be unique (not an edge).
+void read_wall_sensor(Section& p, const Case& c, ProbeSpec& probe) {
+  const int d = c.dim;
+  probe.position = p.vector("position", d);
+  probe.diameter = p.number("diameter", 0.0);
+  if (probe.diameter < 0) p.fail(p.raw("diameter"), "diameter", "must be >= 0 (0: a point sensor)");
+  probe.window = p.number("window", 0.0);
+  if (probe.window < 0) p.fail(p.raw("window"), "window", "must be >= 0 seconds (0: no averaging)");
+  // Within half a particle spacing of a face: the tank's extents are rounded to whole dp, so its
+  // walls may sit up to dp/2 from where the case puts them (e.g. Buchner's tank, 5.366 H long). The
+  // sensor is moved onto the face the particles make.
+  const double tol = 0.5 * c.dp + 1e-9;
+  std::vector<std::pair<Vec3d, Vec3d>> found;  // (normal, position on the face) of every face it lies on
+  auto consider = [&](const Vec3d& lo, const Vec3d& hi, int axis, double plane, double into) {
+    if (std::fabs(probe.position[axis] - plane) > tol) return;
+    for (int k = 0; k < d; ++k)
+      if (k != axis && (probe.position[k] < lo[k] - 1e-9 || probe.position[k] > hi[k] + 1e-9)) return;
+    Vec3d n{0, 0, 0}, at = probe.position;
+    n[axis] = into;
+    at[axis] = plane;
+    found.emplace_back(n, at);
+  };
+  const Vec3d tank_hi = particle_tank_max(c);
+  for (int a = 0; a < d; ++a) {
+    if (c.periodic[a]) continue;
+    consider(c.tank_origin, tank_hi, a, c.tank_origin[a], 1.0);
+    if (!(a == d - 1 && c.open_top)) consider(c.tank_origin, tank_hi, a, tank_hi[a], -1.0);
+  }
+  for (auto& s : c.solids)
+    for (int a = 0; a < d; ++a) {
+      consider(s.box.min, s.box.max, a, s.box.min[a], -1.0);
+      consider(s.box.min, s.box.max, a, s.box.max[a], 1.0);
+    }
+  if (found.empty())
+    p.fail(p.raw("position"), "position",
+           "a wall_pressure sensor must lie on a face of the tank interior or of a solid (within dp/2)");
+  if (!p.has("normal")) {
+    if (found.size() > 1) p.fail(p.raw("position"), "position", "lies on an edge of two faces: give 'normal' to choose one");
+    std::tie(probe.normal, probe.position) = found[0];
+    return;
+  }
+  Vec3d n = p.vector("normal", d);
+  double length = 0;
+  for (int k = 0; k < d; ++k) length += n[k] * n[k];
+  length = std::sqrt(length);
+  if (!(length > 0)) p.fail(p.raw("normal"), "normal", "must be a non-zero vector");
+  for (int k = 0; k < d; ++k) n[k] /= length;
+  for (auto& [m, at] : found) {
+    double dot = 0;
+    for (int k = 0; k < d; ++k) dot += m[k] * n[k];
+    if (dot > 1 - 1e-6) {
+      probe.normal = m;
+      probe.position = at;
+      return;
+    }
+  }
+  p.fail(p.raw("normal"), "normal", "is not the normal (pointing into the fluid) of the face the sensor lies on");
+}
+
+// Whether a point on a face (read_wall_sensor put it exactly there) lies on the surface of a body
+// that moves: the tank's walls, or a solid box, with a motion.
+bool on_moving_body(const Vec3d& x, const Case& c) {
+  const int d = c.dim;
+  const double tol = 1e-9;
+  auto on_box = [&](const Vec3d& lo, const Vec3d& hi) {
+    bool inside = true, on_face = false;
+    for (int k = 0; k < d; ++k) {
+      inside = inside && x[k] >= lo[k] - tol && x[k] <= hi[k] + tol;
+      on_face = on_face || std::fabs(x[k] - lo[k]) <= tol || std::fabs(x[k] - hi[k]) <= tol;
+    }
+    return inside && on_face;
+  };
+  for (const SolidSpec& s : c.solids)
+    if (s.motion >= 0 && on_box(s.box.min, s.box.max)) return true;
+  if (c.tank_motion < 0) return false;
+  return on_box(c.tank_origin, particle_tank_max(c));
+}
+
 Case read(Section& root, const std::string& file) {
   Case c;
   c.file = file;
@@ -397,26 +555,38 @@ Case read(Section& root, const std::string& file) {
   g_default[d - 1] = -9.81;
   c.gravity = root.vector("gravity", d, g_default);
 
+  // Fluids: `fluid:` (one), or a `fluids:` list of materials (several phases); `fluid:` then keeps
+  // only the case-wide artificial_viscosity, body_force and tension.
+  const bool listed = root.has("fluids");
+  if (listed) {
+    auto entries = root.list("fluids");
+    if (entries.empty()) root.fail(root.raw("fluids"), "fluids", "expected a list of at least one fluid");
+    if (entries.size() > static_cast<std::size_t>(kMaxFluids))
+      root.fail(root.raw("fluids"), "fluids", "at most " + std::to_string(kMaxFluids) + " fluids");
+    c.fluids.clear();
+    for (auto& e : entries) {
+      FluidSpec fluid;
+      read_fluid(e, fluid, /*name_required=*/true);
+      for (auto& other : c.fluids)
+        if (other.name == fluid.name) e.fail(e.raw("name"), "name", "fluid '" + fluid.name + "' is defined twice");
+      e.finish();
+      c.fluids.push_back(fluid);
+    }
+  }
   {
     auto f = root.optional_child("fluid");
-    FluidSpec& fluid = c.fluids[0];
-    fluid.name = f.text("name", std::string("water"));
-    fluid.density = f.number("density", 1000.0);
-    if (!(fluid.density > 0)) f.fail(f.raw("density"), "density", "must be > 0");
-    fluid.viscosity = f.number("viscosity", 1.0e-3);
-    if (fluid.viscosity < 0) f.fail(f.raw("viscosity"), "viscosity", "must be >= 0");
-    if (f.has("sound_speed") && !(f.raw("sound_speed").IsScalar() && f.raw("sound_speed").Scalar() == "auto")) {
-      fluid.sound_speed = f.number("sound_speed");
-      if (!(*fluid.sound_speed > 0)) f.fail(f.raw("sound_speed"), "sound_speed", "must be > 0 or 'auto'");
+    if (!listed) {
+      read_fluid(f, c.fluids[0], /*name_required=*/false);
+    } else {
+      for (const char* key : {"name", "density", "viscosity", "sound_speed", "tait_exponent", "background_pressure"})
+        if (f.has(key))
+          f.fail(f.raw(key), key, "with a 'fluids' list each fluid's properties go in its entry; 'fluid' keeps only "
+                                  "artificial_viscosity, body_force and tension");
     }
-    fluid.tait_exponent = f.number("tait_exponent", 7.0);
-    if (!(fluid.tait_exponent >= 1 && fluid.tait_exponent <= 10))
-      f.fail(f.raw("tait_exponent"), "tait_exponent", "must be between 1 and 10 (7 for water)");
-    fluid.background_pressure = f.number("background_pressure", 0.0);
-    if (fluid.background_pressure < 0) f.fail(f.raw("background_pressure"), "background_pressure", "must be >= 0");
     c.artificial_viscosity = f.number("artificial_viscosity", 0.0);
     if (c.artificial_viscosity < 0) f.fail(f.raw("artificial_viscosity"), "artificial_viscosity", "must be >= 0");
     c.body_force = f.vector("body_force", d, Vec3d{0, 0, 0});
+    c.tension = f.boolean("tension", true);
     f.finish();
   }
   {
@@ -425,7 +595,8 @@ Case read(Section& root, const std::string& file) {
                                             {{"continuity", DensityMode::Continuity}, {"summation", DensityMode::Summation}});
     c.diffusion = s.choice<DensityDiffusion>(
         "diffusion", DensityDiffusion::Fourtakas,
-        {{"fourtakas", DensityDiffusion::Fourtakas}, {"molteni_colagrossi", DensityDiffusion::MolteniColagrossi}, {"none", DensityDiffusion::None}});
+        {{"fourtakas", DensityDiffusion::Fourtakas}, {"molteni_colagrossi", DensityDiffusion::MolteniColagrossi},
+         {"riemann", DensityDiffusion::Riemann}, {"none", DensityDiffusion::None}});
     c.delta = s.number("delta", 0.1);
     if (c.delta < 0 || c.delta > 1) s.fail(s.raw("delta"), "delta", "must be between 0 and 1");
     c.density_min_ratio = s.number("min_ratio", 0.5);
@@ -435,6 +606,13 @@ Case read(Section& root, const std::string& file) {
       s.fail(s.raw("min_ratio"), "min_ratio", "must be in [0, 1) (a fraction of the reference density)");
     if (!(c.density_max_ratio > 1)) s.fail(s.raw("max_ratio"), "max_ratio", "must be > 1 (a multiple of the reference density)");
     s.finish();
+  }
+  {
+    auto m = root.optional_child("momentum");
+    c.flux = m.choice<MomentumFlux>("flux", MomentumFlux::Central, {{"central", MomentumFlux::Central}, {"riemann", MomentumFlux::Riemann}});
+    c.riemann_limiter = m.number("riemann_limiter", 3.0);
+    if (!(c.riemann_limiter >= 0)) m.fail(m.raw("riemann_limiter"), "riemann_limiter", "must be >= 0");
+    m.finish();
   }
   if (auto t = root.child("time")) {
     c.end_time = t->number("end");
@@ -517,13 +695,23 @@ Case read(Section& root, const std::string& file) {
   const Vec3d tank_hi{c.tank_origin[0] + c.tank_size[0], c.tank_origin[1] + c.tank_size[1], c.tank_origin[2] + c.tank_size[2]};
   const double tol = 1e-9;
   for (auto& f : root.list("fluid_blocks")) {
-    Box b = read_box(f, d);
+    const FluidBlock b = read_fluid_block(f, c);
     f.finish();
-    if (!inside(b, c.tank_origin, tank_hi, d, tol)) f.fail(f.node(), "max", "fluid block lies (partly) outside the tank");
+    if (!inside(b, c.tank_origin, tank_hi, d, tol))
+      f.fail(f.node(), b.radius > 0 ? "radius" : "max", "fluid block lies (partly) outside the tank");
     c.fluid_blocks.push_back(b);
   }
-  c.wet_bed = root.number("wet_bed", 0.0);
-  if (c.wet_bed < 0 || c.wet_bed >= c.tank_size[d - 1]) root.fail(root.raw("wet_bed"), "wet_bed", "depth must be >= 0 and below the tank top");
+  // wet_bed: a depth (of the first fluid), or {depth, fluid}.
+  if (root.has("wet_bed") && root.raw("wet_bed").IsMap()) {
+    auto bed = *root.child("wet_bed");
+    c.wet_bed = bed.number("depth");
+    c.wet_bed_fluid = fluid_index(bed, "fluid", c);
+    if (c.wet_bed < 0 || c.wet_bed >= c.tank_size[d - 1]) bed.fail(bed.raw("depth"), "depth", "must be >= 0 and below the tank top");
+    bed.finish();
+  } else {
+    c.wet_bed = root.number("wet_bed", 0.0);
+    if (c.wet_bed < 0 || c.wet_bed >= c.tank_size[d - 1]) root.fail(root.raw("wet_bed"), "wet_bed", "depth must be >= 0 and below the tank top");
+  }
   std::set<std::string> solid_names;
   for (auto& s : root.list("solids")) {
     SolidSpec spec;
@@ -547,6 +735,10 @@ Case read(Section& root, const std::string& file) {
     root.fail(root.raw("solids"), "solids", "at most " + std::to_string(kMaxMotions) + " motions (tank and solids together)");
   if (!c.motions.empty() && (c.periodic[0] || c.periodic[1] || c.periodic[2]))
     tank->fail(tank->raw("periodic"), "periodic", "moving walls need a closed tank: no periodic axes with a motion");
+  // The Riemann flux's wall term (finish_fluid_rates) takes the wall at rest (the mirror velocity
+  // -v_i); with a moving wall it would damp the fluid that follows the wall.
+  if (!c.motions.empty() && c.flux == MomentumFlux::Riemann)
+    root.fail(root.raw("momentum"), "momentum.flux", "'riemann' assumes static walls; it cannot be combined with a motion (use 'central')");
   if (c.fluid_blocks.empty() && c.wet_bed <= 0) root.fail(root.node(), "fluid_blocks", "the case has no fluid (no fluid_blocks and no wet_bed)");
 
   for (auto& p : root.list("probes")) {
@@ -558,7 +750,17 @@ Case read(Section& root, const std::string& file) {
       if (other.name == probe.name) p.fail(p.raw("name"), "name", "probe '" + probe.name + "' is defined twice");
     probe.type = p.choice<ProbeType>("type", ProbeType::Pressure,
                                      {{"pressure", ProbeType::Pressure}, {"velocity", ProbeType::Velocity}, {"height", ProbeType::Height},
-                                      {"force", ProbeType::Force}, {"front", ProbeType::Front}});
+                                      {"force", ProbeType::Force}, {"front", ProbeType::Front}, {"wall_pressure", ProbeType::WallPressure},
+                                      {"centroid", ProbeType::Centroid}});
+    // A phase (fluid) to measure: required by a centroid, optional for a point or a gauge.
+    const bool phased = probe.type == ProbeType::Pressure || probe.type == ProbeType::Velocity ||
+                        probe.type == ProbeType::Height || probe.type == ProbeType::Centroid;
+    if (probe.type == ProbeType::Centroid && !p.has("phase")) p.text("phase");  // reports it as required
+    if (p.has("phase")) {
+      if (!phased) p.fail(p.raw("phase"), "phase", "only pressure, velocity, height and centroid probes take a phase");
+      probe.phase = fluid_index(p, "phase", c);
+      probe.phase_name = c.fluids[probe.phase].name;
+    }
     switch (probe.type) {
       case ProbeType::Pressure:
       case ProbeType::Velocity: probe.position = p.vector("position", d); break;
@@ -569,7 +771,21 @@ Case read(Section& root, const std::string& file) {
       case ProbeType::Force:
         probe.solid = p.text("solid");
         if (!solid_names.count(probe.solid)) p.fail(p.raw("solid"), "solid", "no solid named '" + probe.solid + "'");
+        if (p.has("face")) {
+          const std::string face = p.text("face");
+          probe.face = face_index(face, d);
+          if (probe.face < 0)
+            p.fail(p.raw("face"), "face", "'" + face + "' is not a face of a " + std::to_string(d) + "D box (x-, x+, " +
+                                              (d == 3 ? "y-, y+, z-, z+)" : "y-, y+)"));
+        }
         break;
+      case ProbeType::WallPressure:
+        read_wall_sensor(p, c, probe);
+        // The sensor reads Adami's pressure with a static wall's (g - a_w) at a fixed point.
+        if (on_moving_body(probe.position, c))
+          p.fail(p.raw("position"), "position", "a wall_pressure sensor on a moving wall is not supported (it stays where it is)");
+        break;
+      case ProbeType::Centroid: break;
       case ProbeType::Front: {
         const std::string axis = p.text("axis", std::string("x"));
         probe.axis = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;
@@ -582,7 +798,7 @@ Case read(Section& root, const std::string& file) {
     }
     if (p.has("follow")) {
       // The probe rides with a moving body: a gauge on a sloshing tank's wall.
-      if (probe.type == ProbeType::Force || probe.type == ProbeType::Front)
+      if (probe.type != ProbeType::Pressure && probe.type != ProbeType::Velocity && probe.type != ProbeType::Height)
         p.fail(p.raw("follow"), "follow", "only pressure, velocity and height probes follow a moving body");
       const std::string body = p.text("follow");
       int motion = -1;
@@ -677,13 +893,13 @@ Case parse_case(const std::string& yaml_text, const std::string& file_name, cons
 }
 
 Case load_case(const std::string& path, const std::vector<std::string>& overrides) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw CaseError(path + ": cannot read the case file (it is a folder)");
-  std::ifstream in(path);
-  if (!in) throw CaseError(path + ": cannot read the case file (" + std::string(std::strerror(errno)) + ")");
-  std::stringstream s;
-  s << in.rdbuf();
-  return parse_case(s.str(), path, overrides);
+  std::string text;
+  try {
+    text = read_input_text(path, "the case file", kLargestCaseFile);
+  } catch (const InputFileError& e) {
+    throw CaseError(e.what());
+  }
+  return parse_case(text, path, overrides);
 }
 
 double highest_fluid_column(const Case& c) {
@@ -726,7 +942,9 @@ PhysicsParams physics_params(const Case& c) {
                                       static_cast<float>(f.tait_exponent), static_cast<float>(f.viscosity),
                                       static_cast<float>(f.density * std::pow(c.dp, c.dim)),
                                       static_cast<float>(f.background_pressure));
+    if (P.materials.fluid[k].tait_b > P.materials.fluid[P.materials.reference].tait_b) P.materials.reference = static_cast<std::uint8_t>(k);
   }
+  P.tension = c.tension;
   if (c.tank_motion >= 0) P.materials.motion[P.materials.tank()] = static_cast<std::uint8_t>(c.tank_motion + 1);
   for (std::size_t k = 0; k < c.solids.size(); ++k)
     if (c.solids[k].motion >= 0) P.materials.motion[P.materials.solid(static_cast<int>(k))] = static_cast<std::uint8_t>(c.solids[k].motion + 1);
@@ -735,6 +953,8 @@ PhysicsParams physics_params(const Case& c) {
   P.artificial_viscosity = static_cast<float>(c.artificial_viscosity);
   P.delta = static_cast<float>(c.delta);
   P.diffusion = c.diffusion;
+  P.flux = c.flux;
+  P.riemann_limiter = static_cast<float>(c.riemann_limiter);
   P.density_mode = c.density_mode;
   for (int k = 0; k < 3; ++k) {
     P.gravity[k] = static_cast<float>(c.gravity[k]);

@@ -41,8 +41,25 @@ bool in_box(const Box& b, const double x[3], int dim) {
   return true;
 }
 
-// The material of the particle at site (i, j, k), if any (physics/materials.hpp: fluid 0 for fluid
-// blocks and the wet bed, then the tank, then solid k). Returns false for an empty site.
+// Whether site x lies in the block: its box (boundaries included), its disc/sphere, or its box
+// under a sinusoidal top face.
+bool in_block(const FluidBlock& b, const double x[3], int dim) {
+  if (b.radius > 0) {
+    double r2 = 0.0;
+    for (int a = 0; a < dim; ++a) r2 += (x[a] - b.centre[a]) * (x[a] - b.centre[a]);
+    return r2 <= b.radius * b.radius;
+  }
+  if (b.wave_amplitude == 0.0) return in_box(b, x, dim);
+  const int v = dim - 1;
+  for (int a = 0; a < v; ++a)
+    if (x[a] < b.min[a] || x[a] > b.max[a]) return false;
+  const double top = b.max[v] + b.wave_amplitude * std::sin(2.0 * M_PI * (x[0] - b.min[0]) / b.wavelength);
+  return x[v] >= b.min[v] && x[v] <= top;
+}
+
+// The material of the particle at site (i, j, k), if any (physics/materials.hpp: the fluid of the
+// first block that holds it, else of the wet bed, then the tank, then solid k). Returns false for
+// an empty site.
 bool classify(const Case& c, const MaterialTable& M, const Sites& s, const int idx[3], std::uint8_t& kind) {
   const int d = c.dim;
   bool interior = true;
@@ -59,22 +76,20 @@ bool classify(const Case& c, const MaterialTable& M, const Sites& s, const int i
     if (solid.hollow) {
       // Keep sites within wall_layers of a face that touches fluid (the floor face does not).
       double depth = 1e30;
-      for (int a = 0; a < d; ++a) {
-        depth = std::min(depth, x[a] - solid.box.min[a] + (a == d - 1 ? 1e30 : 0.0));
-        depth = std::min(depth, solid.box.max[a] - x[a]);
-      }
+      for (int f = 0; f < 2 * d; ++f)
+        if (f != 2 * (d - 1)) depth = std::min(depth, face_depth(solid.box, x, f));
       if (depth > c.wall_layers * c.dp) return false;
     }
     kind = M.solid(static_cast<int>(k));
     return true;
   }
   for (auto& b : c.fluid_blocks)
-    if (in_box(b, x, d)) {
-      kind = 0;
+    if (in_block(b, x, d)) {
+      kind = static_cast<std::uint8_t>(b.fluid);
       return true;
     }
   if (x[d - 1] - c.tank_origin[d - 1] < c.wet_bed) {
-    kind = 0;
+    kind = static_cast<std::uint8_t>(c.wet_bed_fluid);
     return true;
   }
   return false;
@@ -94,6 +109,11 @@ void for_each_site(const Case& c, Visit&& visit) {
 }
 
 }  // namespace
+
+double face_depth(const Box& b, const double x[3], int face) {
+  const int a = face / 2;
+  return face % 2 == 0 ? x[a] - b.min[a] : b.max[a] - x[a];
+}
 
 Lattice make_lattice(const Case& c) {
   Lattice L;
@@ -343,6 +363,38 @@ double rest_surface(const Case& c, const float* x) {
   return top;
 }
 
+// Several fluids: each fluid particle's density from the pressure of the layers above it,
+//   p = p_b(top) + sum over the fluid sites above in its column of rho0 g dp (+ its own half),
+// through the inverse equation of state of its own fluid, so that oil over water, or water under
+// air, starts in hydrostatic balance with a continuous pressure. Sites are generated column by
+// column, bottom to top (the vertical axis innermost), so each column is a run of consecutive
+// particles, summed here from its top. A solid, a wall or an empty site in between starts a new
+// stack at the background pressure of its top fluid.
+namespace {
+void layered_hydrostatic_density(const Case& c, const PhysicsParams& P, ParticleStore& p) {
+  const int v = c.dim - 1;
+  double g = 0;
+  for (int a = 0; a < c.dim; ++a) g += c.gravity[a] * c.gravity[a];
+  g = std::sqrt(g);
+  auto same_column = [&](std::size_t a, std::size_t b) {
+    for (int k = 0; k < v; ++k)
+      if (p.pos[k][a] != p.pos[k][b]) return false;
+    return true;
+  };
+  double pressure = 0.0;  // at the bottom edge of the particle above
+  for (std::size_t n = p.size(); n-- > 0;) {
+    if (!P.is_fluid(p.material[n])) continue;
+    const FluidMaterial& m = P.materials.of(p.material[n]);
+    const bool below_fluid = n + 1 < p.size() && P.is_fluid(p.material[n + 1]) && same_column(n, n + 1) &&
+                             p.pos[v][n + 1] - p.pos[v][n] < 1.5 * c.dp;
+    if (!below_fluid) pressure = m.background_pressure;  // the top of a stack
+    const double half = 0.5 * m.rho0 * g * c.dp;
+    p.density[n] = tait_density(static_cast<float>(pressure + half), m);
+    pressure += 2.0 * half;
+  }
+}
+}  // namespace
+
 ParticleStore generate_particles(const Case& c) {
   const ParticleCounts n = count_particles(c);
   if (n.fluid == 0) throw CaseError(c.file + ": the case generates no fluid particles (check fluid_blocks, wet_bed and dp)");
@@ -376,6 +428,7 @@ ParticleStore generate_particles(const Case& c) {
     ++i;
   });
   if (i != p.size()) throw std::logic_error("generate_particles: the site loop disagrees with count_particles");
+  if (P.materials.multiphase()) layered_hydrostatic_density(c, P, p);
   p.set_owned(p.size());
   return p;
 }

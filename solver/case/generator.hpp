@@ -26,6 +26,8 @@ OpenSides open_sides(const Case& c);
 std::string geometry_signature(const Case& c);
 std::string geometry_hash(const Case& c);
 
+// How deep x lies below face `face` (2 axis + (0 lower, 1 upper side)) of box b.
+double face_depth(const Box& b, const double x[3], int face);
 // Counts without allocating, in closed form (spate info answers at once at any dp).
 ParticleCounts count_particles(const Case& c);
 // All particles, ids 0..n-1 in generation order, all owned.

@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <system_error>
@@ -17,6 +18,13 @@ void throw_output_error(const std::filesystem::path& path, const std::string& wh
 
 std::filesystem::path temporary_path(const std::filesystem::path& path) {
   return path.string() + ".tmp" + std::to_string(::getpid());
+}
+
+bool is_temporary_name(const std::string& name) {
+  const auto at = name.rfind(".tmp");
+  if (at == std::string::npos) return false;
+  const auto digits = name.substr(at + 4);
+  return std::all_of(digits.begin(), digits.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
 }
 
 void create_output_folder(const std::filesystem::path& folder) {

@@ -23,6 +23,9 @@ struct OutputError : std::runtime_error {
 // The temporary name a file is written under before it is renamed into place (same folder, so the
 // rename is atomic; the process id keeps two writers apart).
 std::filesystem::path temporary_path(const std::filesystem::path& path);
+// Whether a file name is one of those temporary names ("NAME.tmp<pid>"), for watchers of a folder
+// that must not take a file being written for a finished one.
+bool is_temporary_name(const std::string& name);
 
 // Creates the folder (and its parents); OutputError when it cannot.
 void create_output_folder(const std::filesystem::path& folder);

@@ -16,20 +16,36 @@ std::int64_t peak_rss_bytes() {
   return static_cast<std::int64_t>(u.ru_maxrss) * 1024;
 }
 
-void write_summary(const std::filesystem::path& path, const Case& c, const PhysicsParams& P, const RunResult& r,
-                   const SummaryExtras& x) {
+namespace {
+
+// The case and the provenance: which program, from which sources, with which input, where and when.
+nlohmann::ordered_json summary_head(const std::string& case_name, const std::string& case_file) {
   nlohmann::ordered_json j;
-  j["case"] = c.name;
-  j["case_file"] = c.file;
-  // Provenance: which program, from which sources, with which input, where and when.
+  j["case"] = case_name;
+  j["case_file"] = case_file;
   const Provenance& run = invocation();
   j["version"] = version();
   j["commit"] = git_commit();
   j["command_line"] = run.command_line;
-  j["case_file_sha256"] = sha256_of_file(c.file);
+  // Only a regular file is hashed: a refused "case file" may be /dev/zero or a FIFO.
+  std::error_code ec;
+  j["case_file_sha256"] = std::filesystem::is_regular_file(case_file, ec) ? sha256_of_file(case_file) : std::string();
   j["host"] = run.host;
   j["start_time"] = run.start_time;
   j["end_time"] = utc_timestamp();
+  return j;
+}
+
+void write_json(const std::filesystem::path& path, const nlohmann::ordered_json& j) {
+  if (path.has_parent_path()) create_output_folder(path.parent_path());
+  write_file_atomically(path, j.dump(2) + "\n");
+}
+
+}  // namespace
+
+void write_summary(const std::filesystem::path& path, const Case& c, const PhysicsParams& P, const RunResult& r,
+                   const SummaryExtras& x) {
+  nlohmann::ordered_json j = summary_head(c.name, c.file);
   j["warnings"] = x.warnings;
   j["dimensions"] = c.dim;
   j["particles"] = {{"fluid", r.particles.fluid}, {"wall", r.particles.wall}, {"total", r.particles.total()}};
@@ -64,8 +80,16 @@ void write_summary(const std::filesystem::path& path, const Case& c, const Physi
   j["exit_status"] = r.exit_status;
   j["exit_code"] = r.exit_code;
   if (!r.message.empty()) j["message"] = r.message;
-  if (path.has_parent_path()) create_output_folder(path.parent_path());
-  write_file_atomically(path, j.dump(2) + "\n");
+  write_json(path, j);
+}
+
+void write_refusal_summary(const std::filesystem::path& path, const std::string& case_name, const std::string& case_file,
+                           const std::string& exit_status, int exit_code, const std::string& message) {
+  nlohmann::ordered_json j = summary_head(case_name, case_file);
+  j["exit_status"] = exit_status;
+  j["exit_code"] = exit_code;
+  j["message"] = message;
+  write_json(path, j);
 }
 
 }  // namespace spate

@@ -1,5 +1,6 @@
 #include "vtk_snapshot.hpp"
 
+#include "../physics/materials.hpp"
 #include "output_file.hpp"
 
 #include <zlib.h>
@@ -144,8 +145,9 @@ std::vector<char> appended_array(const std::string& file, std::size_t data_start
 }  // namespace
 
 // Every exported field of the registry (field_registry.hpp): positions as the points, the others
-// as point data under their exported names, then the owning slab ("device").
-void write_vtp_piece(const std::filesystem::path& path, ParticleStore& p, int slab) {
+// as point data under their exported names, then the owning slab ("device") and, with several
+// fluids, the phase ("phase").
+void write_vtp_piece(const std::filesystem::path& path, ParticleStore& p, int slab, int fluids) {
   const std::size_t n = p.owned();
   std::vector<Array> point_data;
   Array points;
@@ -155,6 +157,11 @@ void write_vtp_piece(const std::filesystem::path& path, ParticleStore& p, int sl
   }
   std::vector<std::int32_t> owner(n, slab);
   point_data.push_back(make_array<std::int32_t>("device", "Int32", 1, n, {owner.data()}));
+  if (fluids > 1) {  // several fluids: each particle's phase (materials.hpp, phase_of)
+    std::vector<std::int8_t> phase(n);
+    for (std::size_t i = 0; i < n; ++i) phase[i] = phase_of(p.material[i], fluids);
+    point_data.push_back(make_array<std::int8_t>("phase", "Int8", 1, n, {phase.data()}));
+  }
   // One vertex cell per particle: connectivity 0..n-1, offsets 1..n, 32-bit while they fit.
   Array connectivity, offsets;
   auto cells = [&]<class T>(const char* type) {

@@ -22,8 +22,8 @@ namespace spate {
 
 using FieldData = std::vector<std::pair<std::string, double>>;
 
-// Writes owned particles [0, owned) of one slab.
-void write_vtp_piece(const std::filesystem::path& path, ParticleStore& particles, int slab);
+// Writes owned particles [0, owned) of one slab; `fluids` > 1 adds the `phase` array.
+void write_vtp_piece(const std::filesystem::path& path, ParticleStore& particles, int slab, int fluids = 1);
 // Reads a piece written by write_vtp_piece (compressed or, as before spate 0.1, raw) into a store of
 // dimension `dim`, every particle owned: each exported field from the array of its exported name
 // (a field the file lacks stays zero). Throws std::runtime_error naming the file.

@@ -6,6 +6,7 @@
 
 #include "host_device.hpp"
 #include "materials.hpp"
+#include "params.hpp"
 
 namespace spate {
 
@@ -22,6 +23,19 @@ SPATE_HD float tait_power(float x, float gamma) { return gamma == 7.0f ? pow7(x)
 SPATE_HD float tait_pressure(float rho, const FluidMaterial& m) {
   return m.tait_b * (tait_power(rho / m.rho0, m.gamma) - 1.0f) + m.background_pressure;
 }
+
+// The pressure a fluid particle carries: eq. 9, and with fluid.tension off not below 0. A free
+// surface is at atmospheric pressure: a stretching sheet of water (a run-up jet, a splash) loses
+// density in the weakly compressible model and would otherwise pull on itself and on the walls it
+// slides along with a tension real water at atmospheric pressure does not sustain.
+SPATE_HD float fluid_pressure(const PhysicsParams& P, const FluidMaterial& m, float rho) {
+  const float p = tait_pressure(rho, m);
+  return P.tension || p > 0.0f ? p : 0.0f;
+}
+
+// The floor of fluid material m's continuity density: its rest density when the fluid takes no
+// tension (fluid.tension: false; eos.hpp fluid_pressure clips the pressure at 0), 0 otherwise.
+SPATE_HD float density_floor(const PhysicsParams& P, std::uint8_t m) { return P.tension ? 0.0f : P.materials.of(m).rho0; }
 
 // Inverse of eq. 9, used to give wall particles the density that matches their pressure.
 SPATE_HD float tait_density(float p, const FluidMaterial& m) {

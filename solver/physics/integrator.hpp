@@ -20,4 +20,13 @@ SPATE_HD void correct(float& value, float new_rate, float old_rate, float dt) {
   value += 0.5f * dt * (new_rate - old_rate);
 }
 
+// The continuity density after the corrector, not below `floor` (density_floor). Without it a
+// stretching sheet that takes no tension, which no longer pulls itself together, would thin out
+// without bound.
+SPATE_HD void correct_density(float& rho, float new_rate, float old_rate, float dt, float floor) {
+  correct(rho, new_rate, old_rate, dt);
+  rho = rho < floor ? floor : rho;
+}
+
+
 }  // namespace spate

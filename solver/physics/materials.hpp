@@ -2,7 +2,7 @@
 // Materials: every particle carries a one-byte material index (the registry field `material`) into
 // a small table. Fluids come first, then the walls:
 //   [0, fluids)        fluids, each with its own rest density, mass, viscosity, sound speed, Tait
-//                      exponent and background pressure (today one, `fluid:` in the case)
+//                      exponent and background pressure (`fluid:` or the `fluids:` list of the case)
 //   fluids             the tank's walls
 //   fluids + 1 + k     solid k of the case (its own material, so that force probes and motions can
 //                      name it)
@@ -49,6 +49,10 @@ inline FluidMaterial make_fluid(float rho0, float c0, float gamma, float viscosi
 struct MaterialTable {
   std::uint8_t fluids = 1;  // materials [0, fluids) are fluids
   std::uint8_t count = 2;   // fluids, the tank, the solids
+  // The reference fluid: the stiffest (largest c0^2 rho0 / gamma), whose equation of state gives
+  // every wall particle its density (Adami) and whose particles walls stand in for. With one fluid,
+  // that fluid; with water and air, the water (docs/physics.md, "Several fluids").
+  std::uint8_t reference = 0;
   FluidMaterial fluid[kMaxFluids];
   // Per wall material: 0 static, k + 1 moving with the case's motion k (PhysicsParams::motion).
   std::uint8_t motion[kMaxMaterials] = {};
@@ -56,11 +60,17 @@ struct MaterialTable {
   SPATE_HD bool is_fluid(std::uint8_t m) const { return m < fluids; }
   SPATE_HD std::uint8_t tank() const { return fluids; }
   SPATE_HD std::uint8_t solid(int k) const { return static_cast<std::uint8_t>(fluids + 1 + k); }
-  // The fluid whose equation of state gives a wall particle its density (Adami): with one fluid,
-  // that fluid. (Several fluids will choose per wall particle.)
-  SPATE_HD const FluidMaterial& wall_fluid() const { return fluid[0]; }
+  // The fluid whose equation of state gives a wall particle its density (Adami): the reference.
+  SPATE_HD const FluidMaterial& wall_fluid() const { return fluid[reference]; }
+  SPATE_HD bool multiphase() const { return fluids > 1; }
   // The properties of fluid material m (m < fluids).
   SPATE_HD const FluidMaterial& of(std::uint8_t m) const { return fluid[m]; }
 };
+
+// The `phase` array that snapshots and Catalyst get with several fluids: the fluid index of a
+// fluid particle (its material), -1 for a wall or solid particle.
+inline std::int8_t phase_of(std::uint8_t material, int fluids) {
+  return material < fluids ? static_cast<std::int8_t>(material) : std::int8_t{-1};
+}
 
 }  // namespace spate

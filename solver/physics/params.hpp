@@ -11,7 +11,11 @@
 namespace spate {
 
 enum class DensityMode : std::uint8_t { Continuity, Summation };
-enum class DensityDiffusion : std::uint8_t { None, MolteniColagrossi, Fourtakas };
+// Riemann: the pressure diffusion of the acoustic Riemann solver's interface velocity (fluid_interactions.hpp).
+enum class DensityDiffusion : std::uint8_t { None, MolteniColagrossi, Fourtakas, Riemann };
+// The pressure term of the momentum equation: central (p_i + p_j, eq. 7) or the interface pressure
+// of a linearised Riemann solver with a low-dissipation limiter (Zhang, Hu & Adams 2017).
+enum class MomentumFlux : std::uint8_t { Central, Riemann };
 
 struct PhysicsParams {
   int dim = 3;
@@ -27,6 +31,11 @@ struct PhysicsParams {
   float artificial_viscosity = 0.0f;  // Monaghan alpha; 0 switches it off
   float delta = 0.1f;            // density diffusion coefficient
   DensityDiffusion diffusion = DensityDiffusion::Fourtakas;
+  MomentumFlux flux = MomentumFlux::Central;
+  float riemann_limiter = 3.0f;  // eta of the Riemann solver's limiter beta = min(eta dU, c0)
+  // false: fluid pressures are clipped at 0 and continuity densities at rho0 (fluid.tension;
+  // eos.hpp fluid_pressure, integrator.hpp correct_density).
+  bool tension = true;
   DensityMode density_mode = DensityMode::Continuity;
   // Only the first `dim` components are used; the last used axis is vertical (y in 2D, z in 3D).
   float gravity[3] = {0.0f, 0.0f, -9.81f};

@@ -41,6 +41,17 @@ struct WallState {
   Vec<Dim> v;  // extrapolated no-slip velocity
 };
 
+// The pressure the fluid around a wall point implies there (s.w > 0), before any clipping: the
+// kernel-weighted fluid pressure extrapolated to the point along the hydrostatic gradient. It is
+// also what a wall-pressure sensor reads at a point of its disc (sim/probes.cpp). a_w: the wall's
+// acceleration there.
+template <int Dim>
+SPATE_HD float adami_pressure(const PhysicsParams& P, const WallSums<Dim>& s, const Vec<Dim>& a_w) {
+  float g_dot = 0.0f;
+  for (int k = 0; k < Dim; ++k) g_dot += (P.gravity[k] + P.body_force[k] - a_w[k]) * s.rho_r_w[k];
+  return (s.pw + g_dot) / s.w;
+}
+
 // Negative wall pressures would glue fluid to walls at a free surface; they are clipped to zero.
 // The density comes from the equation of state of the fluid the wall bounds (materials.hpp).
 // `material` and `x` are the wall particle's: a moving wall adds its motion (wall_motion.hpp).
@@ -50,15 +61,9 @@ SPATE_HD WallState<Dim> finish_wall(const PhysicsParams& P, const WallSums<Dim>&
   WallState<Dim> out{0.0f, M.rho0, zero_vec<Dim>()};
   if (s.w <= 0.0f) return out;
   const MotionState* motion = P.motion_of(material);
-  float g_dot = 0.0f;
-  if (motion) {
-    // (g - a_w) . sum rho_f r_wf W_wf: the wall's acceleration at its own position.
-    const Vec<Dim> a_w = rigid_acceleration<Dim>(*motion, x);
-    for (int k = 0; k < Dim; ++k) g_dot += (P.gravity[k] + P.body_force[k] - a_w[k]) * s.rho_r_w[k];
-  } else {
-    for (int k = 0; k < Dim; ++k) g_dot += (P.gravity[k] + P.body_force[k]) * s.rho_r_w[k];
-  }
-  const float p = (s.pw + g_dot) / s.w;
+  // (g - a_w): the wall's acceleration at its own position (zero for a static wall).
+  const Vec<Dim> a_w = motion ? rigid_acceleration<Dim>(*motion, x) : zero_vec<Dim>();
+  const float p = adami_pressure(P, s, a_w);
   out.p = p > 0.0f ? p : 0.0f;
   out.rho = tait_density(out.p, M);
   if (motion) {

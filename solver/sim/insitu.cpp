@@ -4,8 +4,9 @@
 
 namespace spate {
 
-SlabView slab_view(ParticleStore& p, int slab, int slab_count) {
+SlabView slab_view(ParticleStore& p, int slab, int slab_count, int fluids) {
   SlabView v;
+  v.fluids = fluids;
   v.slab = slab;
   v.slab_count = slab_count;
   v.dim = p.dim();
@@ -25,7 +26,7 @@ SlabView slab_view(ParticleStore& p, int slab, int slab_count) {
 std::vector<std::pair<std::string, double>> case_constants(const Case& c) {
   const PhysicsParams P = physics_params(c);
   return {{"dimensions", c.dim}, {"dp", c.dp}, {"smoothing_length", P.h}, {"rest_density", c.fluids[0].density},
-          {"particle_mass", P.materials.fluid[0].mass}};
+          {"particle_mass", P.materials.fluid[0].mass}, {"fluids", static_cast<double>(c.fluids.size())}};
 }
 
 }  // namespace spate

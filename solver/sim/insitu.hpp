@@ -10,6 +10,7 @@
 
 #include "../case/case.hpp"
 #include "../particles/field_registry.hpp"
+#include "../physics/materials.hpp"
 
 namespace spate {
 
@@ -30,6 +31,7 @@ struct SlabView {
   int slab_count = 1;
   int dim = 3;
   std::size_t owned = 0;    // particles [0, owned) of every array
+  int fluids = 1;           // materials [0, fluids) are fluids (phases); > 1: consumers add `phase`
   const float* pos[3] = {nullptr, nullptr, nullptr};  // the points; pos[2] is null in 2D
   std::vector<SlabArray> arrays;  // every other exported field, in registry order
   const SlabArray* array(std::string_view name) const {
@@ -41,8 +43,11 @@ struct SlabView {
 
 class ParticleStore;
 // The view of a slab's owned particles [0, owned): every exported field of the registry, pointing
-// at the store's arrays (zero copy; valid until the store next changes).
-SlabView slab_view(ParticleStore& p, int slab, int slab_count);
+// at the store's arrays (zero copy; valid until the store next changes). `fluids`: the case's fluid
+// count (several fluids: snapshots and Catalyst add the derived array `phase`,
+// phase_of in materials.hpp).
+SlabView slab_view(ParticleStore& p, int slab, int slab_count, int fluids = 1);
+
 
 // Case constants that pipelines read from the dataset's field data (sprite sizes, interpolation
 // kernels): put there in situ by the Catalyst adaptor and into every snapshot's .vtm, so that a

@@ -10,9 +10,11 @@
 #include <limits>
 #include <sstream>
 
+#include "../case/generator.hpp"
 #include "../particles/particle_access.hpp"
 #include "../physics/dispatch.hpp"
 #include "../physics/interpolation.hpp"
+#include "../physics/wall_boundary.hpp"
 
 namespace spate {
 
@@ -25,9 +27,13 @@ bool owns_point(SlabWorker& w, const Vec3d& at) {
   return w.grid().owns_column(column);
 }
 
-// Shepard sums of `field` (nullptr: weights only) around a point this slab owns.
+// Whether particle material m counts for a probe of `phase` (a fluid; -1: every fluid).
+bool in_phase(const PhysicsParams& P, std::uint8_t m, int phase) { return phase < 0 ? P.is_fluid(m) : m == phase; }
+
+// Shepard sums of `field` (nullptr: weights only) around a point this slab owns, over the fluid
+// particles of `phase` (-1: every fluid).
 template <class Kernel, int Dim>
-ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const FieldVector<float>* field) {
+ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const FieldVector<float>* field, int phase) {
   ParticleStore& p = w.particles();
   const Lattice& L = w.lattice();
   Vec<Dim> x;
@@ -39,7 +45,7 @@ ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const FieldVector<float
   ShepardSums<Dim> s;
   w.grid().view().for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
     for (std::uint32_t j = b; j < e; ++j)
-      if (w.params().is_fluid(p.material[j]))
+      if (in_phase(w.params(), p.material[j], phase))
         accumulate_shepard<Kernel, Dim>(w.params(), x, load_vec<Dim>(p.pos, j), p.density[j], p.material[j], field ? (*field)[j] : 0.0f, s);
   });
   return s;
@@ -47,23 +53,23 @@ ShepardSums<Dim> shepard(SlabWorker& w, const Vec3d& at, const FieldVector<float
 
 }  // namespace
 
-double sample_pressure(SlabWorker& w, const Vec3d& at) {
+double sample_pressure(SlabWorker& w, const Vec3d& at, int phase) {
   if (!owns_point(w, at)) return kNaN;
   double out = 0.0;
   dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
-    const auto s = shepard<Kernel, Dim>(w, at, &w.particles().pressure);
+    const auto s = shepard<Kernel, Dim>(w, at, &w.particles().pressure, phase);
     out = s.weight > 0 ? s.value / s.weight : 0.0;
   });
   return out;
 }
 
-std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at) {
+std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at, int phase) {
   const int d = w.lattice().dim;
   std::vector<double> v(d, kNaN);
   if (!owns_point(w, at)) return v;
   dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
     for (int k = 0; k < Dim; ++k) {
-      const auto s = shepard<Kernel, Dim>(w, at, &w.particles().vel[k]);
+      const auto s = shepard<Kernel, Dim>(w, at, &w.particles().vel[k], phase);
       v[k] = s.weight > 0 ? s.value / s.weight : 0.0;
     }
   });
@@ -91,7 +97,7 @@ double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c, std::
   dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
     auto fill = [&](int k) {
       at[v] = z(k);
-      return shepard<Kernel, Dim>(w, at, nullptr).weight;
+      return shepard<Kernel, Dim>(w, at, nullptr, gauge.phase).weight;
     };
     // Sample k is wet, k + 1 dry: where the straight line between them crosses 0.5.
     auto crossing = [&](int k, double wet, double dry) { return z(k) + (wet - 0.5) / (wet - dry) * (z(k + 1) - z(k)) - floor; };
@@ -144,6 +150,82 @@ Vec3d followed_position(const ProbeSpec& gauge, const Case& c, const MotionSet& 
   return out;
 }
 
+std::vector<Vec3d> sensor_points(const ProbeSpec& sensor, int dim, double dp) {
+  const Vec3d& c = sensor.position;
+  const Vec3d& n = sensor.normal;
+  if (!(sensor.diameter > 0)) return {c};
+  const double D = sensor.diameter;
+  const int m = std::max(1, static_cast<int>(std::ceil(D / (dp / 4))));
+  auto offset = [&](int i) { return ((i + 0.5) / m - 0.5) * D; };
+  std::vector<Vec3d> out;
+  if (dim == 2) {
+    const Vec3d t{-n[1], n[0], 0};  // along the face
+    for (int i = 0; i < m; ++i) out.push_back(Vec3d{c[0] + offset(i) * t[0], c[1] + offset(i) * t[1], 0});
+    return out;
+  }
+  // Two unit tangents: e x n with e the axis least aligned with n, then n x t1.
+  int e = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::fabs(n[k]) < std::fabs(n[e])) e = k;
+  Vec3d a{0, 0, 0};
+  a[e] = 1;
+  Vec3d t1{a[1] * n[2] - a[2] * n[1], a[2] * n[0] - a[0] * n[2], a[0] * n[1] - a[1] * n[0]};
+  const double l = std::sqrt(t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]);
+  for (auto& x : t1) x /= l;
+  const Vec3d t2{n[1] * t1[2] - n[2] * t1[1], n[2] * t1[0] - n[0] * t1[2], n[0] * t1[1] - n[1] * t1[0]};
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) {
+      const double u = offset(i), v = offset(j);
+      if (u * u + v * v > 0.25 * D * D) continue;
+      out.push_back(Vec3d{c[0] + u * t1[0] + v * t2[0], c[1] + u * t1[1] + v * t2[1], c[2] + u * t1[2] + v * t2[2]});
+    }
+  return out;
+}
+
+std::vector<double> sample_wall_pressure(SlabWorker& w, const std::vector<Vec3d>& points) {
+  std::vector<double> out(points.size(), kNaN);
+  ParticleStore& p = w.particles();
+  const Lattice& L = w.lattice();
+  const PhysicsParams& P = w.params();
+  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      if (!owns_point(w, points[k])) continue;
+      Vec<Dim> x;
+      int g[3] = {0, 0, 0};
+      for (int a = 0; a < Dim; ++a) {
+        x[a] = static_cast<float>(points[k][a]);
+        g[a] = L.cell_of(x[a], a);
+      }
+      WallSums<Dim> sums;
+      w.grid().view().for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
+        for (std::uint32_t j = b; j < e; ++j)
+          if (P.is_fluid(p.material[j])) accumulate_wall_pair<Kernel, Dim>(P, x, load_state<Dim>(p, j), sums);
+      });
+      out[k] = sums.w > 0.0f ? adami_pressure(P, sums, zero_vec<Dim>()) : 0.0;
+    }
+  });
+  return out;
+}
+
+double MovingAverage::add(double t, double v) {
+  samples_.emplace_back(t, v);
+  if (!(window_ > 0) || samples_.size() == 1) return v;
+  const double start = t - window_;
+  // Keep one sample at or before the window's start.
+  while (samples_.size() > 2 && samples_[1].first <= start) samples_.pop_front();
+  double integral = 0.0, from = std::max(start, samples_.front().first);
+  for (std::size_t k = 1; k < samples_.size(); ++k) {
+    const auto [t0, v0] = samples_[k - 1];
+    const auto [t1, v1] = samples_[k];
+    if (t1 <= from) continue;
+    const double a = std::max(t0, from);
+    const auto at = [&](double s) { return t1 > t0 ? v0 + (v1 - v0) * (s - t0) / (t1 - t0) : v1; };
+    integral += 0.5 * (at(a) + v1) * (t1 - a);
+  }
+  const double span = t - from;
+  return span > 0 ? integral / span : v;
+}
+
 double front_level(const ProbeSpec& front, const Case& c) {
   if (!(front.min_depth > 0)) return -std::numeric_limits<double>::infinity();
   return c.tank_origin[c.dim - 1] + front.min_depth - 0.5 * c.dp;
@@ -158,11 +240,36 @@ double local_front(SlabWorker& w, int axis, double lowest) {
   return front;
 }
 
+std::vector<double> sample_centroid(SlabWorker& w, int phase) {
+  // Exact integer sums of fixed-point coordinates and velocities (2^-28 m, 2^-28 m/s: below a
+  // float's resolution at 1 m), so that the centroid does not depend on the split or the order.
+  constexpr double kScale = 268435456.0;  // 2^28
+  const ParticleStore& p = w.particles();
+  const int d = p.dim();
+  std::vector<std::int64_t> sums(1 + 2 * d, 0);
+  for (std::size_t i = 0; i < p.owned(); ++i) {
+    if (!in_phase(w.params(), p.material[i], phase)) continue;
+    ++sums[0];
+    for (int k = 0; k < d; ++k) {
+      sums[1 + k] += std::llround(p.pos[k][i] * kScale);
+      sums[1 + d + k] += std::llround(p.vel[k][i] * kScale);
+    }
+  }
+  w.transport().sum(sums);
+  std::vector<double> row(2 * d, kNaN);
+  if (sums[0] > 0)
+    for (int k = 0; k < 2 * d; ++k) row[k] = static_cast<double>(sums[1 + k]) / kScale / static_cast<double>(sums[0]);
+  return row;
+}
+
 namespace {
 
 // Pressure force of the fluid on every owned particle of material `kind` (a solid), as
-// (id, fx, fy, fz) records.
-Bytes solid_force_records(SlabWorker& w, std::uint8_t kind) {
+// (id, fx, fy, fz) records. For one face of its box (face >= 0): the component along the face's axis
+// of the force on the particles less than a kernel support below that face (the fluid beyond the
+// face is all they can reach through it); a particle near an edge gives each of its faces that
+// face's component.
+Bytes solid_force_records(SlabWorker& w, std::uint8_t kind, const Box& box, int face) {
   Bytes out;
   ParticleStore& p = w.particles();
   const CellGrid& grid = w.grid();
@@ -173,6 +280,10 @@ Bytes solid_force_records(SlabWorker& w, std::uint8_t kind) {
       grid.global_coords(c, g);
       for (std::uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
         if (p.material[i] != kind) continue;
+        if (face >= 0) {
+          const double x[3] = {p.pos[0][i], p.pos[1][i], Dim == 3 ? p.pos[2][i] : 0.0};
+          if (face_depth(box, x, face) >= 2.0 * w.params().h) continue;
+        }
         const auto wi = load_state<Dim>(p, i);
         Vec<Dim> f = zero_vec<Dim>();
         view.for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
@@ -181,11 +292,26 @@ Bytes solid_force_records(SlabWorker& w, std::uint8_t kind) {
         });
         float rec[4] = {0, 0, 0, 0};
         std::memcpy(&rec[0], &p.id[i], sizeof(float));
-        for (int k = 0; k < Dim; ++k) rec[1 + k] = f[k];
+        for (int k = 0; k < Dim; ++k) rec[1 + k] = face < 0 || k == face / 2 ? f[k] : 0.0f;
         out.insert(out.end(), reinterpret_cast<char*>(rec), reinterpret_cast<char*>(rec) + sizeof rec);
       }
     }
   });
+  return out;
+}
+
+// Values that each belong to one slab (NaN elsewhere), gathered: element k from the slab that has a
+// number there (0 if none does).
+std::vector<double> owners_values(SlabTransport& t, const std::vector<double>& mine) {
+  Bytes b(mine.size() * sizeof(double));
+  std::memcpy(b.data(), mine.data(), b.size());
+  std::vector<double> out(mine.size(), 0.0);
+  for (auto& part : t.allgather(b)) {
+    std::vector<double> theirs(mine.size(), kNaN);
+    std::memcpy(theirs.data(), part.data(), std::min(part.size(), b.size()));
+    for (std::size_t k = 0; k < out.size(); ++k)
+      if (!std::isnan(theirs[k])) out[k] = theirs[k];
+  }
   return out;
 }
 
@@ -220,10 +346,19 @@ std::vector<std::string> probe_columns(const ProbeSpec& p, int dim) {
   };
   switch (p.type) {
     case ProbeType::Pressure: columns.push_back("pressure[Pa]"); break;
+    case ProbeType::WallPressure:
+      // The sensor's reading first (averaged when it has a window), then the instantaneous value.
+      columns.push_back("pressure[Pa]");
+      if (p.window > 0) columns.push_back("pressure_instant[Pa]");
+      break;
     case ProbeType::Velocity: components("v", "m/s"); break;
     case ProbeType::Height: columns.push_back("height[m]"); break;
     case ProbeType::Force: components("f", dim == 2 ? "N/m" : "N"); break;  // 2D: per metre of depth
     case ProbeType::Front: columns.push_back("front[m]"); break;
+    case ProbeType::Centroid:
+      for (int k = 0; k < dim; ++k) columns.push_back(std::string(axes[k]) + "[m]");
+      components("v", "m/s");
+      break;
   }
   return columns;
 }
@@ -235,13 +370,20 @@ std::string probe_description(const ProbeSpec& p, int dim) {
     return s + ") m";
   };
   const char* axes[3] = {"x", "y", "z"};
+  const std::string of_phase = p.phase >= 0 ? " of " + p.phase_name : "";
   switch (p.type) {
-    case ProbeType::Pressure: return "pressure at " + point(dim);
-    case ProbeType::Velocity: return "velocity at " + point(dim);
+    case ProbeType::Pressure: return "pressure" + of_phase + " at " + point(dim);
+    case ProbeType::WallPressure:
+      return fmt::format("wall pressure on a sensor of diameter {:g} mm", 1e3 * p.diameter) + " at " + point(dim) +
+             (p.window > 0 ? fmt::format(", {:g} ms mean", 1e3 * p.window) : "");
+    case ProbeType::Velocity: return "velocity" + of_phase + " at " + point(dim);
     case ProbeType::Height:
-      return (dim == 2 ? fmt::format("water height at x = {:g} m", p.position[0]) : "water height at (x, y) = " + point(2)) +
+      return (p.phase >= 0 ? p.phase_name : std::string("water")) +
+             (dim == 2 ? fmt::format(" height at x = {:g} m", p.position[0]) : " height at (x, y) = " + point(2)) +
              (p.connected ? " (connected column)" : "");
-    case ProbeType::Force: return "pressure force on solid '" + p.solid + "'";
+    case ProbeType::Centroid: return "centroid and mean velocity of " + p.phase_name;
+    case ProbeType::Force:
+      return "pressure force on solid '" + p.solid + "'" + (p.face >= 0 ? fmt::format(" face {}{}", p.face % 2 ? "+" : "-", axes[p.face / 2]) : "");
     case ProbeType::Front:
       return fmt::format("front along {}", axes[p.axis]) + (p.min_depth > 0 ? fmt::format(" (water at least {:g} m deep)", p.min_depth) : "");
   }
@@ -275,17 +417,51 @@ std::string rows_up_to(const std::filesystem::path& path, const std::string& hea
   return kept;
 }
 
+// The (time, instantaneous pressure) rows of a sensor's CSV up to step `until`, for a restart to
+// refill the moving average. A file that cannot be read gives none (the average then restarts).
+std::vector<std::pair<double, double>> instant_history(const std::filesystem::path& csv, std::int64_t until) {
+  std::vector<std::pair<double, double>> rows;
+  std::ifstream in(csv);
+  std::string line;
+  if (!std::getline(in, line)) return rows;
+  int column = -1, k = 0;
+  for (std::size_t b = 0; b <= line.size(); ++k) {
+    const std::size_t e = std::min(line.find(',', b), line.size());
+    if (line.compare(b, e - b, "pressure_instant[Pa]") == 0) column = k;
+    b = e + 1;
+  }
+  if (column < 0) return rows;
+  while (std::getline(in, line)) {
+    std::vector<double> v;
+    for (std::size_t b = 0; b <= line.size();) {
+      const std::size_t e = std::min(line.find(',', b), line.size());
+      v.push_back(std::strtod(line.c_str() + b, nullptr));
+      b = e + 1;
+    }
+    if (static_cast<int>(v.size()) > column && v[1] <= static_cast<double>(until)) rows.emplace_back(v[0], v[column]);
+  }
+  return rows;
+}
+
 }  // namespace
 
 ProbeSet::ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, std::optional<std::int64_t> resume_step)
-    : case_(c), probes_(c.probes) {
+    : case_(c) {
+  for (auto& spec : c.probes) {
+    Probe p{spec, {}, MovingAverage(spec.window)};
+    if (spec.type == ProbeType::WallPressure) p.points = sensor_points(spec, c.dim, c.dp);
+    probes_.push_back(std::move(p));
+  }
   if (!writer || probes_.empty()) return;
   const auto dir = out_dir / "probes";
   create_output_folder(dir);
   for (auto& p : probes_) {
     // Probe names are plain file names (checked by the case loader).
-    const auto path = dir / (p.name + ".csv");
-    const std::string header = probe_header(p, c.dim) + "\n";
+    const auto path = dir / (p.spec.name + ".csv");
+    // A sensor with a window refills its moving average from the rows up to the restart step.
+    if (resume_step && p.spec.window > 0)
+      for (auto [t, v] : instant_history(path, *resume_step)) p.average.add(t, v);
+    const std::string header = probe_header(p.spec, c.dim) + "\n";
     write_file_atomically(path, resume_step ? rows_up_to(path, header, *resume_step) : header);
     files_.emplace_back(path, false);
   }
@@ -296,7 +472,8 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
   // Near a slab face a probe sums over ghosts: they must hold the same values as their owners.
   w.refresh_ghosts();
   SlabTransport& t = w.transport();
-  for (auto& p : probes_) {
+  for (auto& probe : probes_) {
+    const ProbeSpec& p = probe.spec;
     std::vector<double> row;
     switch (p.type) {
       case ProbeType::Pressure:
@@ -310,27 +487,33 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
           at.position = followed_position(p, case_, *motions, time);
           if (p.type == ProbeType::Height) floor = at.position[case_.dim - 1];
         }
-        if (p.type == ProbeType::Velocity) mine = sample_velocity(w, at.position);
-        else mine.push_back(p.type == ProbeType::Pressure ? sample_pressure(w, at.position) : sample_height(w, at, case_, floor));
-        Bytes b(mine.size() * sizeof(double));
-        std::memcpy(b.data(), mine.data(), b.size());
-        row.assign(mine.size(), 0.0);
-        for (auto& part : t.allgather(b)) {
-          std::vector<double> theirs(mine.size());
-          std::memcpy(theirs.data(), part.data(), std::min(part.size(), b.size()));
-          if (!theirs.empty() && !std::isnan(theirs[0])) row = theirs;
-        }
+        if (p.type == ProbeType::Velocity) mine = sample_velocity(w, at.position, p.phase);
+        else
+          mine.push_back(p.type == ProbeType::Pressure ? sample_pressure(w, at.position, p.phase) : sample_height(w, at, case_, floor));
+        row = owners_values(t, mine);
+        break;
+      }
+      case ProbeType::WallPressure: {
+        // Each point of the disc has one owner; the mean is taken over the points in their order.
+        const std::vector<double> at = owners_values(t, sample_wall_pressure(w, probe.points));
+        double sum = 0.0;
+        for (double v : at) sum += v;
+        const double instant = sum / static_cast<double>(at.size());
+        if (p.window > 0) row = {probe.average.add(time, instant), instant};
+        else row = {instant};
         break;
       }
       case ProbeType::Force: {
         std::uint8_t kind = w.params().materials.solid(0);
+        Box box;
         for (std::size_t k = 0; k < case_.solids.size(); ++k)
-          if (case_.solids[k].name == p.solid) kind = w.params().materials.solid(static_cast<int>(k));
-        row = sum_by_id(t.allgather(solid_force_records(w, kind)));
+          if (case_.solids[k].name == p.solid) kind = w.params().materials.solid(static_cast<int>(k)), box = case_.solids[k].box;
+        row = sum_by_id(t.allgather(solid_force_records(w, kind, box, p.face)));
         row.resize(case_.dim);
         break;
       }
       case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis, front_level(p, case_)))); break;
+      case ProbeType::Centroid: row = sample_centroid(w, p.phase); break;
     }
     rows.push_back(row);
   }

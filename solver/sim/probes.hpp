@@ -1,12 +1,15 @@
 #pragma once
 // Probes written as CSV time series (probes/<name>.csv): pressure at a point (Shepard average of the
-// fluid), water height at a gauge, total pressure force on a named solid, surge-front position.
-// Sampling is collective; every value is independent of the split (owner-computed or exact).
+// fluid, or of one phase), wall pressure on a sensor disc, water height at a gauge, pressure force
+// on a named solid or one of its faces, surge-front position, centroid and mean velocity of a
+// phase. Sampling is collective; every value is independent of the split (owner-computed or
+// exact). What each probe measures: docs/cases.md, "probes".
 // The same code samples a run's saved snapshots and checkpoints afterwards (spate post).
 //
 // CSV format (docs/cases.md, scripts parse it): a header line `time[s],step,<column>[<unit>],...`,
 // then one row per sample; the first column is the simulated time in seconds.
 #include <cstdint>
+#include <deque>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -20,6 +23,22 @@
 
 namespace spate {
 
+// The trailing moving average of a sampled signal over a window of time, as the (piecewise-linear)
+// signal's mean over [t - window, t]; while fewer than `window` seconds have been sampled, the mean
+// over what has been. A sensor averaging over its window this way reports a peak about half a
+// window late and lower than the instantaneous one, like a laboratory sensor sampled or filtered
+// at that rate.
+class MovingAverage {
+ public:
+  explicit MovingAverage(double window = 0.0) : window_(window) {}
+  // Adds the sample (t, v) (t after every earlier sample) and returns the mean up to t.
+  double add(double t, double v);
+
+ private:
+  double window_;
+  std::deque<std::pair<double, double>> samples_;
+};
+
 class ProbeSet {
  public:
   // `writer`: this slab writes the files. `resume_step`: continue existing files after a restart
@@ -32,8 +51,13 @@ class ProbeSet {
   bool empty() const { return probes_.empty(); }
 
  private:
+  struct Probe {
+    ProbeSpec spec;
+    std::vector<Vec3d> points;  // wall_pressure: where the disc samples the fluid
+    MovingAverage average;      // wall_pressure with a window
+  };
   const Case& case_;
-  std::vector<ProbeSpec> probes_;
+  std::vector<Probe> probes_;
   std::vector<AppendFile> files_;
 };
 
@@ -44,16 +68,20 @@ std::string probe_header(const ProbeSpec& p, int dim);
 // What and where, for plot titles: "pressure at (0.89, 0.305, 0.02) m", "force on solid 'column'".
 std::string probe_description(const ProbeSpec& p, int dim);
 
-// Single probe evaluations on one slab (exposed for tests). NaN when this slab does not own the point.
-double sample_pressure(SlabWorker& w, const Vec3d& at);
+// Single probe evaluations on one slab (exposed for tests). NaN when this slab does not own the
+// point. `phase`: only that fluid's particles count (-1: every fluid).
+double sample_pressure(SlabWorker& w, const Vec3d& at, int phase = -1);
 // Shepard-averaged fluid velocity (dim components), NaN components when not owned.
-std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at);
-// Water height above the tank floor at a gauge (the probe's position and `connected`); `floor`:
-// where the floor is under a gauge that moves with the tank (default: the tank's floor).
+std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at, int phase = -1);
+// Water height above the tank floor at a gauge (the probe's position, `connected` and `phase`);
+// `floor`: where the floor is under a gauge that moves with the tank (default: the tank's floor).
 double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c, std::optional<double> floor = std::nullopt);
 // Where a probe that follows motion `gauge.follow` is at `time`: its point (for a height gauge, its
 // point on the floor, vertical coordinate included) carried by the body's rigid motion.
 Vec3d followed_position(const ProbeSpec& gauge, const Case& c, const MotionSet& motions, double time);
+// Collective: the centroid (dim coordinates) and mean velocity (dim components) of the particles of
+// fluid `phase` on all slabs (equal masses within a phase); NaN when it has none.
+std::vector<double> sample_centroid(SlabWorker& w, int phase);
 // Furthest fluid particle along `axis` whose vertical coordinate is at least `lowest`; -infinity
 // when there is none on this slab.
 double local_front(SlabWorker& w, int axis, double lowest = -std::numeric_limits<double>::infinity());
@@ -61,5 +89,13 @@ double local_front(SlabWorker& w, int axis, double lowest = -std::numeric_limits
 // water at least min_depth deep has a particle centre at floor + min_depth - dp/2 or above
 // (-infinity for min_depth 0: every fluid particle).
 double front_level(const ProbeSpec& front, const Case& c);
+// Where a wall-pressure sensor samples the fluid: points on its disc (in 2D a segment of length
+// `diameter` along the face) on a square lattice of spacing at most dp/4, the centre alone for a
+// point sensor; the same order on every slab.
+std::vector<Vec3d> sensor_points(const ProbeSpec& sensor, int dim, double dp);
+// The wall pressure at each of `points` that this slab owns (NaN at the others): the Adami pressure
+// the fluid within reach implies at that point of the wall (physics/wall_boundary.hpp), not clipped;
+// 0 where no fluid is within reach (a dry part of the sensor).
+std::vector<double> sample_wall_pressure(SlabWorker& w, const std::vector<Vec3d>& points);
 
 }  // namespace spate

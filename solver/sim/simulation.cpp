@@ -536,7 +536,8 @@ class Worker {
     if (first != s_.workers.end() && *first == &w_) {
       std::vector<SlabView> views;
       for (std::size_t k = 0; k < s_.workers.size(); ++k)
-        if (s_.workers[k]) views.push_back(slab_view(s_.workers[k]->particles(), s_.workers_first_slab + static_cast<int>(k), t_.slab_count()));
+        if (s_.workers[k]) views.push_back(slab_view(s_.workers[k]->particles(), s_.workers_first_slab + static_cast<int>(k), t_.slab_count(),
+                                                    static_cast<int>(s_.c.fluids.size())));
       sink->execute(step, time, views);
     }
     t_.barrier();
@@ -556,7 +557,7 @@ class Worker {
   void write_snapshot(PvdIndex& pvd, double time, std::int64_t step, const std::string& folder, bool index = true) {
     const auto dir = s_.opts.out_dir / folder;
     const std::string piece = step_name(step) + "/slab_" + std::to_string(t_.slab()) + ".vtp";
-    write_vtp_piece(dir / piece, w_.particles(), t_.slab());
+    write_vtp_piece(dir / piece, w_.particles(), t_.slab(), static_cast<int>(s_.c.fluids.size()));
     t_.barrier();
     if (t_.slab() != 0) return;
     std::vector<std::string> pieces;

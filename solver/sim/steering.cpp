@@ -1,5 +1,7 @@
 #include "steering.hpp"
 
+#include "../io/input_file.hpp"
+
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -158,18 +160,8 @@ std::vector<SteeringChange> parse_log(const std::string& text, const std::string
 }
 
 std::vector<SteeringChange> read_log(const std::string& path, int dim) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw std::runtime_error(path + ": cannot read the steering log (it is a folder)");
   // A steering log holds a line per change: megabytes of it are not one.
-  constexpr std::uintmax_t kLargest = 16u << 20;
-  if (std::filesystem::is_regular_file(path, ec) && std::filesystem::file_size(path, ec) > kLargest)
-    throw std::runtime_error(path + ": too large for a steering log (more than 16 MiB)");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot read the steering log (" + std::strerror(errno) + ")");
-  std::stringstream s;
-  s << in.rdbuf();
-  if (in.bad()) throw std::runtime_error(path + ": cannot read the steering log");
-  const std::string text = s.str();
+  const std::string text = read_input_text(path, "the steering log", std::size_t{16} << 20);
   if (text.find('\0') != std::string::npos) throw std::runtime_error(path + ": not a steering log (binary data)");
   return parse_log(text, path, dim);
 }

@@ -15,6 +15,7 @@ import re
 import shutil
 import subprocess
 import sys
+import time
 
 TESTS = {}
 
@@ -73,8 +74,22 @@ class Env:
         return self.write_case(name, text.replace(old, new, 1))
 
 
-def expect_bad_input(env, argv, *needles, command="run"):
-    """Runs `spate COMMAND argv --out OUT`: exit 2, every needle in stderr, OUT never created."""
+def check_refused(out, stderr):
+    """A run refused as bad input (exit 2) leaves its output folder holding only a summary.json that
+    says so, with the message it printed (docs/cli.md); nothing else is written."""
+    check(os.path.isdir(out) and sorted(os.listdir(out)) == ["summary.json"],
+          f"{out}: a refused run must leave only summary.json, found {sorted(os.listdir(out)) if os.path.isdir(out) else 'nothing'}")
+    with open(os.path.join(out, "summary.json")) as f:
+        s = json.load(f)
+    check(s["exit_status"] == "bad_input" and s["exit_code"] == 2, f"summary.json: {s['exit_status']} {s['exit_code']}")
+    check(s["message"] and s["message"] in stderr, f"summary.json's message is not the one printed: {s['message']}")
+    shutil.rmtree(out)
+
+
+def expect_bad_input(env, argv, *needles, command="run", parsed=True):
+    """Runs `spate COMMAND argv --out OUT`: exit 2, every needle in stderr; OUT holds only the
+    summary.json of the refusal (check_refused), or, for a command line that does not parse
+    (`parsed=False`), does not exist."""
     out = env.path("out_must_not_exist")
     full = [command, *argv] + (["--out", out, "--quiet"] if command == "run" else [])
     p = env.run(*full)
@@ -86,7 +101,9 @@ def expect_bad_input(env, argv, *needles, command="run"):
             check(needle.search(message), f"message does not match /{needle.pattern}/: {message.strip()}")
         else:
             check(needle in message, f"'{needle}' not in the message: {message.strip()}")
-    check(not os.path.exists(out), f"{out} was created by a run with bad input")
+    if command == "run" and parsed:
+        check_refused(out, message)
+    check(not os.path.exists(out), f"{out} was created by a {command} with bad input")
     check(sorted(os.listdir(env.work)) == sorted(f for f in os.listdir(env.work) if f.endswith(".yaml")),
           f"files written into the working folder: {os.listdir(env.work)}")
     return message
@@ -108,7 +125,7 @@ def bad_case_is_a_folder(env):
     p = env.run("run", folder, "--out", env.path("out_must_not_exist"))
     check(p.returncode == 2, f"exit {p.returncode}")
     check(folder in p.stderr and "cannot read" in p.stderr, "the message does not name the path and the reason")
-    check(not os.path.exists(env.path("out_must_not_exist")), "output folder created")
+    check_refused(env.path("out_must_not_exist"), p.stderr)
 
 
 @test
@@ -232,8 +249,8 @@ def bad_cli_options(env):
     expect_bad_input(env, [env.tiny, "--threads", "-2"], "--threads -2", ">= 0")
     expect_bad_input(env, [env.tiny, "--checkpoint-every", "-5"], "--checkpoint-every -5", ">= 0")
     expect_bad_input(env, [env.tiny, "--devices", "50"], "--devices 50", "at most")
-    expect_bad_input(env, [env.tiny, "--steps", "many"], "spate: error:", "--steps")
-    expect_bad_input(env, [env.tiny, "--no-such-option"], "spate: error:", "--no-such-option")
+    expect_bad_input(env, [env.tiny, "--steps", "many"], "spate: error:", "--steps", parsed=False)
+    expect_bad_input(env, [env.tiny, "--no-such-option"], "spate: error:", "--no-such-option", parsed=False)
     expect_bad_input(env, [env.tiny, "--devices", "0"], "--devices 0", "at least 1", command="info")
     expect_bad_input(env, [env.tiny, "--restart", env.path("missing.h5")], "missing.h5")
     p = env.run("frobnicate")
@@ -379,7 +396,7 @@ def compare_restart_bit_identical(env):
     other = os.path.join(env.shipped, "dam_break_2d.yaml")
     p = env.run("run", other, "--restart", half, "--steps", "1", "--out", env.path("wrong"), "--quiet")
     check(p.returncode == 2 and "checkpoint holds" in p.stderr, f"restart with another case: exit {p.returncode}")
-    check(not os.path.exists(env.path("wrong")), "output folder created for a bad restart")
+    check_refused(env.path("wrong"), p.stderr)
 
 
 # ---- instability --------------------------------------------------------------------------------
@@ -435,8 +452,10 @@ def unstable_kinds(env):
         check(any(n.endswith(".vtm") for n in os.listdir(os.path.join(out, "diagnostic"))), "no diagnostic snapshot")
 
 
-def main(tests=TESTS):
-    """The command line of a test driver: this file's tests, or another driver's (post_tests.py)."""
+def main(tests=TESTS, env_class=None):
+    """The command line of a test driver: this file's tests, or another driver's (post_tests.py,
+    robustness_tests.py with its own Env)."""
+    env_class = env_class or Env
     ap = argparse.ArgumentParser()
     ap.add_argument("--spate", required=True)
     ap.add_argument("--cases", required=True, help="tests/cases")
@@ -453,11 +472,12 @@ def main(tests=TESTS):
         if name not in tests:
             print(f"unknown test {name}")
             return 2
+        begin = time.monotonic()
         try:
-            tests[name](Env(args, name))
-            print(f"PASS {name}")
-        except (Failure, subprocess.TimeoutExpired, json.JSONDecodeError) as e:
-            print(f"FAIL {name}: {e}")
+            tests[name](env_class(args, name))
+            print(f"PASS {name} ({time.monotonic() - begin:.1f} s)")
+        except (Failure, subprocess.TimeoutExpired, json.JSONDecodeError, FileNotFoundError, KeyError) as e:
+            print(f"FAIL {name}: {type(e).__name__}: {e}")
             failed.append(name)
     return 1 if failed else 0
 

@@ -16,7 +16,9 @@ code=$?
 cat "$out/err"
 [ "$code" -eq 2 ] || fail "run --backend cuda without a device: exit $code, expected 2"
 grep -q "no CUDA device" "$out/err" || fail "no 'no CUDA device' in the message"
-[ ! -e "$out/run/summary.json" ] || fail "a run without a device wrote outputs"
+# A refused run writes nothing but the summary.json of its refusal (docs/cli.md).
+[ "$(ls "$out/run")" = "summary.json" ] || fail "a run without a device wrote outputs: $(ls "$out/run")"
+grep -q '"exit_status": "bad_input"' "$out/run/summary.json" || fail "its summary.json does not say bad_input"
 
 "$spate" info "$case_file" --backend cuda --devices 2 | tee "$out/info" || fail "info --backend cuda failed"
 grep -q "device memory" "$out/info" || fail "info prints no device memory"

@@ -1,6 +1,8 @@
 #pragma once
 // Helpers for integration tests that drive the solver library directly.
+#include <cstdio>
 #include <cstring>
+#include <functional>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -14,8 +16,14 @@ namespace spate::test {
 
 inline std::string case_path(const std::string& name) { return test::source_dir() + "/cases/" + name; }
 
+// A fresh folder for a test's output, named after the test and the checkout it was built from, so
+// that two checkouts running the same test at once (engineers' worktrees, a merge being tested) do
+// not write into each other's folders.
 inline std::filesystem::path scratch(const std::string& name) {
-  auto p = std::filesystem::temp_directory_path() / ("spate-test-" + name);
+  const auto checkout = std::hash<std::string>{}(test::source_dir()) % 0x100000000ull;
+  char tag[16];
+  std::snprintf(tag, sizeof tag, "%08llx", static_cast<unsigned long long>(checkout));
+  auto p = std::filesystem::temp_directory_path() / ("spate-test-" + std::string(tag) + "-" + name);
   std::filesystem::remove_all(p);
   return p;
 }

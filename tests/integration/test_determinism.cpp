@@ -1,6 +1,8 @@
 // Bitwise reproducibility: restart and thread count must not change a single bit.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "run_helpers.hpp"
 
 namespace spate {
@@ -22,6 +24,30 @@ TEST(Restart, ContinuesBitIdentically) {
   std::string why;
   EXPECT_TRUE(test::identical_checkpoints(a.last_checkpoint, d.last_checkpoint, &why)) << why;
   EXPECT_EQ(a.simulated_time, d.simulated_time);
+}
+
+// A wall sensor's moving average carries over a restart in the same output folder: the sensor
+// re-reads its last window of samples from its file, so the file is the one an uninterrupted run
+// writes (to the 9 digits the file keeps of the samples it re-reads).
+TEST(Restart, SensorAverageContinues) {
+  const Case c = load_case(test::case_path("dam_break_2d.yaml"),
+                           {"output.interval=0", "output.probe_interval=0",
+                            "probes=[{name: wall, type: wall_pressure, position: [0, 0.01], diameter: 0.004, window: 0.001}]"});
+  const auto straight = test::scratch("sensor-straight"), resumed = test::scratch("sensor-resumed");
+  RunOptions o;
+  o.steps = 120;
+  test::run_case(c, straight, o);
+  o.steps = 60;
+  const RunResult b = test::run_case(c, resumed, o);
+  o.restart = b.last_checkpoint;
+  test::run_case(c, resumed, o);
+  for (int col : {0, 2, 3}) {
+    const auto a = test::read_probe(straight / "probes" / "wall.csv", col);
+    const auto r = test::read_probe(resumed / "probes" / "wall.csv", col);
+    ASSERT_EQ(a.size(), 121u);
+    ASSERT_EQ(r.size(), a.size());
+    for (std::size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(a[k].second, r[k].second, 1e-7 * std::fabs(a[k].second)) << k;
+  }
 }
 
 // Checkpoints written before the field registry (format version 1, tests/fixtures/README.md) still

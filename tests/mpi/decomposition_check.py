@@ -281,10 +281,14 @@ def cmd_bad_input(args):
     garbage.write_text("not HDF5\n")
     tests.append(("garbage_restart", split, ["--restart", str(garbage)], str(garbage.name)))
     for name, sp, extra, needle in tests:
-        _, p = spate.run("bad_" + name, sp, ["--steps", "1", *extra], expect=2)
+        out, p = spate.run("bad_" + name, sp, ["--steps", "1", *extra], expect=2)
         if needle not in p.stderr:
             print(p.stderr)
             fail(f"{name}: the message does not mention '{needle}'")
+        # One summary.json (rank 0's) says so, and nothing else is written.
+        s = summary(out)
+        if s["exit_code"] != 2 or s["exit_status"] != "bad_input" or sorted(os.listdir(out)) != ["summary.json"]:
+            fail(f"{name}: {out} holds {sorted(os.listdir(out))}, summary {s['exit_status']} {s['exit_code']}")
         print(f"  {name}: exit 2: {p.stderr.strip().splitlines()[0]}")
     print("PASS: bad splits and restart files are refused with exit code 2")
 

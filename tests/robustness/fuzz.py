@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Fuzzing the real `spate` program with mutated case files and checkpoints. Every mutant must end
 with exit 0 (a mutant that is still valid) or 2 (bad input, one message): no signal, no timeout,
-no exit 4 (internal error), no HDF5 diagnostics. Runs take no step (--steps 0: generation, the
-halo, the first rates, outputs and the final checkpoint all run), so that no mutant can be
-legitimately unstable. Mutants that fail are kept in the work folder for reproduction.
+no exit 4 (internal error), no HDF5 diagnostics, and every run leaves a summary.json with its exit
+code. Runs take no step (--steps 0: generation, the halo, the first rates, outputs and the final
+checkpoint all run), so that no mutant can be legitimately unstable. Mutants that fail are kept in the work folder for reproduction.
 
     fuzz.py --spate build/bin/spate --cases tests/cases --shipped cases --work DIR [--cases-count N]
             [--checkpoints-count N] [--seed S] [--jobs J]
@@ -163,6 +163,21 @@ def verdict(code, stderr):
     return None
 
 
+def summary_verdict(argv, code):
+    """A run (its --out usable) leaves a summary.json with its exit code, refused or not."""
+    if argv[0] != "run" or code is None or code < 0:
+        return None
+    path = os.path.join(argv[argv.index("--out") + 1], "summary.json")
+    try:
+        with open(path) as f:
+            s = json.load(f)
+    except (OSError, ValueError) as e:
+        return f"no readable summary.json after exit {code}: {e}"
+    if s.get("exit_code") != code:
+        return f"summary.json says exit {s.get('exit_code')}, the process ended with {code}"
+    return None
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--spate", required=True)
@@ -226,6 +241,7 @@ def main():
         jobs.append((f"checkpoint_{k:03d}", folder, argv))
 
     begin = time.monotonic()
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     failures, codes = [], {}
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
         futures = {pool.submit(run, spate, argv, folder): (name, folder, argv) for name, folder, argv in jobs}
@@ -233,15 +249,19 @@ def main():
             name, folder, argv = futures[fut]
             code, out, err = fut.result()
             codes[code] = codes.get(code, 0) + 1
-            problem = verdict(code, err)
+            problem = verdict(code, err) or summary_verdict(argv, code)
             if problem:
                 failures.append(name)
                 print(f"FAIL {name}: {problem}\n  $ spate {' '.join(argv)}\n  " + "\n  ".join((out + err).strip().splitlines()[:10]))
             else:
                 shutil.rmtree(folder, ignore_errors=True)
     seconds = time.monotonic() - begin
-    print(f"{len(jobs)} mutants ({args.cases_count} case files, {args.checkpoints_count} checkpoints, seed {args.seed}) in {seconds:.0f} s;"
-          f" exit codes {dict(sorted(codes.items(), key=lambda kv: str(kv[0])))}")
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    # The CPU time of the spate processes: what the fuzz costs whatever else the machine is doing
+    # (the wall-clock time is about this over the jobs on an idle machine).
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    print(f"{len(jobs)} mutants ({args.cases_count} case files, {args.checkpoints_count} checkpoints, seed {args.seed}) in {seconds:.0f} s"
+          f" ({cpu:.0f} CPU-s of spate, {args.jobs} at a time); exit codes {dict(sorted(codes.items(), key=lambda kv: str(kv[0])))}")
     if failures:
         print(f"FAIL: {len(failures)} mutants: {', '.join(sorted(failures))} (kept in {work})")
         return 1

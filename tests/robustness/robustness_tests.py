@@ -9,7 +9,6 @@ crash, hang or end with exit 4.
     robustness_tests.py --spate build/bin/spate --cases tests/cases --shipped cases --work DIR NAME
     robustness_tests.py ... --list          prints the test names (CTest registers one per name)
 """
-import argparse
 import json
 import os
 import re
@@ -96,7 +95,8 @@ class Env(cli_tests.Env):
 
 
 def expect_bad(env, argv, *needles, command="run"):
-    """spate COMMAND argv: exit 2, every needle in the one-message stderr, no output folder."""
+    """spate COMMAND argv: exit 2, every needle in the one-message stderr; a run leaves only the
+    summary.json of the refusal in its output folder."""
     out = env.path("out_must_not_exist")
     full = [command, *argv] + (["--out", out, "--quiet"] if command == "run" else [])
     r = env.run(*full)
@@ -109,7 +109,8 @@ def expect_bad(env, argv, *needles, command="run"):
             check(n.search(message), f"message does not match /{n.pattern}/: {message}")
         else:
             check(n in message, f"'{n}' not in the message: {message}")
-    check(not os.path.exists(out), "an output folder was created for bad input")
+    if command == "run":
+        cli_tests.check_refused(out, message)  # only its summary.json
     return message
 
 
@@ -350,6 +351,15 @@ def steering_logs(env):
     folder = env.path("log_folder")
     os.makedirs(folder)
     expect_bad(env, [env.tiny, "--steering-log", folder], folder, "folder")
+    # Not files at all: a device that never ends, a FIFO nobody writes to (reads that never end).
+    fifo = env.path("log_fifo")
+    os.mkfifo(fifo)
+    for path in ("/dev/zero", fifo):
+        expect_bad(env, [env.tiny, "--steering-log", path], path, "not a regular file")
+    big = env.path("big.log")
+    with open(big, "w") as f:
+        f.truncate(17 << 20)
+    expect_bad(env, [env.tiny, "--steering-log", big], big, "too large")
     expect_bad(env, [env.tiny, "--steering-log", env.path("missing.log")], "missing.log", "cannot read")
     path = log("garbage.log", "# a comment\n3 0.001 viscosity 0.002\nthis is not a change\n")
     expect_bad(env, [env.tiny, "--steering-log", path], f"{path}:3", "not a step number")
@@ -378,6 +388,14 @@ def case_files(env):
     two = env.write("two_documents.yaml", env.tiny_text() + "---\nname: second\n")
     expect_bad(env, [two], two, "second YAML document")
     expect_bad(env, [two], two, "second YAML document", command="info")
+    # Case "files" that are not files: no read that never ends, no memory filled.
+    fifo = env.path("case_fifo.yaml")
+    os.mkfifo(fifo)
+    for path in ("/dev/zero", "/dev/urandom", fifo):
+        expect_bad(env, [path], path, "not a regular file", command="info")
+        expect_bad(env, [path], path, "not a regular file")
+    big = env.write("big.yaml", env.tiny_text() + "#" * (17 << 20) + "\n")
+    expect_bad(env, [big], big, "too large")
     for name in ["../escape", "/abs/path", "a/b", "..", ".hidden"]:
         expect_bad(env, [env.tiny, "--set", f"name={name}"], "'name'", name)
         expect_bad(env, [env.tiny, "--set", f"probes=[{{name: '{name}', type: front}}]"], "'probes[0].name'", name)
@@ -535,7 +553,7 @@ def memory_estimate(env):
     check(r.seconds < 30, f"spate info took {r.seconds:.1f} s at dp = 0.0002")
     r = env.run("run", column, "--set", "dp=0.0002", "--out", env.path("huge"), "--quiet", timeout=60)
     check(r.returncode == 2 and "memory" in r.stderr and "dp >=" in r.stderr, f"exit {r.returncode}: {r.stderr}")
-    check(not os.path.exists(env.path("huge")), "output folder created for a refused run")
+    cli_tests.check_refused(env.path("huge"), r.stderr)
     # An address-space limit that leaves about 160 MB (info --json reports what is left).
     limit = 6 << 30
     free = json.loads(env.run("info", env.tiny, "--json", limits={resource.RLIMIT_AS: limit}).stdout)["memory_available_bytes"]
@@ -633,32 +651,5 @@ def open_sides(env):
     check(summary(out)["exit_status"] == "unstable", "the summary says unstable")
 
 
-def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--spate", required=True)
-    ap.add_argument("--cases", required=True)
-    ap.add_argument("--shipped", required=True)
-    ap.add_argument("--work", required=True)
-    ap.add_argument("--list", action="store_true")
-    ap.add_argument("names", nargs="*")
-    args = ap.parse_args()
-    if args.list:
-        print("\n".join(TESTS))
-        return 0
-    failed = []
-    for name in args.names or list(TESTS):
-        if name not in TESTS:
-            print(f"unknown test {name}")
-            return 2
-        begin = time.monotonic()
-        try:
-            TESTS[name](Env(args, name))
-            print(f"PASS {name} ({time.monotonic() - begin:.1f} s)")
-        except (Failure, json.JSONDecodeError, FileNotFoundError, KeyError) as e:
-            print(f"FAIL {name}: {type(e).__name__}: {e}")
-            failed.append(name)
-    return 1 if failed else 0
-
-
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(cli_tests.main(TESTS, Env))

@@ -110,6 +110,8 @@ TEST(CaseLoader, MinimalCaseGetsDefaults) {
   EXPECT_DOUBLE_EQ(c.cfl, 0.2);
   EXPECT_EQ(c.density_mode, DensityMode::Continuity);
   EXPECT_EQ(c.diffusion, DensityDiffusion::Fourtakas);
+  EXPECT_EQ(c.flux, MomentumFlux::Central);
+  EXPECT_TRUE(c.tension);
   EXPECT_EQ(c.wall_layers, 3);
   EXPECT_TRUE(c.open_top);
   EXPECT_EQ(c.balance_every, 100);
@@ -123,6 +125,20 @@ TEST(CaseLoader, MinimalCaseGetsDefaults) {
   EXPECT_FLOAT_EQ(P.support2, 4.0f * 0.013f * 0.013f);
   EXPECT_FLOAT_EQ(P.materials.fluid[0].mass, 1000.0f * 0.01f * 0.01f);
   EXPECT_FLOAT_EQ(P.materials.fluid[0].tait_b, P.materials.fluid[0].c0 * P.materials.fluid[0].c0 * 1000.0f / 7.0f);
+}
+
+// The impact options of issue 11 (docs/physics.md, "Impact pressures").
+TEST(CaseLoader, RiemannAndTensionKeysAreRead) {
+  const Case c = parse_case(kMinimal2D, "tiny.yaml",
+                            {"density.diffusion=riemann", "momentum.flux=riemann", "momentum.riemann_limiter=2", "fluid.tension=false"});
+  EXPECT_EQ(c.diffusion, DensityDiffusion::Riemann);
+  EXPECT_EQ(c.flux, MomentumFlux::Riemann);
+  EXPECT_DOUBLE_EQ(c.riemann_limiter, 2.0);
+  EXPECT_FALSE(c.tension);
+  const PhysicsParams P = physics_params(c);
+  EXPECT_EQ(P.flux, MomentumFlux::Riemann);
+  EXPECT_FLOAT_EQ(P.riemann_limiter, 2.0f);
+  EXPECT_FALSE(P.tension);
 }
 
 TEST(CaseLoader, EveryKeyIsRead) {
@@ -191,8 +207,34 @@ TEST(CaseLoader, SetAutoRestoresAdaptiveValues) {
   EXPECT_FALSE(c.fluids[0].sound_speed.has_value());
 }
 
+// Several fluids: the `fluids` list, blocks and the wet bed naming theirs, disc and wavy blocks.
+TEST(CaseLoader, SeveralFluidsAndTheBlocksThatNameThem) {
+  const Case c = parse_case(kMinimal2D, "case.yaml",
+                            {"fluids=[{name: water}, {name: oil, density: 800, viscosity: 0.05, background_pressure: 10}]",
+                             "fluid_blocks=[{fluid: oil, centre: [0.1, 0.05], radius: 0.02}, "
+                             "{min: [0, 0], max: [0.2, 0.06], top_wave: {amplitude: 0.01, wavelength: 0.2}}]",
+                             "wet_bed={depth: 0.01, fluid: oil}"});
+  ASSERT_EQ(c.fluids.size(), 2u);
+  EXPECT_EQ(c.fluids[1].name, "oil");
+  EXPECT_DOUBLE_EQ(c.fluids[1].density, 800.0);
+  EXPECT_DOUBLE_EQ(c.fluids[1].background_pressure, 10.0);
+  ASSERT_EQ(c.fluid_blocks.size(), 2u);
+  EXPECT_EQ(c.fluid_blocks[0].fluid, 1);
+  EXPECT_DOUBLE_EQ(c.fluid_blocks[0].radius, 0.02);
+  EXPECT_DOUBLE_EQ(c.fluid_blocks[0].min[0], 0.08);
+  EXPECT_EQ(c.fluid_blocks[1].fluid, 0);
+  EXPECT_DOUBLE_EQ(c.fluid_blocks[1].wave_amplitude, 0.01);
+  EXPECT_EQ(c.wet_bed_fluid, 1);
+  EXPECT_DOUBLE_EQ(c.wet_bed, 0.01);
+  const PhysicsParams P = physics_params(c);
+  EXPECT_EQ(P.materials.fluids, 2);
+  EXPECT_TRUE(P.materials.multiphase());
+  EXPECT_EQ(P.materials.reference, 0) << "the stiffest fluid (water) gives the walls their density";
+  EXPECT_FLOAT_EQ(P.materials.of(1).rho0, 800.0f);
+}
+
 TEST(CaseLoader, LoadCaseReadsShippedCases) {
-  for (const char* name : {"dam_break_2d.yaml", "dam_break_column_3d.yaml"}) {
+  for (const char* name : {"dam_break_2d.yaml", "dam_break_column_3d.yaml", "two_layer_hydrostatic_2d.yaml"}) {
     const Case c = load_case(test::source_dir() + "/cases/" + name);
     EXPECT_FALSE(c.name.empty()) << name;
     EXPECT_FALSE(c.fluid_blocks.empty()) << name;
@@ -232,13 +274,57 @@ TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
       {"negative headroom", {"tank.headroom=-1"}, {"'tank.headroom'", ">= 0"}},
       {"probe defined twice", {"probes=[{name: p, position: [0.01, 0.01]}, {name: p, position: [0.02, 0.01]}]"},
        {"probes[1].name", "defined twice"}},
+      {"block of an unknown fluid", {"fluid_blocks=[{fluid: oil, min: [0, 0], max: [0.05, 0.06]}]"},
+       {"fluid_blocks[0].fluid", "no fluid named 'oil'", "fluids: water"}},
+      {"fluid defined twice", {"fluids=[{name: a}, {name: a}]"}, {"fluids[1].name", "defined twice"}},
+      {"fluid without a name", {"fluids=[{density: 800}]"}, {"fluids[0].name", "required"}},
+      {"fluid properties beside a fluids list", {"fluids=[{name: a}]", "fluid.density=900"},
+       {"'fluid.density'", "each fluid's properties go in its entry"}},
+      {"disc block with min", {"fluid_blocks=[{centre: [0.05, 0.05], radius: 0.02, min: [0, 0]}]"},
+       {"fluid_blocks[0].min", "'centre' and 'radius' only"}},
+      {"wet bed of an unknown fluid", {"wet_bed={depth: 0.02, fluid: air}"}, {"wet_bed.fluid", "no fluid named 'air'"}},
       {"probe on a missing solid", {"probes=[{name: f, type: force, solid: nope}]"}, {"probes[0].solid", "no solid named 'nope'"}},
+      {"force on a face that a 2D box has not",
+       {"solids=[{name: s, min: [0.15, 0], max: [0.18, 0.05]}]", "probes=[{name: f, type: force, solid: s, face: z+}]"},
+       {"probes[0].face", "'z+' is not a face", "x-, x+, y-, y+"}},
+      {"wall sensor off every face", {"probes=[{name: s, type: wall_pressure, position: [0.1, 0.05]}]"},
+       {"probes[0].position", "must lie on a face"}},
+      {"wall sensor on an edge", {"probes=[{name: s, type: wall_pressure, position: [0, 0]}]"}, {"probes[0].position", "edge", "normal"}},
+      {"wall sensor facing the wall", {"probes=[{name: s, type: wall_pressure, position: [0, 0.02], normal: [-1, 0]}]"},
+       {"probes[0].normal", "is not the normal"}},
+      {"wall sensor of negative size", {"probes=[{name: s, type: wall_pressure, position: [0, 0.02], diameter: -1}]"},
+       {"probes[0].diameter", ">= 0"}},
+      {"wall sensor with a negative window", {"probes=[{name: s, type: wall_pressure, position: [0, 0.02], window: -1}]"},
+       {"probes[0].window", ">= 0"}},
+      {"unknown momentum flux", {"momentum.flux=upwind"}, {"'momentum.flux'", "central", "riemann"}},
+      {"negative Riemann limiter", {"momentum.riemann_limiter=-1"}, {"'momentum.riemann_limiter'", ">= 0"}},
+      {"tension not a boolean", {"fluid.tension=maybe"}, {"'fluid.tension'"}},
   };
   for (const BadCase& b : cases) {
     const std::string message = error_of(kMinimal2D, b.overrides);
     for (const std::string& part : b.expected)
       EXPECT_NE(message.find(part), std::string::npos) << b.what << ": '" << part << "' not in: " << message;
   }
+}
+
+// A wall sensor takes the normal of the face it lies on (pointing into the fluid; for a solid, out of
+// it) and is moved onto the face the particles make when the case puts it within dp/2 of it.
+TEST(CaseLoader, WallSensorFindsItsFace) {
+  const Case c = parse_case(kMinimal2D, "case.yaml",
+                            {"solids=[{name: s, min: [0.15, 0], max: [0.18, 0.05]}]",
+                             "probes=[{name: end, type: wall_pressure, position: [0.2004, 0.03], diameter: 0.004, window: 0.001},"
+                             " {name: floor, type: wall_pressure, position: [0.1, 0]}, {name: solid, type: wall_pressure, position: [0.15, 0.02]},"
+                             " {name: top, type: wall_pressure, position: [0.15, 0.05], normal: [0, 2]}, {name: f, type: force, solid: s, face: x-}]"});
+  ASSERT_EQ(c.probes.size(), 5u);
+  EXPECT_EQ(c.probes[0].type, ProbeType::WallPressure);
+  EXPECT_DOUBLE_EQ(c.probes[0].position[0], 0.2);
+  EXPECT_DOUBLE_EQ(c.probes[0].normal[0], -1.0);
+  EXPECT_DOUBLE_EQ(c.probes[0].diameter, 0.004);
+  EXPECT_DOUBLE_EQ(c.probes[0].window, 0.001);
+  EXPECT_DOUBLE_EQ(c.probes[1].normal[1], 1.0);
+  EXPECT_DOUBLE_EQ(c.probes[2].normal[0], -1.0);
+  EXPECT_DOUBLE_EQ(c.probes[3].normal[1], 1.0);  // the corner of the solid, resolved by the normal
+  EXPECT_EQ(c.probes[4].face, 0);
 }
 
 TEST(CaseLoader, MissingRequiredKeys) {

@@ -217,7 +217,7 @@ TEST(Generator, ClosedFormCountsEqualTheSiteLoop) {
       c.tank_size[a] = uniform(0.05, c.dim == 3 ? 0.15 : 0.3);
     }
     if (rng() % 4 == 0) c.periodic[0] = true;
-    for (int k = 0, blocks = static_cast<int>(rng() % 4); k < blocks; ++k) c.fluid_blocks.push_back(box_in(c, 0.7));
+    for (int k = 0, blocks = static_cast<int>(rng() % 4); k < blocks; ++k) c.fluid_blocks.push_back(FluidBlock{box_in(c, 0.7)});
     for (int k = 0, solids = static_cast<int>(rng() % 4); k < solids; ++k)
       c.solids.push_back(SolidSpec{"s" + std::to_string(k), box_in(c, 0.6), rng() % 2 == 0});
     c.wet_bed = rng() % 3 == 0 ? uniform(0.0, 0.5) * c.tank_size[c.dim - 1] : 0.0;

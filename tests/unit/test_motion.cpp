@@ -236,6 +236,14 @@ TEST(CaseLoader, BadMotionsAreRefusedWithTheKey) {
   refuse({"tank.motion.file=no_such.csv"}, "a time series (file) takes no 'period'");
   refuse({"tank.motion.speed=1"}, "unknown key");
   refuse({"tank.periodic=[x]"}, "no periodic axes with a motion");
+  // The Riemann flux's wall term takes walls at rest; a sensor on a moving wall would stay behind.
+  refuse({"momentum.flux=riemann"}, "'momentum.flux'");
+  refuse({"probes=[{name: s, type: wall_pressure, position: [0.0, 0.05]}]"}, "on a moving wall is not supported");
+  // In the flume a sensor on the moving piston is refused, one on the static far wall is fine.
+  const std::string flume = std::string(SPATE_SOURCE_DIR) + "/cases/wave_flume_2d.yaml";
+  EXPECT_THROW(load_case(flume, {"probes=[{name: s, type: wall_pressure, position: [0, 0.05]}]"}), CaseError);
+  const Case far = load_case(flume, {"probes=[{name: s, type: wall_pressure, position: [10.0, 0.05]}]"});
+  EXPECT_EQ(far.probes.at(0).type, ProbeType::WallPressure);
 }
 
 }  // namespace spate

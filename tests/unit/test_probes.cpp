@@ -1,9 +1,11 @@
 // Probes (solver/sim/probes.cpp): CSV headers with units, height gauges that follow the surface
-// continuously and can ignore spray, and a front that follows a bore over a wet bed.
+// continuously and can ignore spray, a front that follows a bore over a wet bed, the sensor's moving
+// average and the points on which a wall-pressure sensor samples the fluid.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
+#include <thread>
 
 #include "case/case.hpp"
 #include "case/generator.hpp"
@@ -57,6 +59,47 @@ TEST(ProbeFiles, HeadersCarryUnits) {
   EXPECT_EQ(probe_header(p, 3), "time[s],step,fx[N],fy[N],fz[N]");
   p.type = ProbeType::Front;
   EXPECT_EQ(probe_header(p, 3), "time[s],step,front[m]");
+  p.type = ProbeType::WallPressure;
+  EXPECT_EQ(probe_header(p, 2), "time[s],step,pressure[Pa]");
+  p.window = 0.01;  // the averaged reading, then the instantaneous one
+  EXPECT_EQ(probe_header(p, 3), "time[s],step,pressure[Pa],pressure_instant[Pa]");
+  p.type = ProbeType::Centroid;
+  EXPECT_EQ(probe_header(p, 2), "time[s],step,x[m],y[m],vx[m/s],vy[m/s]");
+}
+
+// The centroid of a phase: the mean position and velocity of that fluid's particles only, and the
+// same on one slab as on three (exact integer sums).
+TEST(CentroidProbe, MeanOfOnePhaseIndependentOfTheSplit) {
+  const Case c = parse_case(kTank, "probes.yaml",
+                            {"fluids=[{name: water}, {name: oil, density: 800}]",
+                             "fluid_blocks=[{fluid: oil, min: [0.1, 0], max: [0.2, 0.02]}, {min: [0, 0], max: [0.05, 0.03]}]"});
+  ParticleStore p = generate_particles(c);
+  for (std::size_t i = 0; i < p.size(); ++i) p.vel[0][i] = p.material[i] == 1 ? 0.5f : -1.0f;
+  Slab one(c, p);
+  auto row = sample_centroid(one.w, 1);
+  ASSERT_EQ(row.size(), 4u);
+  EXPECT_NEAR(row[0], 0.15, 1e-6);   // oil: x in [0.1, 0.2]
+  EXPECT_NEAR(row[1], 0.01, 1e-6);   //      y in [0, 0.02]
+  EXPECT_NEAR(row[2], 0.5, 1e-6);    // its velocity only, not the water's
+  EXPECT_NEAR(row[3], 0.0, 1e-12);
+  const auto water = sample_centroid(one.w, 0);
+  EXPECT_NEAR(water[0], 0.025, 1e-6);
+  EXPECT_NEAR(water[2], -1.0, 1e-6);
+
+  const Lattice L = make_lattice(c);
+  InProcessHub hub(3);
+  std::vector<std::unique_ptr<SlabTransport>> t;
+  std::vector<std::unique_ptr<SlabWorker>> w;
+  for (int s = 0; s < 3; ++s) {
+    t.push_back(hub.endpoint(s, false));
+    w.push_back(std::make_unique<SlabWorker>(L, physics_params(c), *t[s]));
+    w[s]->take_share(p, SlabLayout::uniform(L.cells[0], 3));
+  }
+  std::vector<std::vector<double>> rows(3);
+  std::vector<std::thread> threads;
+  for (int s = 0; s < 3; ++s) threads.emplace_back([&, s] { rows[s] = sample_centroid(*w[s], 1); });
+  for (auto& th : threads) th.join();
+  for (int s = 0; s < 3; ++s) EXPECT_EQ(rows[s], row) << "slab " << s;
 }
 
 // Lifting the water by a fraction of the dp/4 sampling step lifts the reading by as much: the
@@ -109,6 +152,62 @@ TEST(FrontProbe, MinimumDepthSkipsTheWetBed) {
   EXPECT_NEAR(local_front(s.w, 0, front_level(c.probes[2], c)), far_wall, c.dp) << "no minimum depth: the bed's end";
   EXPECT_NEAR(local_front(s.w, 0, front_level(c.probes[3], c)), 0.05, c.dp) << "min_depth 0.02: the block's edge";
   EXPECT_EQ(front_level(c.probes[2], c), -std::numeric_limits<double>::infinity());
+}
+
+TEST(MovingAverage, ZeroWindowPassesSamplesThrough) {
+  MovingAverage a(0.0);
+  EXPECT_DOUBLE_EQ(a.add(0.0, 3.0), 3.0);
+  EXPECT_DOUBLE_EQ(a.add(0.1, -2.0), -2.0);
+}
+
+// The mean of the piecewise-linear signal over the trailing window: a ramp v = t averaged over w
+// lags it by w/2; before a full window the mean covers what was sampled.
+TEST(MovingAverage, RampLagsByHalfTheWindow) {
+  MovingAverage a(0.01);
+  double last = 0.0;
+  for (int k = 0; k <= 100; ++k) {
+    const double t = 1e-3 * k + 0.37e-3 * (k % 3);  // uneven sampling
+    last = a.add(t, t);
+    if (t > 0.0105) {
+      EXPECT_NEAR(last, t - 0.005, 1e-12) << t;
+    }
+    if (k == 2) {
+      EXPECT_NEAR(last, 0.5 * t, 1e-12);
+    }
+  }
+  MovingAverage c(0.002);
+  for (int k = 0; k < 50; ++k) EXPECT_DOUBLE_EQ(c.add(1e-4 * k, 7.5), 7.5);
+}
+
+// The sensor's points lie on its disc (segment in 2D), centred on its position, spaced at most dp/4.
+TEST(SensorPoints, CoverTheDiscEvenly) {
+  ProbeSpec s;
+  s.position = {1.61, 0.003, 0};
+  s.normal = {-1, 0, 0};
+  s.diameter = 0.0042;
+  const auto line = sensor_points(s, 2, 0.005);
+  ASSERT_EQ(line.size(), 4u);  // ceil(4.2 / 1.25)
+  double mean = 0;
+  for (auto& x : line) {
+    EXPECT_DOUBLE_EQ(x[0], 1.61);
+    EXPECT_LE(std::fabs(x[1] - 0.003), 0.0021);
+    mean += x[1] / line.size();
+  }
+  EXPECT_NEAR(mean, 0.003, 1e-12);
+  s.position = {0.89, 0.305, 0.02};
+  s.diameter = 0.01;
+  const auto disc = sensor_points(s, 3, 0.01);
+  ASSERT_GT(disc.size(), 8u);
+  Vec3d centre{0, 0, 0};
+  for (auto& x : disc) {
+    EXPECT_DOUBLE_EQ(x[0], 0.89);
+    EXPECT_LE(std::hypot(x[1] - 0.305, x[2] - 0.02), 0.005 + 1e-12);
+    for (int k = 0; k < 3; ++k) centre[k] += x[k] / disc.size();
+  }
+  EXPECT_NEAR(centre[1], 0.305, 1e-12);
+  EXPECT_NEAR(centre[2], 0.02, 1e-12);
+  s.diameter = 0;
+  EXPECT_EQ(sensor_points(s, 3, 0.01).size(), 1u);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "../../physics/dispatch.hpp"
 #include "../../physics/eos.hpp"
 #include "../../physics/fluid_interactions.hpp"
+#include "../../physics/multiphase_interactions.hpp"
 #include "../../physics/integrator.hpp"
 #include "../../physics/wall_boundary.hpp"
 
@@ -54,7 +55,7 @@ void correct(ParticleStore& p, const PhysicsParams& P, float dt) {
   for (std::int64_t i = 0; i < n; ++i) {
     if (!P.is_fluid(p.material[i])) continue;
     for (int k = 0; k < d; ++k) spate::correct(p.vel[k][i], p.acc[k][i], p.acc_prev[k][i], dt);
-    if (continuity) spate::correct(p.density[i], p.density_rate[i], p.density_rate_prev[i], dt);
+    if (continuity) correct_density(p.density[i], p.density_rate[i], p.density_rate_prev[i], dt, density_floor(P, p.material[i]));
   }
 }
 
@@ -62,7 +63,7 @@ void equation_of_state(ParticleStore& p, const PhysicsParams& P) {
   const auto n = static_cast<std::int64_t>(p.size());
 #pragma omp parallel for schedule(static) if (n > kCheapGrain)
   for (std::int64_t i = 0; i < n; ++i)
-    if (P.is_fluid(p.material[i])) p.pressure[i] = tait_pressure(p.density[i], P.materials.of(p.material[i]));
+    if (P.is_fluid(p.material[i])) p.pressure[i] = fluid_pressure(P, P.materials.of(p.material[i]), p.density[i]);
 }
 
 void summation_density(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
@@ -96,20 +97,40 @@ struct NeighbourBatch {
   // Candidates of the current cell.
   std::vector<float> x[Dim], v[Dim], rho, p, r2;
   std::vector<std::uint8_t> material;
+  // Several fluids: each candidate's fluid mass, sound speed and viscosity (NeighbourFluid).
+  std::vector<float> mass, c0, viscosity;
   // Neighbours of the current particle: candidate numbers, then the pair terms per neighbour.
   std::vector<std::uint32_t> index;
   std::vector<NeighbourRecord> record;
   int capacity = 0;
-  void reserve(int n) {
+  void reserve(int n, bool multiphase = false) {
     capacity = n;
     record.resize(n);
     for (int k = 0; k < Dim; ++k) x[k].resize(n), v[k].resize(n);
     rho.resize(n), p.resize(n), r2.resize(n), index.resize(n);
     material.resize(n);
+    if (multiphase) mass.resize(n), c0.resize(n), viscosity.resize(n);
   }
 };
 
-template <class Kernel, int Dim, bool Gamma7, bool MovingWalls>
+// Neighbour n of a chunk (len of them) added to lane n mod kLanes of (vector, scalar) partial sums.
+template <int Dim>
+inline void add_lanes(float (&vec)[Dim][kLanes], float (&scalar)[kLanes], const float (&tvec)[Dim][kChunk],
+                      const float (&tscalar)[kChunk], int len) {
+  int s = 0;
+  for (; s + kLanes <= len; s += kLanes) {
+    for (int l = 0; l < kLanes; ++l) {
+      SPATE_UNROLL for (int k = 0; k < Dim; ++k) vec[k][l] += tvec[k][s + l];
+      scalar[l] += tscalar[s + l];
+    }
+  }
+  for (int l = 0; s + l < len; ++l) {
+    SPATE_UNROLL for (int k = 0; k < Dim; ++k) vec[k][l] += tvec[k][s + l];
+    scalar[l] += tscalar[s + l];
+  }
+}
+
+template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls>
 void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params, std::uint32_t first_cell,
                          std::uint32_t last_cell) {
   const PhysicsParams P = params;  // a local copy: the vectoriser must see that nothing aliases it
@@ -138,7 +159,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
       grid.global_coords(static_cast<std::uint32_t>(c), g);
       int candidates = 0;
       v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) { candidates += static_cast<int>(je - jb); });
-      if (candidates + kSelectSlack > batch.capacity) batch.reserve(candidates + kSelectSlack);
+      if (candidates + kSelectSlack > batch.capacity) batch.reserve(candidates + kSelectSlack, Multiphase);
       float* cx[Dim];
       SPATE_UNROLL for (int k = 0; k < Dim; ++k) cx[k] = batch.x[k].data();
       float* cr2 = batch.r2.data();
@@ -160,6 +181,12 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
             const Vec<Dim> w = boundary_velocity<Dim>(P, load_state<Dim>(ps, jb + q));
             SPATE_UNROLL for (int k = 0; k < Dim; ++k) cw[k][m + q] = w[k];
           }
+        if constexpr (Multiphase) {
+          for (int q = 0; q < len; ++q) {
+            const NeighbourFluid f = neighbour_fluid(P, ckind[m + q]);
+            batch.mass[m + q] = f.mass, batch.c0[m + q] = f.c0, batch.viscosity[m + q] = f.viscosity;
+          }
+        }
         m += len;
       });
       for (std::uint32_t i = b; i < e; ++i) {
@@ -175,6 +202,10 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
         // then neighbour n added to lane n mod kLanes.
         float acc[Dim][kLanes] = {};
         float drho[kLanes] = {};
+        // The wall sums for the Riemann wall term (finish_fluid_rates), only when it is on.
+        const bool wall_sums = P.flux == MomentumFlux::Riemann;
+        float wall_gradient[Dim][kLanes] = {};
+        float wall_weight[kLanes] = {};
         for (int s0 = 0; s0 < count; s0 += kChunk) {
           const int len = std::min(kChunk, count - s0);
           const std::uint32_t* chunk = index + s0;
@@ -183,9 +214,15 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
           gather_records(record, chunk, len, fields);
           std::uint8_t jkind[kChunk];
           gather(ckind, chunk, len, jkind);
-          float jw[Dim][MovingWalls ? kChunk : 1];
+          [[maybe_unused]] float jw[Dim][MovingWalls ? kChunk : 1];
           if constexpr (MovingWalls) SPATE_UNROLL for (int k = 0; k < Dim; ++k) gather(cw[k], chunk, len, jw[k]);
-          float tacc[Dim][kChunk], tdrho[kChunk];
+          [[maybe_unused]] float jmass[Multiphase ? kChunk : 1], jc0[Multiphase ? kChunk : 1], jmu[Multiphase ? kChunk : 1];
+          if constexpr (Multiphase) {
+            gather(batch.mass.data(), chunk, len, jmass);
+            gather(batch.c0.data(), chunk, len, jc0);
+            gather(batch.viscosity.data(), chunk, len, jmu);
+          }
+          float tacc[Dim][kChunk], tdrho[kChunk], twall[Dim][kChunk], tweight[kChunk];
           for (int n = 0; n < len; ++n) {
             ParticleState<Dim> sj;
             SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.x[k] = jf[kRecX + k][n], sj.v[k] = jf[kRecV + k][n];
@@ -193,28 +230,24 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
             sj.p = jf[kRecP][n];
             sj.material = jkind[n];
             if constexpr (MovingWalls) SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.w[k] = jw[k][n];
-            const FluidRates<Dim> t = fluid_pair_terms<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj);
-            SPATE_UNROLL for (int k = 0; k < Dim; ++k) tacc[k][n] = t.acc[k];
+            FluidRates<Dim> t;
+            if constexpr (Multiphase)
+              t = multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj, NeighbourFluid{jmass[n], jc0[n], jmu[n]});
+            else t = fluid_pair_terms<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj);
+            SPATE_UNROLL for (int k = 0; k < Dim; ++k) tacc[k][n] = t.acc[k], twall[k][n] = t.wall_gradient[k];
             tdrho[n] = t.density_rate;
+            tweight[n] = t.wall_weight;
           }
-          int s = 0;
-          for (; s + kLanes <= len; s += kLanes) {
-            for (int l = 0; l < kLanes; ++l) {
-              SPATE_UNROLL for (int k = 0; k < Dim; ++k) acc[k][l] += tacc[k][s + l];
-              drho[l] += tdrho[s + l];
-            }
-          }
-          for (int l = 0; s + l < len; ++l) {
-            SPATE_UNROLL for (int k = 0; k < Dim; ++k) acc[k][l] += tacc[k][s + l];
-            drho[l] += tdrho[s + l];
-          }
+          add_lanes<Dim>(acc, drho, tacc, tdrho, len);
+          if (wall_sums) add_lanes<Dim>(wall_gradient, wall_weight, twall, tweight, len);
         }
         FluidRates<Dim> rates;
         for (int l = 0; l < kLanes; ++l) {
-          SPATE_UNROLL for (int k = 0; k < Dim; ++k) rates.acc[k] += acc[k][l];
+          SPATE_UNROLL for (int k = 0; k < Dim; ++k) rates.acc[k] += acc[k][l], rates.wall_gradient[k] += wall_gradient[k][l];
           rates.density_rate += drho[l];
+          rates.wall_weight += wall_weight[l];
         }
-        add_body_forces(P, rates);
+        finish_fluid_rates(P, M, si, rates);
         SPATE_UNROLL for (int k = 0; k < Dim; ++k) ps.acc[k][i] = rates.acc[k];
         ps.density_rate[i] = P.density_mode == DensityMode::Continuity ? rates.density_rate : 0.0f;
       }
@@ -298,8 +331,8 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
 
 void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P, std::uint32_t first_cell,
                  std::uint32_t last_cell) {
-  dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool MovingWalls>() {
-    fluid_rates_batched<Kernel, Dim, Gamma7, MovingWalls>(p, grid, P, first_cell, last_cell);
+  dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls>() {
+    fluid_rates_batched<Kernel, Dim, Gamma7, Multiphase, MovingWalls>(p, grid, P, first_cell, last_cell);
   });
 }
 

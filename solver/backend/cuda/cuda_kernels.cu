@@ -40,16 +40,16 @@ __global__ void predict_kernel(DeviceFields d, std::uint32_t n, float dt, Physic
   if (i < n) predict_particle(P, d, i, dt);
 }
 
-__global__ void correct_kernel(DeviceFields d, int dim, std::uint32_t n, float dt, bool continuity, std::uint8_t fluids) {
+__global__ void correct_kernel(DeviceFields d, int dim, std::uint32_t n, float dt, bool continuity, PhysicsParams P) {
   const std::uint32_t i = thread_index();
-  if (i >= n || d.material[i] >= fluids) return;
+  if (i >= n || !P.is_fluid(d.material[i])) return;
   for (int k = 0; k < dim; ++k) correct(d.vel[k][i], d.acc[k][i], d.acc_prev[k][i], dt);
-  if (continuity) correct(d.density[i], d.density_rate[i], d.density_rate_prev[i], dt);
+  if (continuity) correct_density(d.density[i], d.density_rate[i], d.density_rate_prev[i], dt, density_floor(P, d.material[i]));
 }
 
 __global__ void eos_kernel(DeviceFields d, std::uint32_t n, PhysicsParams P) {
   const std::uint32_t i = thread_index();
-  if (i < n && P.is_fluid(d.material[i])) d.pressure[i] = tait_pressure(d.density[i], P.materials.of(d.material[i]));
+  if (i < n && P.is_fluid(d.material[i])) d.pressure[i] = fluid_pressure(P, P.materials.of(d.material[i]), d.density[i]);
 }
 
 // One thread per owned particle running one of the shared per-particle bodies
@@ -66,11 +66,11 @@ struct WallStatePass {
     update_wall_state<Kernel, Dim>(P, v, d, i, g);
   }
 };
-template <bool Gamma7, bool MovingWalls>
+template <bool Gamma7, bool Multiphase, bool MovingWalls>
 struct FluidRatesPass {
   template <class Kernel, int Dim>
   __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
-    update_fluid_rates<Kernel, Dim, Gamma7, MovingWalls>(P, v, d, i, g);
+    update_fluid_rates<Kernel, Dim, Gamma7, Multiphase, MovingWalls>(P, v, d, i, g);
   }
 };
 
@@ -119,7 +119,7 @@ class CudaKernels final : public StepKernels {
   void correct(ParticleStore&, const PhysicsParams& P, float dt) override {
     arrays_.select();
     launch(owned(), correct_kernel, arrays_.fields(), arrays_.dim(), owned32(), dt, P.density_mode == DensityMode::Continuity,
-           P.materials.fluids);
+           P);
   }
   void equation_of_state(ParticleStore&, const PhysicsParams& P) override {
     arrays_.select();
@@ -133,11 +133,9 @@ class CudaKernels final : public StepKernels {
   }
   void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
     // The same choices as dispatch_pair_loop on the CPU.
-    const bool gamma7 = all_fluids_gamma7(P), moving = P.moving_walls();
-    if (gamma7 && !moving) neighbour_pass<FluidRatesPass<true, false>>(P, range);
-    else if (gamma7) neighbour_pass<FluidRatesPass<true, true>>(P, range);
-    else if (!moving) neighbour_pass<FluidRatesPass<false, false>>(P, range);
-    else neighbour_pass<FluidRatesPass<false, true>>(P, range);
+    const PairLoopFlags flags = pair_loop_flags(P);
+    dispatch_flags([&]<bool Gamma7, bool Multiphase, bool MovingWalls>() { neighbour_pass<FluidRatesPass<Gamma7, Multiphase, MovingWalls>>(P, range); },
+                   flags.gamma7, flags.multiphase, flags.moving_walls);
   }
   float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
     arrays_.select();

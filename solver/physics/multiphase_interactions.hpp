@@ -1,0 +1,104 @@
+#pragma once
+// The pair interaction of fluid particle i with neighbour j when the case has several fluids
+// (phases): the same terms as fluid_interactions.hpp (continuity, density diffusion, pressure,
+// artificial and laminar viscosity), each written so that it stays consistent across an interface
+// between fluids of very different rest densities (up to water and air, 1000:1). Chosen at
+// dispatch (dispatch_pair_loop, Multiphase = fluids > 1), so a one-fluid run never executes a line
+// of it. Why this form and not another: docs/physics.md, "Several fluids".
+//
+//  - Continuity, eq. 6 of the paper in its normalised form with each particle's own rho0:
+//      d(rho/rho0)_i/dt = (rho_i/rho0_i) sum_j (m_j/rho_j) v_ij . grad W_ij,
+//    stored as rho_i: the neighbour enters through its volume m_j/rho_j (about dp^dim in every
+//    phase), never its density, so a water particle next to air sees no density jump.
+//  - Pressure, eq. 7 with the neighbour's own mass, -(1/rho_i) sum_j V_j (p_i + p_j) grad W_ij
+//    (Colagrossi & Landrini 2003), where p_i + p_j becomes twice the interface pressure of the
+//    linearised (acoustic) Riemann problem between the two particles,
+//      p*_ij = (Z_j p_i + Z_i p_j) / (Z_i + Z_j),   Z = rho c,
+//    i.e. Hu & Adams' (2006) density-weighted inter-particle pressure with each phase's sound
+//    speed. Equal impedances (one fluid, or a wall) give (p_i + p_j)/2, eq. 7 itself; across water
+//    and air the air's pressure governs, so that pressure noise of the water does not kick the
+//    light phase. Antisymmetric in i, j (V_i V_j p*_ij), so momentum is conserved. This is the
+//    interface pressure a Riemann-solver scheme (Rezavand et al. 2020) starts from.
+//  - Laminar viscosity, eq. 8 with the harmonic mean 2 mu_i mu_j / (mu_i + mu_j) of the two
+//    phases' viscosities (Hu & Adams 2006), and the particles' own volumes.
+//  - Density diffusion (delta-SPH, or the Riemann solver's pressure diffusion) and the Riemann
+//    flux's dissipation (momentum.flux riemann) only between particles of the same fluid: across
+//    an interface they would smear the density jump, and their rho0 c0 is one fluid's. The
+//    Riemann wall term (finish_fluid_rates) acts as with one fluid, with i's rho0 and c0.
+//  - Walls: a wall particle is seen by fluid i as a particle of i's own fluid at the wall's
+//    normalised density rho_w / rho0_ref (the reference fluid's equation of state gave rho_w,
+//    Adami; materials.hpp), so its volume m/rho is the same for every phase, its impedance and
+//    viscosity are i's, and p*_iw = (p_i + p_w)/2 as in eq. 7.
+#include <cstdint>
+
+#include "fluid_interactions.hpp"
+
+namespace spate {
+
+// What the multiphase pair terms read of neighbour j's fluid material (for a wall: ignored).
+struct NeighbourFluid {
+  float mass = 0.0f;
+  float c0 = 0.0f;
+  float viscosity = 0.0f;
+};
+
+SPATE_HD NeighbourFluid neighbour_fluid(const PhysicsParams& P, std::uint8_t material) {
+  if (!P.is_fluid(material)) return NeighbourFluid{};
+  const FluidMaterial& m = P.materials.of(material);
+  return NeighbourFluid{m.mass, m.c0, m.viscosity};
+}
+
+// The contribution of neighbour j (of fluid properties Nj, see neighbour_fluid) to fluid particle
+// i of material M. Branch-free like fluid_pair_terms (selects, no jumps), so the CPU driver's loop
+// over neighbours vectorises; zero beyond the support and for j = i. MovingWalls: as
+// fluid_pair_terms (j.w is what continuity sees of j).
+template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false>
+SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
+                                               const ParticleState<Dim>& j, const NeighbourFluid& Nj) {
+  const bool j_is_fluid = P.is_fluid(j.material);
+  const float j_fluid = j_is_fluid ? 1.0f : 0.0f;
+  const PairKinematics<Dim> pk = pair_kinematics<Kernel, Dim, MovingWalls>(P, i, j, j_fluid);
+  const float r2 = pk.r2, F = pk.F, inv_r2_eta = pk.inv_r2_eta, vr = pk.vr;
+  const float same_fluid = j.material == i.material ? 1.0f : 0.0f;  // walls never match a fluid
+  // A wall stands in for a particle of i's fluid at the wall's normalised density (see above).
+  const float wall_scale = M.rho0 / P.materials.wall_fluid().rho0;
+  const float rho_j = j_is_fluid ? j.rho : j.rho * wall_scale;
+  const float m_j = j_is_fluid ? Nj.mass : M.mass;
+  const float c_j = j_is_fluid ? Nj.c0 : M.c0;
+  const float mu_j = j_is_fluid ? Nj.viscosity : M.viscosity;
+  const float inv_rho_i = 1.0f / i.rho;
+  const float volume_i = M.mass * inv_rho_i;
+  const float volume_j = m_j / rho_j;
+
+  // Eq. 6, normalised continuity with the neighbour's volume.
+  float drho = i.rho * volume_j * vr * F;
+  // Density diffusion and the Riemann options within i's fluid only (the terms of
+  // fluid_pair_terms, times same_fluid).
+  drho += density_diffusion<Gamma7>(P, M, same_fluid, i.rho, j.rho, pk.g_dot_rji, r2, F, inv_r2_eta, volume_j);
+  const RiemannPairTerms riemann = riemann_pair_terms<Dim>(P, M, same_fluid, i, j, pk, volume_j);
+  drho += riemann.density_rate;
+
+  // Eq. 7 with the acoustic interface pressure: p_i + p_j -> 2 p*_ij (plus, with momentum.flux
+  // riemann, the limiter's dissipation between particles of one fluid).
+  const float z_i = i.rho * M.c0;
+  const float z_j = rho_j * c_j;
+  const float p_pair = 2.0f * (z_j * i.p + z_i * j.p) / (z_i + z_j) + riemann.p_dissipation;
+  // Monaghan (1992) artificial viscosity with the pair's mean sound speed and density.
+  const float mu_ij = P.h * (vr < 0.0f ? vr : 0.0f) * inv_r2_eta;
+  const float pi_ij = -P.artificial_viscosity * (M.c0 + c_j) * mu_ij / (i.rho + rho_j);
+  const float radial = -(p_pair * inv_rho_i * volume_j + m_j * pi_ij) * F;
+  // Eq. 8 with the harmonic mean of the two viscosities (0 when both fluids are inviscid).
+  const float mu_sum = M.viscosity + mu_j;
+  const float mu_pair = mu_sum > 0.0f ? 2.0f * M.viscosity * mu_j / mu_sum : 0.0f;
+  const float laminar = mu_pair / M.mass * (volume_i * volume_i + volume_j * volume_j) * (r2 * F) * inv_r2_eta;
+
+  return pair_rates<Dim>(pk, radial, laminar, drho, j_fluid, volume_j);
+}
+
+template <class Kernel, int Dim, bool Gamma7, bool MovingWalls>
+SPATE_HD void accumulate_multiphase_pair(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
+                                         const ParticleState<Dim>& j, FluidRates<Dim>& out) {
+  add_pair_rates(out, multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls>(P, M, i, j, neighbour_fluid(P, j.material)));
+}
+
+}  // namespace spate
