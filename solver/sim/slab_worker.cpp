@@ -21,7 +21,7 @@ double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::
 
 SlabWorker::SlabWorker(const Lattice& lattice, const PhysicsParams& params, SlabTransport& transport)
     : lattice_(lattice), params_(params), transport_(transport), particles_(lattice.dim),
-      kernels_(std::make_unique<cpu::Kernels>()) {}
+      kernels_(std::make_unique<cpu::Kernels>(particles_)) {}
 
 SlabWorker::~SlabWorker() = default;
 

@@ -75,40 +75,19 @@ class MirrorKernels final : public StepKernels {
   ParticleStore dev_;
 };
 
-// The device-resident protocol on the CPU: the particles live in HostSlabArrays (the host twin of
-// the CUDA backend's arrays), the worker runs SlabTopology on them (migration, sort, halo, refresh
-// with the interior/boundary overlap) and the physics are the CPU loops. The host store is only a
-// mirror, filled when the worker's particles() are read.
-class ResidentKernels : public StepKernels {
+// The CPU backend over arrays of its own, as a GPU keeps them: the worker runs the same SlabTopology
+// (migration, sort, halo, refresh with the interior/boundary overlap) and the same loops, but the
+// host store is only a mirror, filled when the worker's particles() are read. If the worker read
+// the host store where it must ask the arrays, results would differ from the CPU backend's.
+class ResidentKernels : public cpu::Kernels {
  public:
-  explicit ResidentKernels(int dim, bool poison = false) : arrays_(dim, poison) {}
+  explicit ResidentKernels(int dim, bool poison = false) : cpu::Kernels(std::make_unique<PoisoningArrays>(dim, poison)) {}
   const char* name() const override { return "resident"; }
-  void predict(ParticleStore&, const PhysicsParams& P, float dt) override { cpu::predict(store(), P, dt); }
-  void correct(ParticleStore&, const PhysicsParams& P, float dt) override { cpu::correct(store(), P, dt); }
-  void equation_of_state(ParticleStore&, const PhysicsParams& P) override { cpu::equation_of_state(store(), P); }
-  void summation_density(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
-    cpu::summation_density(store(), arrays_.grid(), P);
-  }
-  void wall_state(ParticleStore&, const CellGrid&, const PhysicsParams& P) override { cpu::wall_state(store(), arrays_.grid(), P); }
-  // The CPU loop computes every owned particle; only [range) keeps its new rates, so a particle
-  // computed in the interior pass (before the halo arrived) keeps what it got from stale ghosts.
-  void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
-    ParticleStore& p = store();
-    ParticleStore before = p;
-    cpu::fluid_rates(p, arrays_.grid(), P);
-    auto keep = [&](FieldVector<float>& now, const FieldVector<float>& old) {
-      for (std::size_t i = 0; i < p.owned(); ++i)
-        if (i < range.first || i >= range.end()) now[i] = old[i];
-    };
-    for (int k = 0; k < p.dim(); ++k) keep(p.acc[k], before.acc[k]);
-    keep(p.density_rate, before.density_rate);
+  void fluid_rates_range(const CellGrid& g, const PhysicsParams& P, ParticleRange range) override {
+    cpu::Kernels::fluid_rates_range(g, P, range);
     ++ranges;
   }
-  float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
-    return cpu::min_time_step(store(), P, c);
-  }
-  SlabArrays* resident() override { return &arrays_; }
-  ParticleStore& device_store() { return arrays_.store(); }
+  ParticleStore& device_store() { return arrays().store(); }
   int ranges = 0;
 
  protected:
@@ -133,8 +112,6 @@ class ResidentKernels : public StepKernels {
    private:
     bool poison_;
   };
-  ParticleStore& store() { return arrays_.store(); }
-  PoisoningArrays arrays_;
 };
 
 // The GPU's arithmetic on the CPU: the resident path with the per-particle fluid body of
@@ -148,9 +125,9 @@ class GpuOrderKernels final : public ResidentKernels {
  public:
   explicit GpuOrderKernels(int dim) : ResidentKernels(dim, true) {}
   void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
-    ParticleStore& p = store();
-    const CellGridView v = arrays_.grid().view();
-    const Lattice& L = arrays_.grid().lattice();
+    ParticleStore& p = device_store();
+    const CellGridView v = arrays().grid().view();
+    const Lattice& L = arrays().grid().lattice();
     dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls>() {
       for (std::size_t i = range.first; i < range.end(); ++i) {
         int g[3] = {0, 0, 0};

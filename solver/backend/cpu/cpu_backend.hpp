@@ -1,6 +1,7 @@
 #pragma once
 // The OpenMP driver: loops over owned particles (or cells) and calls the shared physics bodies in
 // solver/physics. Nothing here knows a formula; it only knows where the arrays are.
+#include "../../domain/slab_plan.hpp"
 #include "../../grid/cell_grid.hpp"
 #include "../../particles/particle_store.hpp"
 #include "../../physics/params.hpp"
@@ -22,31 +23,52 @@ void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 // pass split into cell ranges gives the same bits as one pass.
 void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, std::uint32_t first_cell = 0,
                  std::uint32_t last_cell = 0xffffffffu);
+// The same for the owned particles [range.first, range.end()) (any range: the cells it touches are
+// visited, their particles outside it keep their rates).
+void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, ParticleRange range);
 // Smallest stable time step over owned fluid particles (infinity when there are none).
 float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c);
 
 }  // namespace spate::cpu
 
 #include "../step_kernels.hpp"
+#include "../../domain/host_slab_arrays.hpp"
+
+#include <memory>
+#include <utility>
 
 namespace spate::cpu {
-// The OpenMP loops behind the StepKernels interface; the host store is the only copy.
-class Kernels final : public StepKernels {
+// The OpenMP loops behind the StepKernels interface, resident over HostSlabArrays: the worker runs
+// the same step topology (SlabTopology: migration, sort, halo, refreshes with the interior /
+// boundary overlap) as on a GPU. The arrays are the worker's host store itself, so nothing is
+// copied between a "device" and the host; the loops use the arrays' cell table.
+class Kernels : public StepKernels {
  public:
+  // Over the worker's store (the CPU backend), or over arrays of their own (the tests' stand-in
+  // for a device, whose host store is then only a mirror).
+  explicit Kernels(ParticleStore& store) : arrays_(std::make_unique<HostSlabArrays>(store)) {}
+  explicit Kernels(std::unique_ptr<HostSlabArrays> arrays) : arrays_(std::move(arrays)) {}
   const char* name() const override { return "cpu"; }
-  void predict(ParticleStore& p, const PhysicsParams& P, float dt) override { cpu::predict(p, P, dt); }
-  void correct(ParticleStore& p, const PhysicsParams& P, float dt) override { cpu::correct(p, P, dt); }
-  void equation_of_state(ParticleStore& p, const PhysicsParams& P) override { cpu::equation_of_state(p, P); }
-  void summation_density(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override {
-    cpu::summation_density(p, g, P);
+  void predict(ParticleStore&, const PhysicsParams& P, float dt) override { cpu::predict(store(), P, dt); }
+  void correct(ParticleStore&, const PhysicsParams& P, float dt) override { cpu::correct(store(), P, dt); }
+  void equation_of_state(ParticleStore&, const PhysicsParams& P) override { cpu::equation_of_state(store(), P); }
+  void summation_density(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::summation_density(store(), arrays_->grid(), P);
   }
-  void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::wall_state(p, g, P); }
-  void fluid_rates_cells(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, std::uint32_t first_cell,
-                         std::uint32_t last_cell) override {
-    cpu::fluid_rates(p, g, P, first_cell, last_cell);
+  void wall_state(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::wall_state(store(), arrays_->grid(), P);
   }
-  float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) override {
-    return cpu::min_time_step(p, P, c);
+  void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
+    cpu::fluid_rates(store(), arrays_->grid(), P, range);
   }
+  float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
+    return cpu::min_time_step(store(), P, c);
+  }
+  SlabArrays* resident() override { return arrays_.get(); }
+  HostSlabArrays& arrays() { return *arrays_; }
+
+ private:
+  ParticleStore& store() { return arrays_->store(); }
+  std::unique_ptr<HostSlabArrays> arrays_;
 };
 }  // namespace spate::cpu
