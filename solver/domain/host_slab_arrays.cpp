@@ -32,8 +32,9 @@ void HostSlabArrays::upload(const ParticleStore& host) {
 
 void HostSlabArrays::download(ParticleStore& host, CellGrid& grid) {
   if (host.dim() != store_->dim()) throw std::logic_error("HostSlabArrays::download: a store of another dimension");
-  if (!table_.empty()) grid.assign_starts(grid_.view(), table_);  // before anything changes: throws on a stale geometry
-  if (&host == store_) return;  // the shared store: already the truth
+  // Before anything changes: throws on a stale geometry. A shared store and grid are the truth already.
+  if (!table_.empty() && &grid != grid_) grid.assign_starts(grid_->view(), table_);
+  if (&host == store_) return;
   host.resize(store_->size());
   host.set_owned(store_->owned());
   copy_fields(*store_, host, FieldSet::All, 0, store_->owned());
@@ -89,15 +90,18 @@ void HostSlabArrays::sort_by_key(std::size_t first, std::size_t last) {
 }
 
 void HostSlabArrays::build_table(const CellGrid& geometry) {
-  if (grid_.lattice().cells[0] != geometry.lattice().cells[0] || grid_.owned_lo() != geometry.owned_lo() ||
-      grid_.owned_hi() != geometry.owned_hi() || grid_.cell_count() != geometry.cell_count())
-    grid_.configure(geometry.lattice(), geometry.owned_lo(), geometry.owned_hi());
+  if (grid_->lattice().cells[0] != geometry.lattice().cells[0] || grid_->owned_lo() != geometry.owned_lo() ||
+      grid_->owned_hi() != geometry.owned_hi() || grid_->cell_count() != geometry.cell_count())
+    grid_->configure(geometry.lattice(), geometry.owned_lo(), geometry.owned_hi());
   const KeyBins bins{geometry.cell_count()};
-  // The first particle of every bin: a lower bound per bin over the non-decreasing keys.
+  // The first particle of every bin, in one pass over the non-decreasing keys (a lower bound per bin).
   table_.resize(bins.table_entries());
-  for (std::uint32_t b = 0; b < bins.table_entries(); ++b)
-    table_[b] = static_cast<std::uint32_t>(std::lower_bound(keys_.begin(), keys_.end(), b) - keys_.begin());
-  grid_.assign_starts(geometry.view(), table_);
+  const auto n = static_cast<std::uint32_t>(keys_.size());
+  std::uint32_t b = 0;
+  for (std::uint32_t i = 0; i < n; ++i)
+    for (; b <= keys_[i] && b < bins.table_entries(); ++b) table_[b] = i;
+  for (; b < bins.table_entries(); ++b) table_[b] = n;
+  grid_->assign_starts(geometry.view(), table_);
 }
 
 std::vector<std::uint32_t> HostSlabArrays::table_entries(const TableRead& read) {

@@ -13,10 +13,11 @@ namespace spate {
 class HostSlabArrays : public SlabArrays {
  public:
   // Particles in a store of its own (a stand-in device: the worker's host store is then a mirror).
-  explicit HostSlabArrays(int dim) : own_(dim), store_(&own_) {}
-  // Particles in `shared` (the worker's host store: the CPU backend), so upload and download copy
-  // nothing and outputs and in situ read the arrays the loops write (zero copy).
-  explicit HostSlabArrays(ParticleStore& shared) : store_(&shared) {}
+  explicit HostSlabArrays(int dim) : own_(dim), store_(&own_), grid_(&own_grid_) {}
+  // Particles in `store` and their cell table in `grid`: the worker's host store and grid (the CPU
+  // backend), so upload and download copy nothing, outputs and in situ read the arrays the loops
+  // write (zero copy), and the loops may take the worker's store and grid as they are.
+  HostSlabArrays(ParticleStore& store, CellGrid& grid) : store_(&store), grid_(&grid) {}
   HostSlabArrays(const HostSlabArrays&) = delete;
   HostSlabArrays& operator=(const HostSlabArrays&) = delete;
 
@@ -46,7 +47,7 @@ class HostSlabArrays : public SlabArrays {
 
   // The particles and the cell grid the physics loops of a host backend run on.
   ParticleStore& store() { return *store_; }
-  const CellGrid& grid() const { return grid_; }
+  const CellGrid& grid() const { return *grid_; }
   const std::vector<std::uint32_t>& halo_slots(Side side) const { return slots_[side]; }
   const std::vector<std::uint32_t>& image_targets(int axis, ImagePart part) const {
     return images_[axis][static_cast<int>(part)].target;
@@ -55,7 +56,8 @@ class HostSlabArrays : public SlabArrays {
  private:
   ParticleStore own_;
   ParticleStore* store_;               // own_ or the shared store
-  CellGrid grid_;                      // geometry of the last build_table, with its cell table
+  CellGrid own_grid_;
+  CellGrid* grid_;                     // geometry of the last build_table, with its cell table
   std::vector<std::uint32_t> keys_;    // one per particle
   std::vector<std::uint32_t> table_;   // KeyBins::table_entries() starts, for the geometry of grid_
   std::uint32_t id_bound_ = kNoFault;

@@ -341,13 +341,6 @@ void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P,
   });
 }
 
-void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P, std::uint32_t first_cell,
-                 std::uint32_t last_cell) {
-  const std::uint32_t cells = grid.owned_cell_count();
-  const std::uint32_t b = grid.begin(std::min(first_cell, cells)), e = grid.begin(std::min(last_cell, cells));
-  fluid_rates(p, grid, P, ParticleRange{b, e > b ? e - b : 0});
-}
-
 void wall_state(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
   dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() { wall_state_batched<Kernel, Dim>(p, grid, P); });
 }

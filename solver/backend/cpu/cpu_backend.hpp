@@ -1,6 +1,8 @@
 #pragma once
 // The OpenMP driver: loops over owned particles (or cells) and calls the shared physics bodies in
 // solver/physics. Nothing here knows a formula; it only knows where the arrays are.
+#include <limits>
+
 #include "../../domain/slab_plan.hpp"
 #include "../../grid/cell_grid.hpp"
 #include "../../particles/particle_store.hpp"
@@ -18,14 +20,12 @@ void equation_of_state(ParticleStore& p, const PhysicsParams& P);
 void summation_density(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 // Adami wall pressure, density and no-slip velocity of owned wall particles.
 void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
-// Acceleration and density rate of the owned fluid particles in owned cells [first_cell,
-// last_cell) (all by default). Each particle's rates depend only on its own neighbour loop, so a
-// pass split into cell ranges gives the same bits as one pass.
-void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, std::uint32_t first_cell = 0,
-                 std::uint32_t last_cell = 0xffffffffu);
-// The same for the owned particles [range.first, range.end()) (any range: the cells it touches are
-// visited, their particles outside it keep their rates).
-void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, ParticleRange range);
+// Acceleration and density rate of the owned fluid particles [range.first, range.end()) (all by
+// default): the cells the range touches are visited, their particles outside it keep their rates.
+// Each particle's rates depend only on its own neighbour loop, so a pass split into ranges gives
+// the same bits as one pass.
+void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P,
+                 ParticleRange range = {0, std::numeric_limits<std::size_t>::max()});
 // Smallest stable time step over owned fluid particles (infinity when there are none).
 float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c);
 
@@ -46,7 +46,7 @@ class Kernels : public StepKernels {
  public:
   // Over the worker's store (the CPU backend), or over arrays of their own (the tests' stand-in
   // for a device, whose host store is then only a mirror).
-  explicit Kernels(ParticleStore& store) : arrays_(std::make_unique<HostSlabArrays>(store)) {}
+  Kernels(ParticleStore& store, CellGrid& grid) : arrays_(std::make_unique<HostSlabArrays>(store, grid)) {}
   explicit Kernels(std::unique_ptr<HostSlabArrays> arrays) : arrays_(std::move(arrays)) {}
   const char* name() const override { return "cpu"; }
   void predict(ParticleStore&, const PhysicsParams& P, float dt) override { cpu::predict(store(), P, dt); }
@@ -64,8 +64,7 @@ class Kernels : public StepKernels {
   float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
     return cpu::min_time_step(store(), P, c);
   }
-  SlabArrays* resident() override { return arrays_.get(); }
-  HostSlabArrays& arrays() { return *arrays_; }
+  HostSlabArrays& arrays() override { return *arrays_; }
 
  private:
   ParticleStore& store() { return arrays_->store(); }
