@@ -73,6 +73,13 @@ struct FluidSpec {
   double background_pressure = 0.0;      // [Pa], added to the Tait pressure
 };
 
+// A surface-tension coefficient between two fluids (an entry of the case's `surface_tension:`
+// list, physics/surface_tension.hpp).
+struct SurfaceTensionSpec {
+  int a = 0, b = 1;      // indices into Case::fluids, a != b
+  double coefficient = 0.0;  // sigma [N/m]
+};
+
 struct Case {
   std::string file;  // where it came from, for messages
   std::string name;
@@ -83,6 +90,7 @@ struct Case {
   KernelType kernel = KernelType::WendlandC2;
 
   std::vector<FluidSpec> fluids{FluidSpec{}};  // material k is fluids[k]
+  std::vector<SurfaceTensionSpec> surface_tension;  // empty: no surface tension
   double artificial_viscosity = 0.0;
   bool tension = true;  // false: fluid pressures clipped at 0 (eos.hpp fluid_pressure)
   DensityMode density_mode = DensityMode::Continuity;

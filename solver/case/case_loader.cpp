@@ -490,6 +490,33 @@ Case read(Section& root, const std::string& file) {
     c.tension = f.boolean("tension", true);
     f.finish();
   }
+  // Surface tension: `surface_tension: [{between: [a, b], coefficient: sigma}, ...]`.
+  for (auto& e : root.list("surface_tension")) {
+    const YAML::Node between = e.raw("between");
+    if (!between.IsDefined() || !between.IsSequence() || between.size() != 2 || !between[0].IsScalar() || !between[1].IsScalar())
+      e.fail(between.IsDefined() ? between : e.node(), "between", "expected the names of two fluids, e.g. [water, air]");
+    SurfaceTensionSpec st;
+    int index[2] = {-1, -1};
+    for (int k = 0; k < 2; ++k) {
+      const std::string name = between[k].Scalar();
+      for (std::size_t f = 0; f < c.fluids.size(); ++f)
+        if (c.fluids[f].name == name) index[k] = static_cast<int>(f);
+      if (index[k] < 0) {
+        std::string names;
+        for (auto& f : c.fluids) names += (names.empty() ? "" : ", ") + f.name;
+        e.fail(between[k], "between", "no fluid named '" + name + "' (fluids: " + names + ")");
+      }
+    }
+    if (index[0] == index[1]) e.fail(between, "between", "names the same fluid twice (surface tension acts between two fluids)");
+    st.a = index[0], st.b = index[1];
+    for (auto& other : c.surface_tension)
+      if ((other.a == st.a && other.b == st.b) || (other.a == st.b && other.b == st.a))
+        e.fail(between, "between", "this pair of fluids already has a coefficient");
+    st.coefficient = e.number("coefficient");
+    if (!(st.coefficient >= 0)) e.fail(e.raw("coefficient"), "coefficient", "must be >= 0 [N/m]");
+    e.finish();
+    c.surface_tension.push_back(st);
+  }
   {
     auto s = root.optional_child("density");
     c.density_mode = s.choice<DensityMode>("mode", DensityMode::Continuity,
@@ -805,6 +832,12 @@ PhysicsParams physics_params(const Case& c) {
                                       static_cast<float>(f.density * std::pow(c.dp, c.dim)),
                                       static_cast<float>(f.background_pressure));
     if (P.materials.fluid[k].tait_b > P.materials.fluid[P.materials.reference].tait_b) P.materials.reference = static_cast<std::uint8_t>(k);
+  }
+  for (const SurfaceTensionSpec& st : c.surface_tension) {
+    const float sigma = static_cast<float>(st.coefficient);
+    P.surface_tension.sigma[st.a][st.b] = P.surface_tension.sigma[st.b][st.a] = sigma;
+    for (int f : {st.a, st.b}) P.surface_tension.largest[f] = std::max(P.surface_tension.largest[f], sigma);
+    P.surface_tension.on = P.surface_tension.on || sigma > 0.0f;
   }
   P.tension = c.tension;
   P.artificial_viscosity = static_cast<float>(c.artificial_viscosity);

@@ -15,6 +15,16 @@ enum class DensityDiffusion : std::uint8_t { None, MolteniColagrossi, Fourtakas,
 // of a linearised Riemann solver with a low-dissipation limiter (Zhang, Hu & Adams 2017).
 enum class MomentumFlux : std::uint8_t { Central, Riemann };
 
+// Surface-tension coefficients between fluids (physics/surface_tension.hpp), from the case's
+// `surface_tension:` list: sigma[a][b] = sigma[b][a] [N/m] (0 on the diagonal and for pairs not
+// listed), largest[a] the largest coefficient of fluid a. `on` when any pair has one: only then do
+// the two surface-tension passes run.
+struct SurfaceTensionTable {
+  bool on = false;
+  float sigma[kMaxFluids][kMaxFluids] = {};
+  float largest[kMaxFluids] = {};
+};
+
 struct PhysicsParams {
   int dim = 3;
   KernelType kernel = KernelType::WendlandC2;
@@ -41,6 +51,7 @@ struct PhysicsParams {
   // Rest density, mass, viscosity, sound speed, Tait exponent of every fluid; walls and solids
   // (materials.hpp). The pair terms read fluid properties from here, never from scalars.
   MaterialTable materials;
+  SurfaceTensionTable surface_tension;
 
   SPATE_HD bool is_fluid(std::uint8_t material) const { return materials.is_fluid(material); }
 };
