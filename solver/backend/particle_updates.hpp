@@ -54,7 +54,8 @@ SPATE_HD void update_wall_state(const PhysicsParams& P, const CellGridView& v, F
     for (std::uint32_t j = jb; j < je; ++j)
       if (P.is_fluid(f.material[j])) accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(f, j), sums);
   });
-  const WallState<Dim> s = finish_wall(P, sums);
+  WallState<Dim> s = finish_wall(P, sums);
+  if (P.free_slip_axes) apply_free_slip<Dim>(P, xw, f.material[w], sums, s);
   f.pressure[w] = s.p;
   f.density[w] = s.rho;
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.vel[k][w] = s.v[k];

@@ -577,17 +577,23 @@ Case read(Section& root, const std::string& file) {
   c.max_removed_fraction = tank->number("max_removed_fraction", 0.05);
   if (!(c.max_removed_fraction >= 0 && c.max_removed_fraction <= 1))
     tank->fail(tank->raw("max_removed_fraction"), "max_removed_fraction", "must be in [0, 1] (a fraction of the fluid particles)");
-  if (tank->has("periodic")) {
-    YAML::Node p = tank->raw("periodic");
-    if (!p.IsSequence()) tank->fail(p, "periodic", "expected a list of axes, e.g. [x]");
+  // `periodic` and `free_slip`: lists of axes, e.g. [x].
+  auto axes = [&](const std::string& key, std::array<bool, 3>& out) {
+    if (!tank->has(key)) return;
+    YAML::Node p = tank->raw(key);
+    if (!p.IsSequence()) tank->fail(p, key, "expected a list of axes, e.g. [x]");
     for (auto a : p) {
       const std::string axis = a.IsScalar() ? a.Scalar() : "";
       const int k = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;
-      if (k < 0 || k >= d) tank->fail(a, "periodic", "'" + axis + "' is not an axis of this " + std::to_string(d) + "D case");
-      if (k == d - 1) tank->fail(a, "periodic", "the vertical axis cannot be periodic");
-      c.periodic[k] = true;
+      if (k < 0 || k >= d) tank->fail(a, key, "'" + axis + "' is not an axis of this " + std::to_string(d) + "D case");
+      if (key == "periodic" && k == d - 1) tank->fail(a, key, "the vertical axis cannot be periodic");
+      out[k] = true;
     }
-  }
+  };
+  axes("periodic", c.periodic);
+  axes("free_slip", c.free_slip);
+  for (int k = 0; k < d; ++k)
+    if (c.periodic[k] && c.free_slip[k]) tank->fail(tank->raw("free_slip"), "free_slip", "an axis cannot be periodic and have walls");
   tank->finish();
   {
     double largest = 0;
@@ -840,6 +846,11 @@ PhysicsParams physics_params(const Case& c) {
     P.surface_tension.on = P.surface_tension.on || sigma > 0.0f;
   }
   P.tension = c.tension;
+  for (int k = 0; k < 3; ++k) {
+    P.tank_lo[k] = static_cast<float>(c.tank_origin[k]);
+    P.tank_hi[k] = static_cast<float>(c.tank_origin[k] + c.tank_size[k]);
+    if (c.free_slip[k]) P.free_slip_axes = static_cast<std::uint8_t>(P.free_slip_axes | (1u << k));
+  }
   P.artificial_viscosity = static_cast<float>(c.artificial_viscosity);
   P.delta = static_cast<float>(c.delta);
   P.diffusion = c.diffusion;

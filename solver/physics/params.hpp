@@ -52,6 +52,11 @@ struct PhysicsParams {
   // (materials.hpp). The pair terms read fluid properties from here, never from scalars.
   MaterialTable materials;
   SurfaceTensionTable surface_tension;
+  // Free-slip tank walls (tank.free_slip, wall_boundary.hpp): bit k set for the walls normal to
+  // axis k; the tank's fluid region [tank_lo, tank_hi] tells a tank wall particle's side.
+  std::uint8_t free_slip_axes = 0;
+  float tank_lo[3] = {0.0f, 0.0f, 0.0f};
+  float tank_hi[3] = {0.0f, 0.0f, 0.0f};
 
   SPATE_HD bool is_fluid(std::uint8_t material) const { return materials.is_fluid(material); }
 };

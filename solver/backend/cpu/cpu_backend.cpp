@@ -329,7 +329,8 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
           sj.material = 0;  // a fluid (the wall sums do not look at it)
           accumulate_wall_pair<Kernel, Dim>(P, xw, sj, sums);
         }
-        const WallState<Dim> st = finish_wall(P, sums);
+        WallState<Dim> st = finish_wall(P, sums);
+        if (P.free_slip_axes) apply_free_slip<Dim>(P, xw, ps.material[w], sums, st);
         ps.pressure[w] = st.p;
         ps.density[w] = st.rho;
         SPATE_UNROLL for (int k = 0; k < Dim; ++k) ps.vel[k][w] = st.v[k];
