@@ -19,7 +19,7 @@ TEST(WallBoundary, FreeSlipWallsMirrorOnlyTheNormalVelocity) {
   s.w = 2.0f;
   s.v_w = Vec<2>{{0.6f, 0.8f}};  // kernel-weighted fluid velocity (0.3, 0.4)
   auto state = [&](float x, float y, std::uint8_t material) {
-    WallState<2> st = finish_wall(P, s);
+    WallState<2> st = finish_wall(P, s, material, Vec<2>{{x, y}});
     apply_free_slip<2>(P, Vec<2>{{x, y}}, material, s, st);
     return st.v;
   };
