@@ -36,6 +36,16 @@ class StepKernels {
     (void)p, (void)g, (void)P, (void)first_cell, (void)last_cell;
     throw std::logic_error(std::string(name()) + " backend: fluid_rates_cells is for host-store backends");
   }
+  // Surface tension (only when PhysicsParams::surface_tension.on): the colour gradient of the owned
+  // particles, before the halo refresh; the force, after the fluid rates (owned fluid).
+  virtual void colour_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) {
+    (void)p, (void)g, (void)P;
+    throw std::logic_error(std::string(name()) + " backend: no surface tension");
+  }
+  virtual void surface_tension(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) {
+    (void)p, (void)g, (void)P;
+    throw std::logic_error(std::string(name()) + " backend: no surface tension");
+  }
   virtual float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) = 0;
 
   // Residency. `publish`: every field of every particle (owned and ghosts) and the cell table of

@@ -22,6 +22,11 @@ void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 // pass split into cell ranges gives the same bits as one pass.
 void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, std::uint32_t first_cell = 0,
                  std::uint32_t last_cell = 0xffffffffu);
+// Surface tension (physics/surface_tension.hpp), only when the case has a coefficient: the colour
+// gradient of the owned particles (before the halo refresh that carries it to the ghosts), then,
+// after the fluid rates, the force added to the owned fluid particles' acceleration.
+void colour_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+void surface_tension(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 // Smallest stable time step over owned fluid particles (infinity when there are none).
 float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c);
 
@@ -45,6 +50,8 @@ class Kernels final : public StepKernels {
                          std::uint32_t last_cell) override {
     cpu::fluid_rates(p, g, P, first_cell, last_cell);
   }
+  void colour_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::colour_gradient(p, g, P); }
+  void surface_tension(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::surface_tension(p, g, P); }
   float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) override {
     return cpu::min_time_step(p, P, c);
   }
