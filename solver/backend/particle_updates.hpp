@@ -10,6 +10,7 @@
 #include "../physics/fluid_interactions.hpp"
 #include "../physics/integrator.hpp"
 #include "../physics/multiphase_interactions.hpp"
+#include "../physics/surface_tension.hpp"
 #include "../physics/wall_boundary.hpp"
 
 namespace spate {
@@ -72,10 +73,50 @@ SPATE_HD void update_wall_state(const PhysicsParams& P, const CellGridView& v, F
     for (std::uint32_t j = jb; j < je; ++j)
       if (P.is_fluid(f.material[j])) accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(f, j), sums);
   });
-  const WallState<Dim> s = finish_wall(P, sums, f.material[w], xw);
+  WallState<Dim> s = finish_wall(P, sums, f.material[w], xw);
+  if (P.free_slip_axes) apply_free_slip<Dim>(P, xw, f.material[w], sums, s);
   f.pressure[w] = s.p;
   f.density[w] = s.rho;
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.vel[k][w] = s.v[k];
+}
+
+// Surface tension, pass 1: the colour gradient of fluid particle i (zero for walls), which the
+// halo refresh then sends to the ghosts (physics/surface_tension.hpp).
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void update_colour_gradient(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
+  Vec<Dim> grad = zero_vec<Dim>();
+  if (P.is_fluid(f.material[i])) {
+    const ParticleState<Dim> si = load_state<Dim>(f, i);
+    const float volume_i = P.materials.of(si.material).mass / si.rho;
+    v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+      for (std::uint32_t j = jb; j < je; ++j)
+        if (distance_squared<Dim>(si.x, f.pos, j) < P.support2)
+          grad = grad + colour_gradient_term<Kernel, Dim>(P, si, volume_i, load_state<Dim>(f, j));
+    });
+    SPATE_UNROLL for (int k = 0; k < Dim; ++k) grad[k] /= volume_i;
+  }
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.colour_gradient[k][i] = grad[k];
+}
+
+// Surface tension, pass 2: the curvature of fluid particle i from its neighbours' normals, and
+// the force, added to the acceleration of the fluid pass (physics/surface_tension.hpp).
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void add_surface_tension(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
+  if (!P.is_fluid(f.material[i])) return;
+  const Vec<Dim> grad_i = load_vec<Dim>(f.colour_gradient, i);
+  if (!has_normal<Dim>(P, grad_i)) return;
+  const ParticleState<Dim> si = load_state<Dim>(f, i);
+  const float inv_len = 1.0f / sqrtf(dot(grad_i, grad_i));
+  Vec<Dim> n_i;
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) n_i[k] = grad_i[k] * inv_len;
+  DivergenceSums sums;
+  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+    for (std::uint32_t j = jb; j < je; ++j)
+      if (distance_squared<Dim>(si.x, f.pos, j) < P.support2)
+        accumulate_divergence<Kernel, Dim>(P, si, n_i, load_state<Dim>(f, j), load_vec<Dim>(f.colour_gradient, j), sums);
+  });
+  const Vec<Dim> a = surface_tension_acceleration<Dim>(P, si, grad_i, sums);
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] += a[k];
 }
 
 // Mass-summation density (eq. 5) of fluid particle i, clipped below at rho0 (free surface).

@@ -9,6 +9,8 @@
 // params_). The store and grid it receives are the worker's: on the CPU backend they are the arrays
 // themselves (current), on a device backend a mirror (stale; ignore them and use the arrays).
 #include <cstddef>
+#include <stdexcept>
+#include <string>
 
 #include "../grid/cell_grid.hpp"
 #include "../domain/slab_arrays.hpp"
@@ -32,6 +34,16 @@ class StepKernels {
   // Fluid rates of owned particles [range.first, range.end()): the worker computes the interior
   // while the halo refresh travels, then the boundary ranges (SlabTopology::split()).
   virtual void fluid_rates_range(const CellGrid& g, const PhysicsParams& P, ParticleRange range) = 0;
+  // Surface tension (only when PhysicsParams::surface_tension.on): the colour gradient of the owned
+  // particles, before the halo refresh; the force, after the fluid rates (owned fluid).
+  virtual void colour_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) {
+    (void)p, (void)g, (void)P;
+    throw std::logic_error(std::string(name()) + " backend: no surface tension");
+  }
+  virtual void surface_tension(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) {
+    (void)p, (void)g, (void)P;
+    throw std::logic_error(std::string(name()) + " backend: no surface tension");
+  }
   virtual float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) = 0;
 
   // The backend's particles, on which the worker runs the step topology. The worker's host store

@@ -76,6 +76,13 @@ struct FluidSpec {
   double background_pressure = 0.0;      // [Pa], added to the Tait pressure
 };
 
+// A surface-tension coefficient between two fluids (an entry of the case's `surface_tension:`
+// list, physics/surface_tension.hpp).
+struct SurfaceTensionSpec {
+  int a = 0, b = 1;      // indices into Case::fluids, a != b
+  double coefficient = 0.0;  // sigma [N/m]
+};
+
 struct Case {
   std::string file;  // where it came from, for messages
   std::string name;
@@ -86,6 +93,7 @@ struct Case {
   KernelType kernel = KernelType::WendlandC2;
 
   std::vector<FluidSpec> fluids{FluidSpec{}};  // material k is fluids[k]
+  std::vector<SurfaceTensionSpec> surface_tension;  // empty: no surface tension
   double artificial_viscosity = 0.0;
   bool tension = true;  // false: fluid pressures clipped at 0 (eos.hpp fluid_pressure)
   DensityMode density_mode = DensityMode::Continuity;
@@ -107,6 +115,7 @@ struct Case {
   int wall_layers = 3;
   bool open_top = true;
   std::array<bool, 3> periodic{false, false, false};
+  std::array<bool, 3> free_slip{false, false, false};  // tank walls normal to these axes are free-slip
   double headroom = 0.5;  // domain extends this fraction of the tank height above an open top
   // Fluid that leaves through the open top (over the walls, above the headroom) is removed; more
   // than this fraction of the fluid removed stops the run (exit 3).

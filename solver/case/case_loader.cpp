@@ -589,6 +589,33 @@ Case read(Section& root, const std::string& file) {
     c.tension = f.boolean("tension", true);
     f.finish();
   }
+  // Surface tension: `surface_tension: [{between: [a, b], coefficient: sigma}, ...]`.
+  for (auto& e : root.list("surface_tension")) {
+    const YAML::Node between = e.raw("between");
+    if (!between.IsDefined() || !between.IsSequence() || between.size() != 2 || !between[0].IsScalar() || !between[1].IsScalar())
+      e.fail(between.IsDefined() ? between : e.node(), "between", "expected the names of two fluids, e.g. [water, air]");
+    SurfaceTensionSpec st;
+    int index[2] = {-1, -1};
+    for (int k = 0; k < 2; ++k) {
+      const std::string name = between[k].Scalar();
+      for (std::size_t f = 0; f < c.fluids.size(); ++f)
+        if (c.fluids[f].name == name) index[k] = static_cast<int>(f);
+      if (index[k] < 0) {
+        std::string names;
+        for (auto& f : c.fluids) names += (names.empty() ? "" : ", ") + f.name;
+        e.fail(between[k], "between", "no fluid named '" + name + "' (fluids: " + names + ")");
+      }
+    }
+    if (index[0] == index[1]) e.fail(between, "between", "names the same fluid twice (surface tension acts between two fluids)");
+    st.a = index[0], st.b = index[1];
+    for (auto& other : c.surface_tension)
+      if ((other.a == st.a && other.b == st.b) || (other.a == st.b && other.b == st.a))
+        e.fail(between, "between", "this pair of fluids already has a coefficient");
+    st.coefficient = e.number("coefficient");
+    if (!(st.coefficient >= 0)) e.fail(e.raw("coefficient"), "coefficient", "must be >= 0 [N/m]");
+    e.finish();
+    c.surface_tension.push_back(st);
+  }
   {
     auto s = root.optional_child("density");
     c.density_mode = s.choice<DensityMode>("mode", DensityMode::Continuity,
@@ -649,17 +676,23 @@ Case read(Section& root, const std::string& file) {
   c.max_removed_fraction = tank->number("max_removed_fraction", 0.05);
   if (!(c.max_removed_fraction >= 0 && c.max_removed_fraction <= 1))
     tank->fail(tank->raw("max_removed_fraction"), "max_removed_fraction", "must be in [0, 1] (a fraction of the fluid particles)");
-  if (tank->has("periodic")) {
-    YAML::Node p = tank->raw("periodic");
-    if (!p.IsSequence()) tank->fail(p, "periodic", "expected a list of axes, e.g. [x]");
+  // `periodic` and `free_slip`: lists of axes, e.g. [x].
+  auto axes = [&](const std::string& key, std::array<bool, 3>& out) {
+    if (!tank->has(key)) return;
+    YAML::Node p = tank->raw(key);
+    if (!p.IsSequence()) tank->fail(p, key, "expected a list of axes, e.g. [x]");
     for (auto a : p) {
       const std::string axis = a.IsScalar() ? a.Scalar() : "";
       const int k = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;
-      if (k < 0 || k >= d) tank->fail(a, "periodic", "'" + axis + "' is not an axis of this " + std::to_string(d) + "D case");
-      if (k == d - 1) tank->fail(a, "periodic", "the vertical axis cannot be periodic");
-      c.periodic[k] = true;
+      if (k < 0 || k >= d) tank->fail(a, key, "'" + axis + "' is not an axis of this " + std::to_string(d) + "D case");
+      if (key == "periodic" && k == d - 1) tank->fail(a, key, "the vertical axis cannot be periodic");
+      out[k] = true;
     }
-  }
+  };
+  axes("periodic", c.periodic);
+  axes("free_slip", c.free_slip);
+  for (int k = 0; k < d; ++k)
+    if (c.periodic[k] && c.free_slip[k]) tank->fail(tank->raw("free_slip"), "free_slip", "an axis cannot be periodic and have walls");
   if (auto m = tank->child("motion")) {
     Vec3d lo = c.tank_origin, hi = c.tank_origin;
     for (int k = 0; k < d; ++k) {
@@ -668,6 +701,8 @@ Case read(Section& root, const std::string& file) {
     }
     c.tank_motion = static_cast<int>(c.motions.size());
     c.motions.push_back(read_motion(*m, c, "tank", lo, hi));
+    for (int k = 0; k < d; ++k)
+      if (c.free_slip[k]) tank->fail(tank->raw("free_slip"), "free_slip", "free-slip walls are for a tank at rest (not with tank.motion)");
   }
   tank->finish();
   {
@@ -944,7 +979,18 @@ PhysicsParams physics_params(const Case& c) {
                                       static_cast<float>(f.background_pressure));
     if (P.materials.fluid[k].tait_b > P.materials.fluid[P.materials.reference].tait_b) P.materials.reference = static_cast<std::uint8_t>(k);
   }
+  for (const SurfaceTensionSpec& st : c.surface_tension) {
+    const float sigma = static_cast<float>(st.coefficient);
+    P.surface_tension.sigma[st.a][st.b] = P.surface_tension.sigma[st.b][st.a] = sigma;
+    for (int f : {st.a, st.b}) P.surface_tension.largest[f] = std::max(P.surface_tension.largest[f], sigma);
+    P.surface_tension.on = P.surface_tension.on || sigma > 0.0f;
+  }
   P.tension = c.tension;
+  for (int k = 0; k < 3; ++k) {
+    P.tank_lo[k] = static_cast<float>(c.tank_origin[k]);
+    P.tank_hi[k] = static_cast<float>(c.tank_origin[k] + c.tank_size[k]);
+    if (c.free_slip[k]) P.free_slip_axes = static_cast<std::uint8_t>(P.free_slip_axes | (1u << k));
+  }
   if (c.tank_motion >= 0) P.materials.motion[P.materials.tank()] = static_cast<std::uint8_t>(c.tank_motion + 1);
   for (std::size_t k = 0; k < c.solids.size(); ++k)
     if (c.solids[k].motion >= 0) P.materials.motion[P.materials.solid(static_cast<int>(k))] = static_cast<std::uint8_t>(c.solids[k].motion + 1);

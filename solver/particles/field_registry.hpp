@@ -40,6 +40,8 @@ enum FieldFlag : std::uint16_t {
   kRefreshed = 1 << 3,   // a ghost field that changes after the halo is built: sent again in refreshes
   kExported = 1 << 4,    // written to snapshots and handed to in-situ pipelines (zero copy on the CPU)
   kNeighbour = 1 << 5,   // packed into the CPU fluid pass's 32-byte neighbour record (floats only)
+  kOptional = 1 << 6,    // only in the stores of runs that need it (OptionalFields, particle_store.hpp):
+                         // a feature's field that every other run must not pay for
 };
 
 struct FieldSpec {
@@ -79,7 +81,9 @@ constexpr FieldType field_type_of() {
   F(acc, float, Vector, Rate, kMigrated | kCheckpointed, "", "ax", "ay", "az")                                        \
   F(density_rate, float, Scalar, Rate, kMigrated | kCheckpointed, "", "density_rate")                                 \
   F(acc_prev, float, Vector, History, kMigrated, "", "ax_prev", "ay_prev", "az_prev")                                 \
-  F(density_rate_prev, float, Scalar, History, kMigrated, "", "density_rate_prev")
+  F(density_rate_prev, float, Scalar, History, kMigrated, "", "density_rate_prev")                                    \
+  F(colour_gradient, float, Vector, Derived, kGhost | kRefreshed | kOptional, "", "colour_gradient_x",               \
+    "colour_gradient_y", "colour_gradient_z")
 // clang-format on
 
 #define SPATE_FIELD_SPEC(member, ctype, shape, role, flags, exported, ...) \
@@ -118,10 +122,12 @@ static_assert([] {
   return true;
 }(), "a refreshed field must be a ghost field");
 
-// Bytes one particle's fields take (every field, dim components per vector).
+// Bytes one particle's fields take in every run (every field but the optional ones, dim
+// components per vector).
 constexpr std::size_t builtin_field_bytes(int dim) {
   std::size_t b = 0;
-  for (const FieldSpec& f : kParticleFields) b += static_cast<std::size_t>(f.components(dim)) * f.elem_size();
+  for (const FieldSpec& f : kParticleFields)
+    if (!f.has(kOptional)) b += static_cast<std::size_t>(f.components(dim)) * f.elem_size();
   return b;
 }
 

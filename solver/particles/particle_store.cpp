@@ -3,6 +3,7 @@
 #include "../backend/cpu/parallel.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <list>
 #include <cstring>
 #include <mutex>
@@ -95,14 +96,30 @@ std::vector<const FieldSpec*> field_extensions() {
   return out;
 }
 
-ParticleStore::ParticleStore(int dim) : dim_(dim) {
+namespace {
+std::atomic<int>& optional_users() {
+  static std::atomic<int> n{0};
+  return n;
+}
+}  // namespace
+
+OptionalFields::OptionalFields(bool enable) : enabled_(enable) {
+  if (enabled_) ++optional_users();
+}
+OptionalFields::~OptionalFields() {
+  if (enabled_) --optional_users();
+}
+bool optional_fields_enabled() { return optional_users() > 0; }
+
+ParticleStore::ParticleStore(int dim) : dim_(dim), optional_(optional_fields_enabled()) {
   for (const FieldSpec* spec : field_extensions()) extensions_.push_back(Extension{spec, {}, {}});
 }
 
 std::vector<FieldRef> ParticleStore::fields() {
   std::vector<FieldRef> f;
   f.reserve(3 * kBuiltinFieldCount + 3 * extensions_.size());
-#define SPATE_STORE_REF(member, ...) add(f, kParticleFields[kField_##member], dim_, member);
+#define SPATE_STORE_REF(member, ...) \
+  if (optional_ || !kParticleFields[kField_##member].has(kOptional)) add(f, kParticleFields[kField_##member], dim_, member);
   SPATE_PARTICLE_FIELDS(SPATE_STORE_REF)
 #undef SPATE_STORE_REF
   for (Extension& e : extensions_) {

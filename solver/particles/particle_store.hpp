@@ -58,6 +58,23 @@ class FieldExtension {
 // The registered extensions, in registration order (stable addresses).
 std::vector<const FieldSpec*> field_extensions();
 
+// The optional registry fields (kOptional, e.g. surface tension's colour gradient) are part of the
+// stores made while an OptionalFields(true) is alive, and of no other: a run that needs them holds
+// one for its whole length (Simulation::run), so all of its stores, buffers and device arrays agree
+// on the fields; every other run has the stores, halos and footprint it had without them.
+class OptionalFields {
+ public:
+  explicit OptionalFields(bool enable);
+  ~OptionalFields();
+  OptionalFields(const OptionalFields&) = delete;
+  OptionalFields& operator=(const OptionalFields&) = delete;
+
+ private:
+  bool enabled_;
+};
+// Whether stores made now carry the optional fields.
+bool optional_fields_enabled();
+
 class ParticleStore;
 
 // A field as snapshots and in-situ consumers see it (kExported): the registry entry and its
@@ -81,7 +98,8 @@ class ParticleStore {
   void set_owned(std::size_t n) { owned_ = n; }
 
   void resize(std::size_t n);
-  // All fields, in registry order, then the extensions. Components beyond dim are not listed.
+  // All fields, in registry order, then the extensions. Components beyond dim are not listed, nor
+  // the optional fields of a store made without them (OptionalFields).
   std::vector<FieldRef> fields();
   // Bytes held per particle by the per-particle arrays (the headline memory figure).
   std::size_t bytes_per_particle() const;
@@ -108,6 +126,7 @@ class ParticleStore {
     FieldVector<std::uint8_t> bytes[3];   // 1-byte fields
   };
   int dim_;
+  bool optional_;  // carries the kOptional fields (OptionalFields)
   std::size_t owned_ = 0;
   std::vector<Extension> extensions_;
   std::vector<std::uint32_t> scratch_;  // permute(): one word per particle for every field type

@@ -17,6 +17,16 @@ enum class DensityDiffusion : std::uint8_t { None, MolteniColagrossi, Fourtakas,
 // of a linearised Riemann solver with a low-dissipation limiter (Zhang, Hu & Adams 2017).
 enum class MomentumFlux : std::uint8_t { Central, Riemann };
 
+// Surface-tension coefficients between fluids (physics/surface_tension.hpp), from the case's
+// `surface_tension:` list: sigma[a][b] = sigma[b][a] [N/m] (0 on the diagonal and for pairs not
+// listed), largest[a] the largest coefficient of fluid a. `on` when any pair has one: only then do
+// the two surface-tension passes run.
+struct SurfaceTensionTable {
+  bool on = false;
+  float sigma[kMaxFluids][kMaxFluids] = {};
+  float largest[kMaxFluids] = {};
+};
+
 struct PhysicsParams {
   int dim = 3;
   KernelType kernel = KernelType::WendlandC2;
@@ -43,6 +53,12 @@ struct PhysicsParams {
   // Rest density, mass, viscosity, sound speed, Tait exponent of every fluid; walls and solids
   // (materials.hpp). The pair terms read fluid properties from here, never from scalars.
   MaterialTable materials;
+  SurfaceTensionTable surface_tension;
+  // Free-slip tank walls (tank.free_slip, wall_boundary.hpp): bit k set for the walls normal to
+  // axis k; the tank's fluid region [tank_lo, tank_hi] tells a tank wall particle's side.
+  std::uint8_t free_slip_axes = 0;
+  float tank_lo[3] = {0.0f, 0.0f, 0.0f};
+  float tank_hi[3] = {0.0f, 0.0f, 0.0f};
   // Prescribed wall motions (wall_motion.hpp; MaterialTable::motion says which walls follow
   // which), set by the time loop before every step: the state at the time the rates are
   // evaluated, and the rigid map of the predictor.

@@ -1,6 +1,6 @@
 #pragma once
-// Adaptive time step limits (Monaghan 1992; Morris et al. 1997): sound-speed CFL, acceleration and
-// viscous diffusion. The global step is the minimum over every particle of every device.
+// Adaptive time step limits (Monaghan 1992; Morris et al. 1997): sound-speed CFL, acceleration,
+// viscous diffusion and capillary waves (Brackbill et al. 1992). The global step is the minimum over every particle of every device.
 #include <cmath>
 
 #include "params.hpp"
@@ -11,6 +11,7 @@ struct TimeStepControl {
   float cfl = 0.2f;
   float force_factor = 0.25f;
   float viscous_factor = 0.125f;
+  float surface_tension_factor = 0.25f;
 };
 
 // The step one fluid particle allows. A particle whose speed is NaN allows 0, not NaN: the global
@@ -40,6 +41,32 @@ inline float viscous_time_step(const PhysicsParams& P, const TimeStepControl& c)
     dt = dt_m < dt ? dt_m : dt;
   }
   return dt;
+}
+
+// The capillary-wave limit dt <= 0.25 sqrt(rho h^3 / (2 pi sigma)) (Brackbill, Kothe & Zemach
+// 1992; Adami, Hu & Adams 2010), over every pair of fluids with a coefficient, with the lighter
+// fluid's rest density (the stricter of the two). Infinity without surface tension.
+inline float surface_tension_time_step(const PhysicsParams& P, const TimeStepControl& c) {
+  float dt = INFINITY;
+  if (!P.surface_tension.on) return dt;
+  const float h3 = P.h * P.h * P.h;
+  for (int a = 0; a < P.materials.fluids; ++a) {
+    for (int b = a + 1; b < P.materials.fluids; ++b) {
+      const float sigma = P.surface_tension.sigma[a][b];
+      if (sigma <= 0.0f) continue;
+      const float rho = std::fmin(P.materials.fluid[a].rho0, P.materials.fluid[b].rho0);
+      const float dt_ab = c.surface_tension_factor * std::sqrt(rho * h3 / (2.0f * 3.14159265f * sigma));
+      dt = dt_ab < dt ? dt_ab : dt;
+    }
+  }
+  return dt;
+}
+
+// The limits that do not depend on the particles' state: viscous diffusion and capillary waves.
+inline float state_free_time_step(const PhysicsParams& P, const TimeStepControl& c) {
+  const float viscous = viscous_time_step(P, c);
+  const float capillary = surface_tension_time_step(P, c);
+  return capillary < viscous ? capillary : viscous;
 }
 
 }  // namespace spate

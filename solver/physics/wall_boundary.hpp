@@ -75,4 +75,24 @@ SPATE_HD WallState<Dim> finish_wall(const PhysicsParams& P, const WallSums<Dim>&
   return out;
 }
 
+// Free-slip tank walls (tank.free_slip; Hysing et al.'s rising bubble has free-slip sides): a tank
+// wall particle beyond the fluid region along a free-slip axis a, and inside it along every other
+// axis (corners stay no-slip), keeps Adami's mirrored normal component -v~_a (no penetration) but
+// takes the fluid's own tangential velocity v~_k, k != a, so the viscous term (eq. 8) exerts no
+// shear along the wall. Only called when some axis is free-slip.
+template <int Dim>
+SPATE_HD void apply_free_slip(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material, const WallSums<Dim>& s,
+                              WallState<Dim>& st) {
+  if (material != P.materials.tank() || s.w <= 0.0f) return;
+  int normal = -1;
+  for (int k = 0; k < Dim; ++k) {
+    if (x_wall[k] >= P.tank_lo[k] && x_wall[k] <= P.tank_hi[k]) continue;
+    if (normal >= 0 || !(P.free_slip_axes & (1u << k))) return;  // a corner, or a no-slip wall
+    normal = k;
+  }
+  if (normal < 0) return;
+  for (int k = 0; k < Dim; ++k)
+    if (k != normal) st.v[k] = s.v_w[k] / s.w;
+}
+
 }  // namespace spate

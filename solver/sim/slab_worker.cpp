@@ -85,9 +85,18 @@ void SlabWorker::compute_rates() {
   const auto t0 = Clock::now();
   kernels_->equation_of_state(particles_, params_);
   kernels_->wall_state(particles_, grid_, params_);
+  // Surface tension: the colour gradient rides on the refresh below to the ghosts, whose normals
+  // the force pass after the fluid rates reads (physics/surface_tension.hpp).
+  const bool tension = params_.surface_tension.on;
+  if (tension) kernels_->colour_gradient(particles_, grid_, params_);
   const double wall = since(t0);
   // The fluid phase excludes the wait for the halo (on a GPU: host time around the launches).
-  const double fluid = fluid_rates_overlapping_refresh();
+  double fluid = fluid_rates_overlapping_refresh();
+  if (tension) {
+    const auto t1 = Clock::now();
+    kernels_->surface_tension(particles_, grid_, params_);
+    fluid += since(t1);
+  }
   busy_seconds_ += wall + fluid;
   window_wall_seconds_ += wall;
   window_fluid_seconds_ += fluid;

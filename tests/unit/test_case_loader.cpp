@@ -297,6 +297,19 @@ TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
       {"wall sensor with a negative window", {"probes=[{name: s, type: wall_pressure, position: [0, 0.02], window: -1}]"},
        {"probes[0].window", ">= 0"}},
       {"unknown momentum flux", {"momentum.flux=upwind"}, {"'momentum.flux'", "central", "riemann"}},
+      {"free slip along a periodic axis", {"tank.periodic=[x]", "tank.free_slip=[x]"}, {"'tank.free_slip'", "periodic"}},
+      {"free slip along a missing axis", {"tank.free_slip=[z]"}, {"'tank.free_slip'", "'z' is not an axis"}},
+      {"surface tension of an unknown fluid", {"fluids=[{name: a}, {name: b}]", "surface_tension=[{between: [a, c], coefficient: 1}]"},
+       {"surface_tension[0].between", "no fluid named 'c'", "fluids: a, b"}},
+      {"surface tension of a fluid with itself", {"fluids=[{name: a}, {name: b}]", "surface_tension=[{between: [a, a], coefficient: 1}]"},
+       {"surface_tension[0].between", "same fluid twice"}},
+      {"surface tension of one name", {"fluids=[{name: a}, {name: b}]", "surface_tension=[{between: [a], coefficient: 1}]"},
+       {"surface_tension[0].between", "two fluids"}},
+      {"surface tension given twice", {"fluids=[{name: a}, {name: b}]",
+                                       "surface_tension=[{between: [a, b], coefficient: 1}, {between: [b, a], coefficient: 2}]"},
+       {"surface_tension[1].between", "already has a coefficient"}},
+      {"negative surface tension", {"fluids=[{name: a}, {name: b}]", "surface_tension=[{between: [a, b], coefficient: -1}]"},
+       {"surface_tension[0].coefficient", ">= 0"}},
       {"negative Riemann limiter", {"momentum.riemann_limiter=-1"}, {"'momentum.riemann_limiter'", ">= 0"}},
       {"tension not a boolean", {"fluid.tension=maybe"}, {"'fluid.tension'"}},
   };
@@ -325,6 +338,28 @@ TEST(CaseLoader, WallSensorFindsItsFace) {
   EXPECT_DOUBLE_EQ(c.probes[2].normal[0], -1.0);
   EXPECT_DOUBLE_EQ(c.probes[3].normal[1], 1.0);  // the corner of the solid, resolved by the normal
   EXPECT_EQ(c.probes[4].face, 0);
+}
+
+// Surface tension and free-slip walls reach the physics constants: sigma symmetric per pair, the
+// largest per fluid, the pass switched on; the free-slip axes and the tank's fluid region.
+TEST(CaseLoader, SurfaceTensionAndFreeSlipReachThePhysics) {
+  const Case c = parse_case(kMinimal2D, "tiny.yaml",
+                            {"fluids=[{name: a}, {name: b, density: 100}, {name: c}]",
+                             "surface_tension=[{between: [b, a], coefficient: 2.5}, {between: [c, a], coefficient: 1}]",
+                             "tank.free_slip=[x]"});
+  const PhysicsParams P = physics_params(c);
+  EXPECT_TRUE(P.surface_tension.on);
+  EXPECT_EQ(P.surface_tension.sigma[0][1], 2.5f);
+  EXPECT_EQ(P.surface_tension.sigma[1][0], 2.5f);
+  EXPECT_EQ(P.surface_tension.sigma[0][2], 1.0f);
+  EXPECT_EQ(P.surface_tension.sigma[1][2], 0.0f);
+  EXPECT_EQ(P.surface_tension.largest[0], 2.5f);
+  EXPECT_EQ(P.surface_tension.largest[2], 1.0f);
+  EXPECT_EQ(P.free_slip_axes, 1u);
+  EXPECT_FLOAT_EQ(P.tank_hi[0], 0.2f);
+  const PhysicsParams plain = physics_params(parse_case(kMinimal2D, "tiny.yaml", {}));
+  EXPECT_FALSE(plain.surface_tension.on);
+  EXPECT_EQ(plain.free_slip_axes, 0u);
 }
 
 TEST(CaseLoader, MissingRequiredKeys) {

@@ -55,6 +55,36 @@ TEST(FieldRegistry, TheNeighbourRecordAndTheMemoryFigureFollowTheRegistry) {
   EXPECT_EQ(checkpoint_datasets(2, 1)[6].name, "kind");
 }
 
+// An optional field (kOptional: surface tension's colour gradient) is in the stores made while a
+// run that needs it holds OptionalFields(true), and costs every other run nothing: not in fields(),
+// not in the ghost or refresh sets, not in the bytes per particle.
+TEST(FieldRegistry, AnOptionalFieldIsOnlyInTheStoresOfRunsThatNeedIt) {
+  auto has_colour = [](ParticleStore& p) {
+    for (auto& f : p.fields())
+      if (f.spec == &kParticleFields[kField_colour_gradient]) return true;
+    return false;
+  };
+  ParticleStore plain(2);
+  EXPECT_FALSE(has_colour(plain));
+  {
+    const OptionalFields off(false);
+    ParticleStore p(2);
+    EXPECT_FALSE(has_colour(p));
+  }
+  {
+    const OptionalFields on(true);
+    ParticleStore p(2);
+    EXPECT_TRUE(has_colour(p));
+    EXPECT_EQ(p.bytes_per_particle(), plain.bytes_per_particle() + 2 * sizeof(float));
+    p.resize(5);
+    EXPECT_EQ(p.colour_gradient[1].size(), 5u);
+  }
+  ParticleStore after(2);
+  EXPECT_FALSE(has_colour(after));
+  after.resize(5);
+  EXPECT_TRUE(after.colour_gradient[0].empty());
+}
+
 // Two slabs run the dam break with a registered test-only field: after steps in which particles
 // cross the face, every ghost, every migrated particle, the checkpoint, the snapshot piece and the
 // in-situ view carry each particle's own value.

@@ -117,6 +117,7 @@ std::vector<std::vector<char>> run(const Case& c, int slabs, int steps, const st
                                    const ParticleHook& hook = {}, std::vector<std::uint32_t>* removed = nullptr) {
   const Lattice L = make_lattice(c);
   const PhysicsParams P = physics_params(c);
+  const OptionalFields optional_fields(P.surface_tension.on);  // as Simulation::run
   const ParticleStore initial = generate_particles(c);
   InProcessHub hub(slabs);
   std::vector<ParticleStore> finals(slabs);
@@ -218,6 +219,8 @@ std::vector<CheckedCase> gpu_checked_cases() {
       // Several fluids: the multiphase pair terms, the GPU's per-particle loop against the CPU's
       // batched one (oil over water, viscosities 50 times apart).
       {"two_fluids", load("two_layer_hydrostatic_2d.yaml", {"probes=[]"}), 100},
+      // Surface tension: the colour-gradient and force passes (a bubble ten times lighter).
+      {"surface_tension", load("bubble_rise_2d.yaml", {"probes=[]"}), 100},
   };
 }
 
@@ -314,6 +317,15 @@ TEST(ResidentTopology, RiemannOptionsAreSplitIndependentAndMatchTheCpuBackend) {
   expect_same(three, run(c, 3, 12, [&] { return std::make_unique<ResidentKernels>(c.dim, true); }));
 }
 
+// Surface tension (the colour gradient, refreshed to the ghosts, then the force): 1 and 3 slabs
+// bit-identical, and the device's orchestration (host twin) bit-identical to the CPU backend.
+TEST(ResidentTopology, SurfaceTensionIsSplitIndependentAndMatchesTheCpuBackend) {
+  const Case c = load_case(test::source_dir() + "/cases/bubble_rise_2d.yaml", {"probes=[]"});
+  const auto three = run(c, 3, 12, nullptr);
+  expect_same(run(c, 1, 12, nullptr), three);
+  expect_same(three, run(c, 3, 12, [&] { return std::make_unique<ResidentKernels>(c.dim, true); }));
+}
+
 TEST(ResidentTopology, SummationDensityAndPeriodicXMatchTheCpuBackend) {
   const Case summation = load_case(test::source_dir() + "/cases/dam_break_2d.yaml",
                                    {"tank.size=[0.16, 0.12]", "density.mode=summation"});
@@ -363,6 +375,7 @@ TEST(ResidentTopology, DeviceHealthAndDomainChecksFindTheHostsFault) {
   const Case c = small_dam_break();
   const Lattice L = make_lattice(c);
   const PhysicsParams P = physics_params(c);
+  const OptionalFields optional_fields(P.surface_tension.on);  // as Simulation::run
   const ParticleStore initial = generate_particles(c);
   InProcessHub hub(1);
   auto t = hub.endpoint(0, L.periodic[0]);

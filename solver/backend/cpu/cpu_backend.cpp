@@ -75,6 +75,24 @@ void summation_density(ParticleStore& p, const CellGrid& grid, const PhysicsPara
   });
 }
 
+void colour_gradient(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+    const CellGridView v = grid.view();
+    for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
+      for (std::uint32_t i = b; i < e; ++i) update_colour_gradient<Kernel, Dim>(P, v, p, i, g);
+    });
+  });
+}
+
+void surface_tension(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+    const CellGridView v = grid.view();
+    for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
+      for (std::uint32_t i = b; i < e; ++i) add_surface_tension<Kernel, Dim>(P, v, p, i, g);
+    });
+  });
+}
+
 namespace {
 
 // SIMD-friendly fluid rates. Per cell, the candidates (the particles of the 27 cells around it, in
@@ -324,7 +342,8 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
           sj.material = 0;  // a fluid (the wall sums do not look at it)
           accumulate_wall_pair<Kernel, Dim>(P, xw, sj, sums);
         }
-        const WallState<Dim> st = finish_wall(P, sums, ps.material[w], xw);
+        WallState<Dim> st = finish_wall(P, sums, ps.material[w], xw);
+        if (P.free_slip_axes) apply_free_slip<Dim>(P, xw, ps.material[w], sums, st);
         ps.pressure[w] = st.p;
         ps.density[w] = st.rho;
         SPATE_UNROLL for (int k = 0; k < Dim; ++k) ps.vel[k][w] = st.v[k];
@@ -359,7 +378,7 @@ float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeSt
     }
     dt = std::min(dt, particle_time_step(P, P.materials.of(p.material[i]), c, std::sqrt(v2), std::sqrt(a2)));
   }
-  return std::min(dt, viscous_time_step(P, c));
+  return std::min(dt, state_free_time_step(P, c));
 }
 
 }  // namespace spate::cpu

@@ -26,6 +26,11 @@ void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 // the same bits as one pass.
 void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P,
                  ParticleRange range = {0, std::numeric_limits<std::size_t>::max()});
+// Surface tension (physics/surface_tension.hpp), only when the case has a coefficient: the colour
+// gradient of the owned particles (before the halo refresh that carries it to the ghosts), then,
+// after the fluid rates, the force added to the owned fluid particles' acceleration.
+void colour_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+void surface_tension(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 // Smallest stable time step over owned fluid particles (infinity when there are none).
 float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c);
 
@@ -60,6 +65,12 @@ class Kernels : public StepKernels {
   }
   void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
     cpu::fluid_rates(store(), arrays_->grid(), P, range);
+  }
+  void colour_gradient(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::colour_gradient(store(), arrays_->grid(), P);
+  }
+  void surface_tension(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::surface_tension(store(), arrays_->grid(), P);
   }
   float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
     return cpu::min_time_step(store(), P, c);

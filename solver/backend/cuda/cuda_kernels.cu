@@ -53,7 +53,7 @@ __global__ void eos_kernel(DeviceFields d, std::uint32_t n, PhysicsParams P) {
 }
 
 // One thread per owned particle running one of the shared per-particle bodies
-// (backend/particle_updates.hpp), named by a tag so that the three neighbour loops share one kernel.
+// (backend/particle_updates.hpp), named by a tag so that the neighbour loops share one kernel.
 struct SummationDensityPass {
   template <class Kernel, int Dim>
   __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
@@ -71,6 +71,19 @@ struct FluidRatesPass {
   template <class Kernel, int Dim>
   __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
     update_fluid_rates<Kernel, Dim, Gamma7, Multiphase, MovingWalls>(P, v, d, i, g);
+  }
+};
+
+struct ColourGradientPass {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
+    update_colour_gradient<Kernel, Dim>(P, v, d, i, g);
+  }
+};
+struct SurfaceTensionPass {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
+    add_surface_tension<Kernel, Dim>(P, v, d, i, g);
   }
 };
 
@@ -137,6 +150,12 @@ class CudaKernels final : public StepKernels {
     dispatch_flags([&]<bool Gamma7, bool Multiphase, bool MovingWalls>() { neighbour_pass<FluidRatesPass<Gamma7, Multiphase, MovingWalls>>(P, range); },
                    flags.gamma7, flags.multiphase, flags.moving_walls);
   }
+  void colour_gradient(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    neighbour_pass<ColourGradientPass>(P, ParticleRange{0, owned()});
+  }
+  void surface_tension(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    neighbour_pass<SurfaceTensionPass>(P, ParticleRange{0, owned()});
+  }
   float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
     arrays_.select();
     float dt = INFINITY;
@@ -144,8 +163,8 @@ class CudaKernels final : public StepKernels {
       launch(owned(), time_step_kernel, arrays_.fields(), arrays_.dim(), owned32(), P, c, arrays_.scratch());
       dt = arrays_.min_f32(arrays_.scratch(), owned());
     }
-    const float viscous = viscous_time_step(P, c);
-    return viscous < dt ? viscous : dt;
+    const float limit = state_free_time_step(P, c);
+    return limit < dt ? limit : dt;
   }
   std::size_t device_bytes() const override { return arrays_.bytes(); }
 

@@ -251,13 +251,15 @@ void bind(T* (&p)[3], const char* const* data, std::size_t& at, int dim) {
 }  // namespace
 
 // The registry's fields come first in arrays_, in registry order, dim components per vector
-// (ParticleStore::fields()); run-time extensions follow and have no DeviceFields member.
+// (ParticleStore::fields()); run-time extensions follow and have no DeviceFields member. An
+// optional field the run does not carry (kOptional) stays a null pointer.
 DeviceFields DeviceSlabArrays::fields() const {
   std::vector<const char*> data(arrays_.size());
   for (std::size_t f = 0; f < arrays_.size(); ++f) data[f] = arrays_[f].data.get();
   DeviceFields d{};
   std::size_t at = 0;
-#define SPATE_BIND_FIELD(member, ...) bind(d.member, data.data(), at, dim_);
+#define SPATE_BIND_FIELD(member, ...) \
+  if (at < arrays_.size() && arrays_[at].meta.spec == &kParticleFields[kField_##member]) bind(d.member, data.data(), at, dim_);
   SPATE_PARTICLE_FIELDS(SPATE_BIND_FIELD)
 #undef SPATE_BIND_FIELD
   return d;
