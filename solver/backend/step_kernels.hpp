@@ -36,6 +36,12 @@ class StepKernels {
     (void)p, (void)g, (void)P, (void)first_cell, (void)last_cell;
     throw std::logic_error(std::string(name()) + " backend: fluid_rates_cells is for host-store backends");
   }
+  // Particle shifting (only called when P.shifting.enabled): the displacement of the owned fluid
+  // particles into `shift`, after the fluid rates and before correct(), which applies it.
+  virtual void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt) {
+    (void)p, (void)g, (void)P, (void)dt;
+    throw std::logic_error(std::string(name()) + " backend: no particle shifting");
+  }
   virtual float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) = 0;
 
   // Residency. `publish`: every field of every particle (owned and ghosts) and the cell table of

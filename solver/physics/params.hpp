@@ -15,6 +15,14 @@ enum class DensityDiffusion : std::uint8_t { None, MolteniColagrossi, Fourtakas,
 // of a linearised Riemann solver with a low-dissipation limiter (Zhang, Hu & Adams 2017).
 enum class MomentumFlux : std::uint8_t { Central, Riemann };
 
+// Particle shifting of the delta-plus-SPH model (shifting.hpp; case key `shifting`). Off: no
+// shifting pass runs and the step is what it was without it.
+struct ShiftingParams {
+  bool enabled = false;
+  float coefficient = 1.0f;  // C of shifting.hpp (Sun et al. 2017: 1)
+  float mach = 0.1f;         // Ma = U / c0 of the flow's reference speed U
+};
+
 struct PhysicsParams {
   int dim = 3;
   KernelType kernel = KernelType::WendlandC2;
@@ -35,6 +43,7 @@ struct PhysicsParams {
   // eos.hpp fluid_pressure, integrator.hpp correct_density).
   bool tension = true;
   DensityMode density_mode = DensityMode::Continuity;
+  ShiftingParams shifting;
   // Only the first `dim` components are used; the last used axis is vertical (y in 2D, z in 3D).
   float gravity[3] = {0.0f, 0.0f, -9.81f};
   float body_force[3] = {0.0f, 0.0f, 0.0f};  // extra acceleration on fluid (Poiseuille driving)

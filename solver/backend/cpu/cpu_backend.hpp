@@ -22,6 +22,9 @@ void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 // pass split into cell ranges gives the same bits as one pass.
 void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, std::uint32_t first_cell = 0,
                  std::uint32_t last_cell = 0xffffffffu);
+// Particle-shifting displacement (physics/shifting.hpp) of the owned fluid particles for a step
+// dt, into `shift`; correct() then adds it to the positions (only when P.shifting.enabled).
+void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt);
 // Smallest stable time step over owned fluid particles (infinity when there are none).
 float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c);
 
@@ -45,6 +48,7 @@ class Kernels final : public StepKernels {
                          std::uint32_t last_cell) override {
     cpu::fluid_rates(p, g, P, first_cell, last_cell);
   }
+  void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt) override { cpu::shifting(p, g, P, dt); }
   float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) override {
     return cpu::min_time_step(p, P, c);
   }
