@@ -48,6 +48,8 @@ CatalystSteering::CatalystSteering(const std::filesystem::path& xml, const Steer
   vtkSMPropertyHelper(proxy, "gravity").Set(initial.gravity.data(), 3);
   vtkSMPropertyHelper(proxy, "viscosity").Set(initial.viscosity);
   vtkSMPropertyHelper(proxy, "artificial_viscosity").Set(initial.artificial_viscosity);
+  vtkSMPropertyHelper(proxy, "motion_amplitude").Set(initial.motion_amplitude.data(), 2);
+  vtkSMPropertyHelper(proxy, "motion_frequency").Set(initial.motion_frequency.data(), 2);
   vtkSMPropertyHelper(proxy, "insitu_every").Set(initial.insitu_every);
   vtkSMPropertyHelper(proxy, "write_checkpoint").Set(0);
   vtkSMPropertyHelper(proxy, "stop").Set(0);

@@ -24,6 +24,8 @@ struct SteeringInitial {
   std::array<double, 3> gravity{0.0, -9.81, 0.0};
   double viscosity = 0.0;
   double artificial_viscosity = 0.0;
+  std::array<double, 2> motion_amplitude{0.0, 1.0};  // motion number, amplitude scale
+  std::array<double, 2> motion_frequency{0.0, 0.0};  // motion number, frequency [Hz]
   int insitu_every = 1;
 };
 

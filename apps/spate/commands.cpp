@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <csignal>
+#include <numbers>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -244,6 +245,7 @@ int run_case(const RunArgs& a, RunRecord& record) {
       init.viscosity = c.fluids[0].viscosity;
       init.artificial_viscosity = c.artificial_viscosity;
       init.insitu_every = insitu_every;
+      if (!c.motions.empty()) init.motion_frequency = {0.0, MotionSet(c.motions, c.dim).frequency(0)};
       // A restart continues steered (the checkpoint holds the accepted changes): show those values.
       if (o.restart) {
         try {
@@ -254,6 +256,8 @@ int run_case(const RunArgs& a, RunRecord& record) {
             if (ch.name == "viscosity" && !ch.value.empty()) init.viscosity = ch.value[0];
             if (ch.name == "artificial_viscosity" && !ch.value.empty()) init.artificial_viscosity = ch.value[0];
             if (ch.name == "insitu_every" && !ch.value.empty()) init.insitu_every = static_cast<int>(ch.value[0]);
+            if (ch.name == "motion_amplitude" && ch.value.size() == 2) init.motion_amplitude = {ch.value[0], ch.value[1]};
+            if (ch.name == "motion_frequency" && ch.value.size() == 2) init.motion_frequency = {ch.value[0], ch.value[1]};
           }
         } catch (const std::exception&) {
           // an unreadable checkpoint is reported by the run itself (exit 2)
@@ -409,9 +413,33 @@ int info_command(const InfoArgs& a) {
         e["tait_exponent"] = f.gamma;
         e["background_pressure"] = f.background_pressure;
       }
+      if (!P.is_fluid(m)) e["motion"] = P.materials.motion[m] > 0 ? nlohmann::ordered_json(P.materials.motion[m] - 1) : nlohmann::ordered_json();
       materials.push_back(e);
     }
     j["materials"] = materials;
+    nlohmann::ordered_json motions = nlohmann::ordered_json::array();
+    for (std::size_t k = 0; k < c.motions.size(); ++k) {
+      const MotionSpec& ms = c.motions[k];
+      nlohmann::ordered_json e{{"index", k}, {"body", ms.body}, {"type", ms.sinusoid() ? "sinusoid" : "time_series"}};
+      if (ms.sinusoid()) {
+        e["period"] = 2.0 * std::numbers::pi / ms.omega;
+        e["translation_amplitude"] = std::vector<double>(ms.translation.begin(), ms.translation.begin() + c.dim);
+        e["rotation_amplitude_degrees"] = ms.rotation * 180.0 / std::numbers::pi;
+        e["phase_degrees"] = ms.phase * 180.0 / std::numbers::pi;
+      } else {
+        e["file"] = ms.file;
+        e["samples"] = ms.times.size();
+        e["from"] = ms.times.front();
+        e["to"] = ms.times.back();
+      }
+      e["axis"] = ms.axis;
+      e["centre"] = std::vector<double>(ms.centre.begin(), ms.centre.begin() + c.dim);
+      e["ramp"] = ms.ramp;
+      e["end"] = ms.end ? nlohmann::ordered_json(*ms.end) : nlohmann::ordered_json();
+      e["end_ramp"] = ms.end_ramp;
+      motions.push_back(e);
+    }
+    j["motions"] = motions;
     j["dt"] = dt;
     j["dt_adaptive"] = !c.fixed_dt.has_value();
     j["cells"] = {L.cells[0], L.cells[1], L.cells[2]};
@@ -448,8 +476,31 @@ int info_command(const InfoArgs& a) {
         std::printf("  %-3d %-12s fluid: rho0 = %g kg/m3, mass = %g kg, mu = %g Pa s, c0 = %g m/s, gamma = %g, p_b = %g Pa\n", m,
                     names[m].c_str(), f.rho0, f.mass, f.viscosity, f.c0, f.gamma, f.background_pressure);
       } else {
-        std::printf("  %-3d %-12s %s\n", m, names[m].c_str(), m == P.materials.tank() ? "tank walls" : "solid");
+        const int motion = P.materials.motion[m];
+        std::printf("  %-3d %-12s %s%s\n", m, names[m].c_str(), m == P.materials.tank() ? "tank walls" : "solid",
+                    motion > 0 ? fmt::format(", moving (motion {})", motion - 1).c_str() : "");
       }
+    }
+    if (!c.motions.empty()) std::printf("motions         %zu\n", c.motions.size());
+    for (std::size_t k = 0; k < c.motions.size(); ++k) {
+      const MotionSpec& ms = c.motions[k];
+      std::string what;
+      if (ms.sinusoid()) {
+        what = fmt::format("sinusoid, period {:g} s", 2.0 * std::numbers::pi / ms.omega);
+        if (ms.translation[0] != 0 || ms.translation[1] != 0 || ms.translation[2] != 0)
+          what += c.dim == 2 ? fmt::format(", translation amplitude [{:g}, {:g}] m", ms.translation[0], ms.translation[1])
+                             : fmt::format(", translation amplitude [{:g}, {:g}, {:g}] m", ms.translation[0], ms.translation[1], ms.translation[2]);
+        if (ms.rotation != 0) what += fmt::format(", rotation amplitude {:g} deg", ms.rotation * 180.0 / std::numbers::pi);
+      } else {
+        what = fmt::format("time series {} ({} samples, t = {:g} to {:g} s)", ms.file, ms.times.size(), ms.times.front(), ms.times.back());
+      }
+      if (ms.rotation != 0 || !ms.sinusoid())
+        what += c.dim == 2 ? fmt::format(" about [{:g}, {:g}]", ms.centre[0], ms.centre[1])
+                           : fmt::format(" about [{:g}, {:g}, {:g}], axis [{:g}, {:g}, {:g}]", ms.centre[0], ms.centre[1], ms.centre[2],
+                                         ms.axis[0], ms.axis[1], ms.axis[2]);
+      if (ms.ramp > 0) what += fmt::format(", ramp {:g} s", ms.ramp);
+      if (ms.end) what += fmt::format(", ends at {:g} s (over {:g} s)", *ms.end, ms.end_ramp);
+      std::printf("  %-3zu %-12s %s\n", k, ms.body.c_str(), what.c_str());
     }
     std::printf("time step       %g s (%s)\n", dt, c.fixed_dt ? "fixed" : "adaptive, initial CFL estimate");
     std::printf("cell lattice    %d x %d x %d\n", L.cells[0], L.cells[1], L.cells[2]);

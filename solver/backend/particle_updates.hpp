@@ -8,15 +8,32 @@
 #include "../grid/cell_grid_view.hpp"
 #include "../particles/particle_access.hpp"
 #include "../physics/fluid_interactions.hpp"
+#include "../physics/integrator.hpp"
 #include "../physics/multiphase_interactions.hpp"
 #include "../physics/shifting.hpp"
 #include "../physics/wall_boundary.hpp"
 
 namespace spate {
 
+// The predictor of particle i (physics/integrator.hpp): a fluid particle drifts and kicks with
+// the previous rates; a wall particle that follows a motion moves rigidly from t_n to t_n+1
+// (physics/wall_motion.hpp); a static wall stays.
+template <class Fields>
+SPATE_HD void predict_particle(const PhysicsParams& P, Fields& f, std::uint32_t i, float dt) {
+  const std::uint8_t m = f.material[i];
+  if (!P.is_fluid(m)) {
+    const int motion = P.materials.motion[m];
+    if (motion > 0) apply_motion_step(P.motion_step[motion - 1], P.dim, f.pos, i);
+    return;
+  }
+  for (int k = 0; k < P.dim; ++k) predict_component(f.pos[k][i], f.vel[k][i], f.acc_prev[k][i], dt);
+  if (P.density_mode == DensityMode::Continuity) predict_density(f.density[i], f.density_rate_prev[i], dt);
+}
+
 // Acceleration and density rate of fluid particle i (zero rates for walls). Multiphase: the pair
-// terms of multiphase_interactions.hpp with each neighbour's own fluid.
-template <class Kernel, int Dim, bool Gamma7, bool Multiphase, class Fields>
+// terms of multiphase_interactions.hpp with each neighbour's own fluid. MovingWalls: walls carry
+// their prescribed velocity into continuity (ParticleState::w).
+template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, class Fields>
 SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
   if (!P.is_fluid(f.material[i])) {
     SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = 0.0f;
@@ -31,10 +48,12 @@ SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, 
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
     for (std::uint32_t j = jb; j < je; ++j) {
       if (distance_squared<Dim>(si.x, f.pos, j) < P.support2) {
+        ParticleState<Dim> sj = load_state<Dim>(f, j);
+        if constexpr (MovingWalls) sj.w = boundary_velocity<Dim>(P, sj);
         if constexpr (Multiphase) {
-          accumulate_multiphase_pair<Kernel, Dim, Gamma7>(P, M, si, load_state<Dim>(f, j), rates);
+          accumulate_multiphase_pair<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj, rates);
         } else {
-          accumulate_fluid_pair<Kernel, Dim, Gamma7>(P, M, si, load_state<Dim>(f, j), rates);
+          accumulate_fluid_pair<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj, rates);
         }
       }
     }
@@ -54,7 +73,7 @@ SPATE_HD void update_wall_state(const PhysicsParams& P, const CellGridView& v, F
     for (std::uint32_t j = jb; j < je; ++j)
       if (P.is_fluid(f.material[j])) accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(f, j), sums);
   });
-  const WallState<Dim> s = finish_wall(P, sums);
+  const WallState<Dim> s = finish_wall(P, sums, f.material[w], xw);
   f.pressure[w] = s.p;
   f.density[w] = s.rho;
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.vel[k][w] = s.v[k];
@@ -86,7 +105,7 @@ SPATE_HD void update_shift(const PhysicsParams& P, const CellGridView& v, Fields
   ShiftingSums<Dim> sums;
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
     for (std::uint32_t j = jb; j < je; ++j)
-      accumulate_shifting_pair<Kernel, Dim>(P, M, w_dp, xi, ParticleState<Dim>{load_vec<Dim>(f.pos, j), zero_vec<Dim>(), f.density[j], 0.0f, f.material[j]}, sums);
+      accumulate_shifting_pair<Kernel, Dim>(P, M, w_dp, xi, ParticleState<Dim>{load_vec<Dim>(f.pos, j), zero_vec<Dim>(), f.density[j], 0.0f, f.material[j], zero_vec<Dim>()}, sums);
   });
   const Vec<Dim> dr = shifting_displacement<Dim>(P, M, sums, dt);
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.shift[k][i] = dr[k];

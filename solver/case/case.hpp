@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "../physics/params.hpp"
+#include "motion.hpp"
 
 namespace spate {
 
@@ -39,6 +40,7 @@ struct SolidSpec {
   std::string name;
   Box box;
   bool hollow = true;  // only `wall_layers` layers under its surface are particles
+  int motion = -1;     // index into Case::motions, or -1: static
 };
 
 enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid };
@@ -56,6 +58,7 @@ struct ProbeSpec {
   double window = 0.0;      // wall_pressure: moving-average window [s] (0: none)
   bool connected = false;   // height: the top of the water column standing on the floor (spray above ignored)
   double min_depth = 0.0;   // front: only water at least this deep counts (a bore over a wet bed)
+  int follow = -1;          // pressure, velocity, height: moves with this motion (Case::motions), -1: fixed
   // pressure, velocity, height, centroid: only this fluid's particles (index into Case::fluids;
   // -1: every fluid); `phase_name` its name, for descriptions.
   int phase = -1;
@@ -112,6 +115,10 @@ struct Case {
   // Fluid that leaves through the open top (over the walls, above the headroom) is removed; more
   // than this fraction of the fluid removed stops the run (exit 3).
   double max_removed_fraction = 0.05;
+
+  int tank_motion = -1;  // index into `motions`, or -1: the tank stands still
+  // Prescribed wall motions (motion.hpp), of the tank and of solids; at most kMaxMotions.
+  std::vector<MotionSpec> motions;
 
   std::vector<FluidBlock> fluid_blocks;
   double wet_bed = 0.0;  // depth of still water on the rest of the floor

@@ -367,12 +367,93 @@ std::optional<std::string> file_name_problem(const std::string& name) {
 constexpr double kLargestCoordinateInDp = 1048576.0;
 constexpr double kLargestCoordinate = 1.0e7;  // metres
 
+constexpr double kDegrees = 3.14159265358979323846 / 180.0;
+
+// A `motion:` map of the tank or of a solid (docs/cases.md, Motions). `lo`, `hi`: the moving body's
+// extent (for its default centre and its reach).
+MotionSpec read_motion(Section& m, const Case& c, const std::string& body, const Vec3d& lo, const Vec3d& hi) {
+  const int d = c.dim;
+  MotionSpec spec;
+  spec.body = body;
+  if (m.has("file")) {
+    for (const char* key : {"period", "frequency", "translation", "rotation", "phase"})
+      if (m.has(key)) m.fail(m.raw(key), key, "a time series (file) takes no '" + std::string(key) + "'");
+    const std::filesystem::path given(m.text("file"));
+    const std::filesystem::path path = given.is_absolute() ? given : std::filesystem::path(c.file).parent_path() / given;
+    spec.file = path.lexically_normal().string();
+    try {
+      read_motion_csv(spec.file, spec);
+    } catch (const std::exception& e) {
+      m.fail(m.raw("file"), "file", e.what());
+    }
+    if (d == 2)
+      for (const auto& v : spec.values)
+        if (v[2] != 0.0) m.fail(m.raw("file"), "file", "a 2D case has no z displacement");
+  } else {
+    if (m.has("period") == m.has("frequency")) m.fail(m.node(), "period", "a sinusoidal motion needs a period or a frequency (one of them)");
+    if (m.has("period")) {
+      const double period = m.number("period");
+      if (!(period > 0)) m.fail(m.raw("period"), "period", "must be > 0");
+      spec.omega = 2.0 * 3.14159265358979323846 / period;
+    } else {
+      const double f = m.number("frequency");
+      if (!(f > 0)) m.fail(m.raw("frequency"), "frequency", "must be > 0");
+      spec.omega = 2.0 * 3.14159265358979323846 * f;
+    }
+    const Vec3d t = m.vector("translation", d, Vec3d{0, 0, 0});
+    for (int k = 0; k < 3; ++k) spec.translation[k] = t[k];
+    spec.rotation = m.number("rotation", 0.0) * kDegrees;
+    spec.phase = m.number("phase", 0.0) * kDegrees;
+    if (t[0] == 0 && t[1] == 0 && t[2] == 0 && spec.rotation == 0)
+      m.fail(m.node(), "translation", "a motion needs a translation or a rotation amplitude");
+  }
+  if (d == 3) {
+    const Vec3d axis = m.vector("axis", 3, Vec3d{0, 0, 1});
+    const double n = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    if (!(n > 0)) m.fail(m.raw("axis"), "axis", "the rotation axis must not be zero");
+    for (int k = 0; k < 3; ++k) spec.axis[k] = axis[k] / n;
+  } else if (m.has("axis")) {
+    m.fail(m.raw("axis"), "axis", "a 2D case rotates about z; it takes no axis");
+  }
+  Vec3d middle{0, 0, 0};
+  for (int k = 0; k < d; ++k) middle[k] = 0.5 * (lo[k] + hi[k]);
+  const Vec3d centre = m.vector("centre", d, middle);
+  for (int k = 0; k < 3; ++k) spec.centre[k] = centre[k];
+  spec.ramp = m.number("ramp", 0.0);
+  if (spec.ramp < 0) m.fail(m.raw("ramp"), "ramp", "must be >= 0 (seconds)");
+  if (m.has("end")) {
+    spec.end = m.number("end");
+    if (!(*spec.end > 0)) m.fail(m.raw("end"), "end", "must be > 0 (seconds)");
+  }
+  spec.end_ramp = m.number("end_ramp", spec.ramp);
+  if (spec.end_ramp < 0 || (spec.end && spec.end_ramp > *spec.end))
+    m.fail(m.raw("end_ramp"), "end_ramp", "must be >= 0 and not longer than 'end'");
+  // The farthest corner of the body from the centre.
+  for (int corner = 0; corner < (1 << d); ++corner) {
+    double r2 = 0.0;
+    for (int k = 0; k < d; ++k) {
+      const double x = (corner >> k & 1) ? hi[k] : lo[k];
+      r2 += (x - spec.centre[k]) * (x - spec.centre[k]);
+    }
+    spec.reach = std::max(spec.reach, std::sqrt(r2));
+  }
+  m.finish();
+  return spec;
+}
+
 // "x-" -> 0, "x+" -> 1, "y-" -> 2, ... (2 axis + side); -1 for anything else.
 int face_index(const std::string& name, int dim) {
   if (name.size() != 2 || (name[1] != '-' && name[1] != '+')) return -1;
   const int axis = name[0] == 'x' ? 0 : name[0] == 'y' ? 1 : name[0] == 'z' ? 2 : -1;
   if (axis < 0 || axis >= dim) return -1;
   return 2 * axis + (name[1] == '+' ? 1 : 0);
+}
+
+// The tank's upper corner as its particles make it: its extents rounded to whole dp.
+Vec3d particle_tank_max(const Case& c) {
+  Vec3d hi{0, 0, 0};
+  for (int k = 0; k < c.dim; ++k) hi[k] = c.tank_origin[k] + static_cast<double>(std::lround(c.tank_size[k] / c.dp)) * c.dp;
+  return hi;
 }
 
 // A wall-pressure sensor sits on a face that fluid can touch: an interior face of the tank (not
@@ -399,8 +480,7 @@ void read_wall_sensor(Section& p, const Case& c, ProbeSpec& probe) {
     at[axis] = plane;
     found.emplace_back(n, at);
   };
-  Vec3d tank_hi{0, 0, 0};
-  for (int k = 0; k < d; ++k) tank_hi[k] = c.tank_origin[k] + static_cast<double>(std::lround(c.tank_size[k] / c.dp)) * c.dp;
+  const Vec3d tank_hi = particle_tank_max(c);
   for (int a = 0; a < d; ++a) {
     if (c.periodic[a]) continue;
     consider(c.tank_origin, tank_hi, a, c.tank_origin[a], 1.0);
@@ -435,6 +515,25 @@ void read_wall_sensor(Section& p, const Case& c, ProbeSpec& probe) {
     }
   }
   p.fail(p.raw("normal"), "normal", "is not the normal (pointing into the fluid) of the face the sensor lies on");
+}
+
+// Whether a point on a face (read_wall_sensor put it exactly there) lies on the surface of a body
+// that moves: the tank's walls, or a solid box, with a motion.
+bool on_moving_body(const Vec3d& x, const Case& c) {
+  const int d = c.dim;
+  const double tol = 1e-9;
+  auto on_box = [&](const Vec3d& lo, const Vec3d& hi) {
+    bool inside = true, on_face = false;
+    for (int k = 0; k < d; ++k) {
+      inside = inside && x[k] >= lo[k] - tol && x[k] <= hi[k] + tol;
+      on_face = on_face || std::fabs(x[k] - lo[k]) <= tol || std::fabs(x[k] - hi[k]) <= tol;
+    }
+    return inside && on_face;
+  };
+  for (const SolidSpec& s : c.solids)
+    if (s.motion >= 0 && on_box(s.box.min, s.box.max)) return true;
+  if (c.tank_motion < 0) return false;
+  return on_box(c.tank_origin, particle_tank_max(c));
 }
 
 Case read(Section& root, const std::string& file) {
@@ -573,6 +672,15 @@ Case read(Section& root, const std::string& file) {
       c.periodic[k] = true;
     }
   }
+  if (auto m = tank->child("motion")) {
+    Vec3d lo = c.tank_origin, hi = c.tank_origin;
+    for (int k = 0; k < d; ++k) {
+      lo[k] -= c.wall_layers * c.dp;
+      hi[k] += c.tank_size[k] + c.wall_layers * c.dp;
+    }
+    c.tank_motion = static_cast<int>(c.motions.size());
+    c.motions.push_back(read_motion(*m, c, "tank", lo, hi));
+  }
   tank->finish();
   {
     double largest = 0;
@@ -622,6 +730,10 @@ Case read(Section& root, const std::string& file) {
     spec.name = s.text("name");
     spec.box = read_box(s, d);
     spec.hollow = s.boolean("hollow", true);
+    if (auto m = s.child("motion")) {
+      spec.motion = static_cast<int>(c.motions.size());
+      c.motions.push_back(read_motion(*m, c, spec.name, spec.box.min, spec.box.max));
+    }
     s.finish();
     if (!solid_names.insert(spec.name).second) s.fail(s.raw("name"), "name", "solid '" + spec.name + "' is defined twice");
     if (!inside(spec.box, c.tank_origin, tank_hi, d, tol)) s.fail(s.node(), "max", "solid lies (partly) outside the tank");
@@ -631,6 +743,14 @@ Case read(Section& root, const std::string& file) {
   }
   if (c.solids.size() > 200) root.fail(root.raw("solids"), "solids", "at most 200 solids");
   if (c.fluid_blocks.size() > 200) root.fail(root.raw("fluid_blocks"), "fluid_blocks", "at most 200 fluid blocks");
+  if (static_cast<int>(c.motions.size()) > kMaxMotions)
+    root.fail(root.raw("solids"), "solids", "at most " + std::to_string(kMaxMotions) + " motions (tank and solids together)");
+  if (!c.motions.empty() && (c.periodic[0] || c.periodic[1] || c.periodic[2]))
+    tank->fail(tank->raw("periodic"), "periodic", "moving walls need a closed tank: no periodic axes with a motion");
+  // The Riemann flux's wall term (finish_fluid_rates) takes the wall at rest (the mirror velocity
+  // -v_i); with a moving wall it would damp the fluid that follows the wall.
+  if (!c.motions.empty() && c.flux == MomentumFlux::Riemann)
+    root.fail(root.raw("momentum"), "momentum.flux", "'riemann' assumes static walls; it cannot be combined with a motion (use 'central')");
   if (c.fluid_blocks.empty() && c.wet_bed <= 0) root.fail(root.node(), "fluid_blocks", "the case has no fluid (no fluid_blocks and no wet_bed)");
 
   for (auto& p : root.list("probes")) {
@@ -671,7 +791,12 @@ Case read(Section& root, const std::string& file) {
                                               (d == 3 ? "y-, y+, z-, z+)" : "y-, y+)"));
         }
         break;
-      case ProbeType::WallPressure: read_wall_sensor(p, c, probe); break;
+      case ProbeType::WallPressure:
+        read_wall_sensor(p, c, probe);
+        // The sensor reads Adami's pressure with a static wall's (g - a_w) at a fixed point.
+        if (on_moving_body(probe.position, c))
+          p.fail(p.raw("position"), "position", "a wall_pressure sensor on a moving wall is not supported (it stays where it is)");
+        break;
       case ProbeType::Centroid: break;
       case ProbeType::Front: {
         const std::string axis = p.text("axis", std::string("x"));
@@ -682,6 +807,19 @@ Case read(Section& root, const std::string& file) {
           p.fail(p.raw("min_depth"), "min_depth", "must be >= 0 and below the tank top");
         break;
       }
+    }
+    if (p.has("follow")) {
+      // The probe rides with a moving body: a gauge on a sloshing tank's wall.
+      if (probe.type != ProbeType::Pressure && probe.type != ProbeType::Velocity && probe.type != ProbeType::Height)
+        p.fail(p.raw("follow"), "follow", "only pressure, velocity and height probes follow a moving body");
+      const std::string body = p.text("follow");
+      int motion = -1;
+      if (body == "tank") motion = c.tank_motion;
+      for (const SolidSpec& solid : c.solids)
+        if (solid.name == body) motion = solid.motion;
+      if (body != "tank" && !solid_names.count(body)) p.fail(p.raw("follow"), "follow", "no solid named '" + body + "' (or 'tank')");
+      if (motion < 0) p.fail(p.raw("follow"), "follow", "'" + body + "' does not move (it has no motion)");
+      probe.follow = motion;
     }
     p.finish();
     c.probes.push_back(probe);
@@ -819,6 +957,11 @@ PhysicsParams physics_params(const Case& c) {
     if (P.materials.fluid[k].tait_b > P.materials.fluid[P.materials.reference].tait_b) P.materials.reference = static_cast<std::uint8_t>(k);
   }
   P.tension = c.tension;
+  if (c.tank_motion >= 0) P.materials.motion[P.materials.tank()] = static_cast<std::uint8_t>(c.tank_motion + 1);
+  for (std::size_t k = 0; k < c.solids.size(); ++k)
+    if (c.solids[k].motion >= 0) P.materials.motion[P.materials.solid(static_cast<int>(k))] = static_cast<std::uint8_t>(c.solids[k].motion + 1);
+  // The walls' state at t = 0; the time loop sets it again before every step.
+  MotionSet(c.motions, c.dim).set_step(P, 0.0, 0.0);
   P.artificial_viscosity = static_cast<float>(c.artificial_viscosity);
   P.delta = static_cast<float>(c.delta);
   P.diffusion = c.diffusion;

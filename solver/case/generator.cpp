@@ -121,6 +121,7 @@ Lattice make_lattice(const Case& c) {
   // 0.1% above the support so that rounding in cell_of never hides a neighbour.
   const double support = 2.0 * c.smoothing_ratio * c.dp * 1.001;
   const Sites s(c);
+  const Vec3d motion_bound = MotionSet(c.motions, c.dim).bound();
   for (int a = 0; a < 3; ++a) {
     if (a >= c.dim) {
       L.cells[a] = 1;
@@ -130,6 +131,9 @@ Lattice make_lattice(const Case& c) {
     }
     double lo = s.origin[a] + s.lo[a] * c.dp;
     double hi = s.origin[a] + s.hi[a] * c.dp;
+    // Moving walls sweep beyond where they start: room for the farthest they can go.
+    lo -= motion_bound[a];
+    hi += motion_bound[a];
     if (c.periodic[a]) {
       const double period = c.tank_size[a];
       const int cells = static_cast<int>(std::floor(period / support));

@@ -17,7 +17,13 @@ SPATE_HD Vec<Dim> load_vec(const Array (&a)[3], std::size_t i) {
 
 template <int Dim, class Fields>
 SPATE_HD ParticleState<Dim> load_state(const Fields& f, std::size_t i) {
-  return ParticleState<Dim>{load_vec<Dim>(f.pos, i), load_vec<Dim>(f.vel, i), f.density[i], f.pressure[i], f.material[i]};
+  ParticleState<Dim> s;
+  s.x = load_vec<Dim>(f.pos, i);
+  s.v = load_vec<Dim>(f.vel, i);
+  s.rho = f.density[i];
+  s.p = f.pressure[i];
+  s.material = f.material[i];
+  return s;
 }
 
 // |x_i - x_j|^2 with x_j read from structure-of-arrays positions: the support test of the pair

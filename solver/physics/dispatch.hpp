@@ -25,21 +25,37 @@ inline bool all_fluids_gamma7(const PhysicsParams& P) {
   return true;
 }
 
+// Calls f.template operator()<Fixed..., b...>() with the runtime bools b as template arguments:
+// each choice of the bools gets its own compiled loop, and a run pays only for what it uses.
+template <bool... Fixed, class F>
+void dispatch_flags(F&& f) {
+  f.template operator()<Fixed...>();
+}
+template <bool... Fixed, class F, class... Rest>
+void dispatch_flags(F&& f, bool first, Rest... rest) {
+  if (first) dispatch_flags<Fixed..., true>(f, rest...);
+  else dispatch_flags<Fixed..., false>(f, rest...);
+}
+
+// The fluid pair loop's compile-time choices: Gamma7 (every fluid has the Tait exponent 7: the
+// exact product instead of pow), Multiphase (several fluids: the interface-consistent pair terms
+// of multiphase_interactions.hpp), MovingWalls (some walls move: their prescribed velocity in
+// continuity). One static fluid keeps the single-phase loop, unchanged.
+struct PairLoopFlags {
+  bool gamma7, multiphase, moving_walls;
+};
+inline PairLoopFlags pair_loop_flags(const PhysicsParams& P) {
+  return PairLoopFlags{all_fluids_gamma7(P), P.materials.multiphase(), P.moving_walls()};
+}
+
 // As dispatch_kernel_dim, for the fluid pair loop: f.template operator()<Kernel, Dim, Gamma7,
-// Multiphase>(). Multiphase (several fluids) selects the interface-consistent pair terms
-// (multiphase_interactions.hpp); one fluid keeps the single-phase loop, unchanged.
+// Multiphase, MovingWalls>().
 template <class F>
 void dispatch_pair_loop(const PhysicsParams& P, F&& f) {
-  const bool gamma7 = all_fluids_gamma7(P);
-  const bool multiphase = P.materials.multiphase();
+  const PairLoopFlags flags = pair_loop_flags(P);
   dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-    if (multiphase) {
-      if (gamma7) f.template operator()<Kernel, Dim, true, true>();
-      else f.template operator()<Kernel, Dim, false, true>();
-    } else {
-      if (gamma7) f.template operator()<Kernel, Dim, true, false>();
-      else f.template operator()<Kernel, Dim, false, false>();
-    }
+    dispatch_flags([&]<bool Gamma7, bool Multiphase, bool MovingWalls>() { f.template operator()<Kernel, Dim, Gamma7, Multiphase, MovingWalls>(); },
+                   flags.gamma7, flags.multiphase, flags.moving_walls);
   });
 }
 

@@ -19,7 +19,17 @@ struct ParticleState {
   float rho;     // density
   float p;       // pressure
   std::uint8_t material;  // index into PhysicsParams::materials (materials.hpp)
+  // With moving walls only (the MovingWalls pair terms): the velocity continuity and artificial
+  // viscosity see, a fluid's own, a wall's prescribed rigid motion (boundary_velocity()).
+  Vec<Dim> w;
 };
+
+// What continuity and artificial viscosity see of neighbour j: a fluid's velocity, a wall's
+// prescribed velocity (its `v` holds the no-slip velocity the viscous term sees).
+template <int Dim>
+SPATE_HD Vec<Dim> boundary_velocity(const PhysicsParams& P, const ParticleState<Dim>& j) {
+  return P.is_fluid(j.material) ? j.v : wall_velocity<Dim>(P, j.material, j.x);
+}
 
 template <int Dim>
 struct FluidRates {
@@ -54,8 +64,8 @@ SPATE_HD float density_diffusion(const PhysicsParams& P, const FluidMaterial& M,
 // gradient factor (grad_i W_ij = F r_ij), 1/(r^2 + eta^2), g . r_ji (the hydrostatic jump's
 // direction, for density diffusion and the Riemann solver), and the relative velocity, once as the
 // laminar term sees a wall (its extrapolated no-slip velocity) and once as continuity and artificial
-// viscosity see it (static walls: their real, zero velocity; Adami et al. 2012), with vr its
-// projection on r_ij.
+// viscosity see it (a wall's real velocity: zero for static walls, the prescribed motion j.w for
+// moving ones; Adami et al. 2012), with vr its projection on r_ij.
 template <int Dim>
 struct PairKinematics {
   Vec<Dim> r;
@@ -64,7 +74,7 @@ struct PairKinematics {
   float vr;
 };
 
-template <class Kernel, int Dim>
+template <class Kernel, int Dim, bool MovingWalls = false>
 SPATE_HD PairKinematics<Dim> pair_kinematics(const PhysicsParams& P, const ParticleState<Dim>& i, const ParticleState<Dim>& j,
                                              float j_fluid) {
   PairKinematics<Dim> k;
@@ -77,7 +87,8 @@ SPATE_HD PairKinematics<Dim> pair_kinematics(const PhysicsParams& P, const Parti
   SPATE_UNROLL for (int a = 0; a < Dim; ++a) k.g_dot_rji -= P.gravity[a] * k.r[a];
   SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
     k.v_ij_visc[a] = i.v[a] - j.v[a];
-    k.v_ij_wall[a] = i.v[a] - j_fluid * j.v[a];
+    if constexpr (MovingWalls) k.v_ij_wall[a] = i.v[a] - j.w[a];
+    else k.v_ij_wall[a] = i.v[a] - j_fluid * j.v[a];
   }
   k.vr = dot(k.v_ij_wall, k.r);
   return k;
@@ -138,11 +149,12 @@ SPATE_HD FluidRates<Dim> pair_rates(const PairKinematics<Dim>& pk, float radial,
 // driver's inner loop vectorises: beyond the support the kernel gradient is exactly 0, and for
 // j = i the offset r is 0, so every term vanishes by itself and adds +0 to the sums (which leaves
 // them unchanged). Gamma7: M.gamma == 7 (the exact product instead of pow, chosen per run).
-template <class Kernel, int Dim, bool Gamma7 = true>
+// MovingWalls: some walls move (j.w holds what continuity sees of j); without it walls are at rest.
+template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false>
 SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
                                           const ParticleState<Dim>& j) {
   const float j_fluid = P.is_fluid(j.material) ? 1.0f : 0.0f;
-  const PairKinematics<Dim> pk = pair_kinematics<Kernel, Dim>(P, i, j, j_fluid);
+  const PairKinematics<Dim> pk = pair_kinematics<Kernel, Dim, MovingWalls>(P, i, j, j_fluid);
   const float r2 = pk.r2, F = pk.F, inv_r2_eta = pk.inv_r2_eta, vr = pk.vr;
   const float inv_rho_i = 1.0f / i.rho;
   const float inv_rho_j = 1.0f / j.rho;
@@ -179,10 +191,10 @@ SPATE_HD void add_pair_rates(FluidRates<Dim>& out, const FluidRates<Dim>& t) {
   out.wall_weight += t.wall_weight;
 }
 
-template <class Kernel, int Dim, bool Gamma7>
+template <class Kernel, int Dim, bool Gamma7, bool MovingWalls>
 SPATE_HD void accumulate_fluid_pair(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
                                     const ParticleState<Dim>& j, FluidRates<Dim>& out) {
-  add_pair_rates(out, fluid_pair_terms<Kernel, Dim, Gamma7>(P, M, i, j));
+  add_pair_rates(out, fluid_pair_terms<Kernel, Dim, Gamma7, MovingWalls>(P, M, i, j));
 }
 
 // Once per fluid particle after the pair sum: the Riemann solver's wall term, then body forces.

@@ -50,13 +50,14 @@ SPATE_HD NeighbourFluid neighbour_fluid(const PhysicsParams& P, std::uint8_t mat
 
 // The contribution of neighbour j (of fluid properties Nj, see neighbour_fluid) to fluid particle
 // i of material M. Branch-free like fluid_pair_terms (selects, no jumps), so the CPU driver's loop
-// over neighbours vectorises; zero beyond the support and for j = i.
-template <class Kernel, int Dim, bool Gamma7 = true>
+// over neighbours vectorises; zero beyond the support and for j = i. MovingWalls: as
+// fluid_pair_terms (j.w is what continuity sees of j).
+template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false>
 SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
                                                const ParticleState<Dim>& j, const NeighbourFluid& Nj) {
   const bool j_is_fluid = P.is_fluid(j.material);
   const float j_fluid = j_is_fluid ? 1.0f : 0.0f;
-  const PairKinematics<Dim> pk = pair_kinematics<Kernel, Dim>(P, i, j, j_fluid);
+  const PairKinematics<Dim> pk = pair_kinematics<Kernel, Dim, MovingWalls>(P, i, j, j_fluid);
   const float r2 = pk.r2, F = pk.F, inv_r2_eta = pk.inv_r2_eta, vr = pk.vr;
   const float same_fluid = j.material == i.material ? 1.0f : 0.0f;  // walls never match a fluid
   // A wall stands in for a particle of i's fluid at the wall's normalised density (see above).
@@ -94,10 +95,10 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
   return pair_rates<Dim>(pk, radial, laminar, drho, j_fluid, volume_j);
 }
 
-template <class Kernel, int Dim, bool Gamma7>
+template <class Kernel, int Dim, bool Gamma7, bool MovingWalls>
 SPATE_HD void accumulate_multiphase_pair(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
                                          const ParticleState<Dim>& j, FluidRates<Dim>& out) {
-  add_pair_rates(out, multiphase_pair_terms<Kernel, Dim, Gamma7>(P, M, i, j, neighbour_fluid(P, j.material)));
+  add_pair_rates(out, multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls>(P, M, i, j, neighbour_fluid(P, j.material)));
 }
 
 }  // namespace spate

@@ -4,7 +4,9 @@
 #include <cstdint>
 
 #include "kernels.hpp"
+#include "vec.hpp"
 #include "materials.hpp"
+#include "wall_motion.hpp"
 
 namespace spate {
 
@@ -50,8 +52,27 @@ struct PhysicsParams {
   // Rest density, mass, viscosity, sound speed, Tait exponent of every fluid; walls and solids
   // (materials.hpp). The pair terms read fluid properties from here, never from scalars.
   MaterialTable materials;
+  // Prescribed wall motions (wall_motion.hpp; MaterialTable::motion says which walls follow
+  // which), set by the time loop before every step: the state at the time the rates are
+  // evaluated, and the rigid map of the predictor.
+  int motions = 0;
+  MotionState motion[kMaxMotions];
+  MotionStep motion_step[kMaxMotions];
 
   SPATE_HD bool is_fluid(std::uint8_t material) const { return materials.is_fluid(material); }
+  SPATE_HD bool moving_walls() const { return motions > 0; }
+  // The motion wall material m follows, or null when it is static (and for fluids).
+  SPATE_HD const MotionState* motion_of(std::uint8_t m) const {
+    const int k = materials.motion[m];
+    return k > 0 ? &motion[k - 1] : nullptr;
+  }
 };
+
+// The velocity of wall particle x of material m (zero for static walls).
+template <int Dim>
+SPATE_HD Vec<Dim> wall_velocity(const PhysicsParams& P, std::uint8_t m, const Vec<Dim>& x) {
+  const MotionState* s = P.motion_of(m);
+  return s ? rigid_velocity<Dim>(*s, x) : zero_vec<Dim>();
+}
 
 }  // namespace spate

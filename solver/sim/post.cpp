@@ -111,11 +111,16 @@ std::vector<std::vector<double>> SavedProbes::sample(const SavedState& s) {
   const Lattice lattice = make_lattice(case_);
   InProcessHub hub(1);
   auto transport = hub.endpoint(0, lattice.periodic[0]);
-  SlabWorker w(lattice, physics_params(case_), *transport);
+  // Moving walls where the case's motions put them at that time (probes that follow a body; the
+  // wall state of an old checkpoint). Steering changes of a motion during the run are not replayed.
+  const MotionSet motions(case_.motions, case_.dim);
+  PhysicsParams P = physics_params(case_);
+  motions.set_step(P, s.time, s.time);
+  SlabWorker w(lattice, P, *transport);
   w.take_share(merged(s.pieces, case_.dim), SlabLayout::uniform(lattice.cells[0], 1));
   if (s.derived_saved) w.prepare_saved();
   else w.prepare(false);
-  return probes_.sample(s.time, s.step, w);
+  return probes_.sample(s.time, s.step, w, &motions);
 }
 
 }  // namespace spate

@@ -83,12 +83,12 @@ std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at, int phase) {
 // (the first crossing above the lowest wet sample, which must lie within the kernel support 2h of
 // the floor), so that spray, an overtopping jet or drops above it are ignored; otherwise the
 // highest crossing. 0 when dry.
-double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c) {
+double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c, std::optional<double> floor_at) {
   const int v = c.dim - 1;
   Vec3d at = gauge.position;
   at[v] = 0;
   if (!owns_point(w, at)) return kNaN;
-  const double floor = c.tank_origin[v];
+  const double floor = floor_at.value_or(c.tank_origin[v]);
   const double top = w.lattice().upper(v) - 1e-6;
   const double step = c.dp / 4;
   const int last = static_cast<int>(std::ceil((top - floor) / step));  // samples 0..last
@@ -129,6 +129,25 @@ double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c) {
     }
   });
   return height;
+}
+
+Vec3d followed_position(const ProbeSpec& gauge, const Case& c, const MotionSet& motions, double time) {
+  const int v = c.dim - 1;
+  Vec3d at = gauge.position;
+  if (gauge.type == ProbeType::Height) at[v] = c.tank_origin[v];
+  const MotionSpec& m = motions.spec(gauge.follow);
+  const MotionSample s = motions.sample(gauge.follow, time);
+  // x(t) = centre + d(t) + R(theta) (x(0) - centre), R about the motion's axis (Rodrigues).
+  double r[3] = {0, 0, 0};
+  for (int k = 0; k < c.dim; ++k) r[k] = at[k] - m.centre[k];
+  const double cs = std::cos(s.angle), sn = std::sin(s.angle);
+  const auto& n = m.axis;
+  const double n_dot_r = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
+  const double cross[3] = {n[1] * r[2] - n[2] * r[1], n[2] * r[0] - n[0] * r[2], n[0] * r[1] - n[1] * r[0]};
+  Vec3d out{0, 0, 0};
+  for (int k = 0; k < c.dim; ++k)
+    out[k] = m.centre[k] + s.displacement[k] + r[k] * cs + cross[k] * sn + n[k] * n_dot_r * (1.0 - cs);
+  return out;
 }
 
 std::vector<Vec3d> sensor_points(const ProbeSpec& sensor, int dim, double dp) {
@@ -182,7 +201,7 @@ std::vector<double> sample_wall_pressure(SlabWorker& w, const std::vector<Vec3d>
         for (std::uint32_t j = b; j < e; ++j)
           if (P.is_fluid(p.material[j])) accumulate_wall_pair<Kernel, Dim>(P, x, load_state<Dim>(p, j), sums);
       });
-      out[k] = sums.w > 0.0f ? adami_pressure(P, sums) : 0.0;
+      out[k] = sums.w > 0.0f ? adami_pressure(P, sums, zero_vec<Dim>()) : 0.0;
     }
   });
   return out;
@@ -448,7 +467,7 @@ ProbeSet::ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool wri
   }
 }
 
-std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step, SlabWorker& w) {
+std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step, SlabWorker& w, const MotionSet* motions) {
   std::vector<std::vector<double>> rows;
   // Near a slab face a probe sums over ghosts: they must hold the same values as their owners.
   w.refresh_ghosts();
@@ -462,8 +481,15 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
       case ProbeType::Height: {
         // Exactly one slab owns the point and has numbers; the others send NaN.
         std::vector<double> mine;
-        if (p.type == ProbeType::Velocity) mine = sample_velocity(w, p.position, p.phase);
-        else mine.push_back(p.type == ProbeType::Pressure ? sample_pressure(w, p.position, p.phase) : sample_height(w, p, case_));
+        ProbeSpec at = p;
+        std::optional<double> floor;
+        if (p.follow >= 0 && motions) {  // riding with a moving body
+          at.position = followed_position(p, case_, *motions, time);
+          if (p.type == ProbeType::Height) floor = at.position[case_.dim - 1];
+        }
+        if (p.type == ProbeType::Velocity) mine = sample_velocity(w, at.position, p.phase);
+        else
+          mine.push_back(p.type == ProbeType::Pressure ? sample_pressure(w, at.position, p.phase) : sample_height(w, at, case_, floor));
         row = owners_values(t, mine);
         break;
       }

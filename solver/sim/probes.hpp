@@ -12,6 +12,7 @@
 #include <deque>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -45,7 +46,8 @@ class ProbeSet {
   // checkpoint, are dropped); none: start them afresh.
   ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, std::optional<std::int64_t> resume_step);
   // Collective over all slabs. Returns the sampled row values in probe order (for tests).
-  std::vector<std::vector<double>> sample(double time, std::int64_t step, SlabWorker& w);
+  // `motions`: where probes that follow a moving body are at `time` (none: they stay put).
+  std::vector<std::vector<double>> sample(double time, std::int64_t step, SlabWorker& w, const MotionSet* motions = nullptr);
   bool empty() const { return probes_.empty(); }
 
  private:
@@ -71,8 +73,12 @@ std::string probe_description(const ProbeSpec& p, int dim);
 double sample_pressure(SlabWorker& w, const Vec3d& at, int phase = -1);
 // Shepard-averaged fluid velocity (dim components), NaN components when not owned.
 std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at, int phase = -1);
-// Water height above the tank floor at a gauge (the probe's position, `connected` and `phase`).
-double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c);
+// Water height above the tank floor at a gauge (the probe's position, `connected` and `phase`);
+// `floor`: where the floor is under a gauge that moves with the tank (default: the tank's floor).
+double sample_height(SlabWorker& w, const ProbeSpec& gauge, const Case& c, std::optional<double> floor = std::nullopt);
+// Where a probe that follows motion `gauge.follow` is at `time`: its point (for a height gauge, its
+// point on the floor, vertical coordinate included) carried by the body's rigid motion.
+Vec3d followed_position(const ProbeSpec& gauge, const Case& c, const MotionSet& motions, double time);
 // Collective: the centroid (dim coordinates) and mean velocity (dim components) of the particles of
 // fluid `phase` on all slabs (equal masses within a phase); NaN when it has none.
 std::vector<double> sample_centroid(SlabWorker& w, int phase);

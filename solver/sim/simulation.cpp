@@ -286,6 +286,19 @@ class Worker {
                    // paper's case it holds about a gigabyte)
     if (t_.slab() == s_.workers_first_slab) s_.initial = ParticleStore(s_.c.dim);
     t_.barrier();
+    // The parameters as steered so far (a restart continues steered) and the walls' motion at the
+    // start time, before the first rates.
+    PhysicsParams params = s_.params;
+    int insitu_every = 1;
+    MotionSet motions(s_.c.motions, s_.c.dim);
+    SteeringTarget steer{&params, &insitu_every, &motions};
+    for (auto& change : s_.steering_history) {
+      apply(change, steer);
+      if (change.name == "insitu_every" && s_.opts.insitu) s_.opts.insitu->set_interval(insitu_every);
+    }
+    steer.checkpoint_now = steer.stop = false;
+    motions.set_step(params, s_.start.time, s_.start.time);
+    w_.set_params(params);
     w_.prepare(!s_.restarted);
 
     ProbeSet probes(s_.c, s_.opts.out_dir, writer, s_.restarted ? std::optional<std::int64_t>(s_.start.step) : std::nullopt);
@@ -312,7 +325,7 @@ class Worker {
     // At most one probe row and one snapshot per step, whatever the intervals.
     auto output = [&](bool final_step) {
       if (!probes.empty() && (probe_dt <= 0 || time >= next_probe - 1e-9 * probe_dt || final_step)) {
-        probes.sample(time, step, w_);
+        probes.sample(time, step, w_, &motions);
         if (probe_dt > 0) next_probe = next_on_grid(time, probe_dt);
       }
       if (out_dt > 0 && (time >= next_output - 1e-9 * out_dt || (final_step && last_snapshot != step))) {
@@ -325,15 +338,6 @@ class Worker {
     if (!s_.restarted) output(false);
     in_situ(step, time);
     std::string unstable;
-    PhysicsParams params = s_.params;
-    int insitu_every = 1;
-    SteeringTarget steer{&params, &insitu_every};
-    for (auto& change : s_.steering_history) {  // a restart continues steered
-      apply(change, steer);
-      if (change.name == "insitu_every" && s_.opts.insitu) s_.opts.insitu->set_interval(insitu_every);
-    }
-    steer.checkpoint_now = steer.stop = false;
-    w_.set_params(params);
     AppendFile steering_log;
     if (writer && s_.opts.steering) {
       const auto path = s_.opts.out_dir / "steering.log";
@@ -349,7 +353,7 @@ class Worker {
       for (auto& change : share_changes(t_, asked)) {
         change.step = step;
         change.time = time;
-        if (auto why = validate(change, s_.c.dim)) {
+        if (auto why = validate(change, s_.c.dim, &motions)) {
           if (writer) spdlog::warn("steering: rejected {} at step {}: {}", change.name, step, *why);
           if (writer) ++s_.result.steering_rejected;
           continue;
@@ -389,6 +393,10 @@ class Worker {
       if (s_.opts.steps ? taken >= *s_.opts.steps : time >= end_time - 1e-12) break;
       if (t_.slab_count() > 1 && balancing_pass_due(taken, step, s_.c.balance_every))
         imbalance_log.push_back(w_.rebalance(kMinColumnsPerSlab));
+      if (motions.size() > 0) {  // the walls' rigid map over this step and their state at its end
+        motions.set_step(params, time, time + dt);
+        w_.set_params(params);
+      }
       if (auto fault = w_.step(static_cast<float>(dt))) {
         unstable = describe(*fault, step + 1, time + dt);
         time += dt;

@@ -19,6 +19,9 @@ const std::vector<SteeringParameter>& steering_parameters() {
       {"gravity", 3, 0.0, 100.0, "m/s2", "gravity vector (its magnitude at most 100 m/s2); tilt it to start sloshing"},
       {"viscosity", 1, 0.0, 10.0, "Pa s", "dynamic viscosity mu of eq. 8 (of the fluid, material 0)"},
       {"artificial_viscosity", 1, 0.0, 1.0, "", "Monaghan alpha (0 switches it off)"},
+      {"motion_amplitude", 2, 0.0, kMaxMotionAmplitudeScale, "",
+       "motion number, amplitude scale (1: the case's amplitude; blends over one period, no jump)"},
+      {"motion_frequency", 2, 0.0, 100.0, "Hz", "motion number, frequency of a sinusoidal motion (the phase stays continuous)"},
       {"insitu_every", 1, 1.0, 1.0e6, "steps", "steps between in-situ pipeline executions"},
       {"write_checkpoint", 1, 0.0, 1.0, "", "1: write a checkpoint at the next step boundary"},
       {"stop", 1, 0.0, 1.0, "", "1: write a checkpoint and stop cleanly (exit 0)"},
@@ -26,7 +29,7 @@ const std::vector<SteeringParameter>& steering_parameters() {
   return p;
 }
 
-std::optional<std::string> validate(const SteeringChange& c, int dim) {
+std::optional<std::string> validate(const SteeringChange& c, int dim, const MotionSet* motions) {
   const SteeringParameter* spec = nullptr;
   for (auto& p : steering_parameters())
     if (p.name == c.name) spec = &p;
@@ -40,6 +43,23 @@ std::optional<std::string> validate(const SteeringChange& c, int dim) {
     for (double v : c.value) m2 += v * v;
     if (std::sqrt(m2) > spec->max) return "gravity: magnitude " + std::to_string(std::sqrt(m2)) + " m/s2 exceeds 100";
     if (dim == 2 && c.value[2] != 0.0) return "gravity: a 2D case has no z component (third value must be 0)";
+    return std::nullopt;
+  }
+  if (c.name == "motion_amplitude" || c.name == "motion_frequency") {
+    const double k = c.value[0];
+    if (k != std::floor(k) || k < 0) return c.name + ": the motion number must be a whole number >= 0";
+    if (!motions) {
+      // The case's motions are not known here (a recorded log read before the run, e.g. a
+      // checkpoint's): only the ranges; the run checks the motion itself before applying it.
+      const double v = c.value[1];
+      if (v < spec->min || v > spec->max || (c.name == "motion_frequency" && !(v > 0)))
+        return c.name + ": " + std::to_string(v) + " is outside the parameter's range";
+      return std::nullopt;
+    }
+    if (motions->size() == 0) return c.name + ": the case has no moving walls";
+    const auto why = c.name == "motion_amplitude" ? motions->check_amplitude(static_cast<int>(k), c.value[1])
+                                                  : motions->check_frequency(static_cast<int>(k), c.value[1]);
+    if (why) return c.name + ": " + *why;
     return std::nullopt;
   }
   const double v = c.value[0];
@@ -59,6 +79,10 @@ void apply(const SteeringChange& c, SteeringTarget& t) {
     t.params->materials.fluid[0].viscosity = static_cast<float>(c.value[0]);
   } else if (c.name == "artificial_viscosity") {
     t.params->artificial_viscosity = static_cast<float>(c.value[0]);
+  } else if (c.name == "motion_amplitude") {
+    if (t.motions) t.motions->set_amplitude(static_cast<int>(c.value[0]), c.value[1], c.time);
+  } else if (c.name == "motion_frequency") {
+    if (t.motions) t.motions->set_frequency(static_cast<int>(c.value[0]), c.value[1], c.time);
   } else if (c.name == "insitu_every") {
     if (t.insitu_every) *t.insitu_every = static_cast<int>(c.value[0]);
   } else if (c.name == "write_checkpoint") {

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "../case/motion.hpp"
 #include "../physics/params.hpp"
 
 namespace spate {
@@ -19,8 +20,8 @@ struct SteeringParameter {
   std::string unit, doc;
 };
 
-// The documented set (docs/live.md): gravity, viscosity, artificial_viscosity, insitu_every,
-// write_checkpoint, stop.
+// The documented set (docs/live.md): gravity, viscosity, artificial_viscosity, motion_amplitude,
+// motion_frequency, insitu_every, write_checkpoint, stop.
 const std::vector<SteeringParameter>& steering_parameters();
 
 struct SteeringChange {
@@ -34,12 +35,15 @@ struct SteeringChange {
 struct SteeringTarget {
   PhysicsParams* params = nullptr;
   int* insitu_every = nullptr;
+  MotionSet* motions = nullptr;  // the walls' motions (motion_amplitude, motion_frequency)
   bool checkpoint_now = false;
   bool stop = false;
 };
 
-// Reason for rejection, or nothing when the change is acceptable.
-std::optional<std::string> validate(const SteeringChange& change, int dim);
+// Reason for rejection, or nothing when the change is acceptable. `motions`: the run's wall
+// motions (a motion change names one of them); null: not known (a recorded log read before the
+// run), only the ranges are checked.
+std::optional<std::string> validate(const SteeringChange& change, int dim, const MotionSet* motions = nullptr);
 void apply(const SteeringChange& change, SteeringTarget& target);
 
 // One line per change: "<step> <time> <name> <v0> [<v1> <v2>]", '#' starts a comment.

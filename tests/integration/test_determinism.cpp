@@ -73,6 +73,37 @@ TEST(Restart, ReadsFormatVersionOneBitIdentically) {
   EXPECT_EQ(straight.simulated_time, resumed.simulated_time);
 }
 
+// Moving walls under steering: the amplitude and frequency changes of a replayed log live in the
+// checkpoint's steering history, so a restart half way continues on the same wall path, bit for bit.
+TEST(Restart, SteeredMovingWallsContinueBitIdentically) {
+  const Case c = load_case(test::case_path("sloshing_2d.yaml"),
+                           {"dp=0.02", "output.interval=0", "probes=[]", "time.dt=2e-4", "tank.motion.ramp=0", "tank.motion.period=0.25",
+                            "tank.motion.rotation=3"});
+  const auto log = parse_log("40 0 motion_amplitude 0 1.8\n70 0 motion_frequency 0 3\n", "test log");
+  RunOptions o;
+  o.steps = 120;
+  SteeringReplay all(log);
+  o.steering = &all;
+  const RunResult straight = test::run_case(c, test::scratch("moving-straight"), o);
+  EXPECT_EQ(straight.steering_accepted, 2);
+  o.steps = 60;
+  SteeringReplay first_half(log);
+  o.steering = &first_half;
+  const RunResult first = test::run_case(c, test::scratch("moving-first"), o);
+  o.restart = first.last_checkpoint;
+  SteeringReplay second_half(log);
+  o.steering = &second_half;
+  const RunResult second = test::run_case(c, test::scratch("moving-second"), o);
+  ASSERT_EQ(second.final_step, 120);
+  std::string why;
+  EXPECT_TRUE(test::identical_checkpoints(straight.last_checkpoint, second.last_checkpoint, &why)) << why;
+  // Unsteered, the walls take another path.
+  o = RunOptions{};
+  o.steps = 120;
+  const RunResult plain = test::run_case(c, test::scratch("moving-plain"), o);
+  EXPECT_FALSE(test::identical_checkpoints(straight.last_checkpoint, plain.last_checkpoint));
+}
+
 TEST(Threads, OneAndTwoThreadsBitIdentical) {
   // Above the OpenMP grain size (backend/cpu/parallel.hpp) so that two threads really share loops.
   const Case c = load_case(test::case_path("dam_break_column_3d.yaml"),

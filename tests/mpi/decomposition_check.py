@@ -179,6 +179,8 @@ def cmd_splits(args):
         print(f"  {split_name(split)}: device_particles {s['device_particles']}, imbalance {s['imbalance']:.3f}, "
               f"ghosts {s['ghost_particles']}, migrated {s.get('migrated_particles')}, face moves {s.get('face_moves')}, "
               f"removed {s.get('removed_particles', 0)}")
+        if args.expect_migration and split[0] * split[1] > 1 and s["migrated_particles"] <= 0:
+            fail(f"{split_name(split)}: no particle crossed a face (--expect-migration)")
     if args.pvbatch:
         last = args.splits[-1]
         out = spate.work / split_name(last)
@@ -344,6 +346,7 @@ def main():
     ap.add_argument("--mpiexec", default="")
     ap.add_argument("--mpiexec-args", default="")
     ap.add_argument("--fresh", action="store_true", help="splits: empty the work folder first")
+    ap.add_argument("--expect-migration", action="store_true", help="splits: particles must cross faces in every multi-slab run")
     ap.add_argument("--pvbatch", default="", help="check that ParaView opens the last split's snapshots as one dataset")
     ap.add_argument("--too-many", type=int, default=64, help="a device count with fewer than 3 cells per slab")
     ap.add_argument("--expect-removed", action="store_true", help="splits, restart: fluid leaves through open sides")

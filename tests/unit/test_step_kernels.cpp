@@ -26,6 +26,7 @@
 #include "case/generator.hpp"
 #include "comm/in_process_transport.hpp"
 #include "domain/host_slab_arrays.hpp"
+#include "case/motion.hpp"
 #include "io/field_scale.hpp"
 #include "physics/dispatch.hpp"
 #include "sim/slab_worker.hpp"
@@ -150,11 +151,11 @@ class GpuOrderKernels final : public ResidentKernels {
     ParticleStore& p = store();
     const CellGridView v = arrays_.grid().view();
     const Lattice& L = arrays_.grid().lattice();
-    dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase>() {
+    dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls>() {
       for (std::size_t i = range.first; i < range.end(); ++i) {
         int g[3] = {0, 0, 0};
         for (int a = 0; a < Dim; ++a) g[a] = L.cell_of(p.pos[a][i], a);
-        update_fluid_rates<Kernel, Dim, Gamma7, Multiphase>(P, v, p, static_cast<std::uint32_t>(i), g);
+        update_fluid_rates<Kernel, Dim, Gamma7, Multiphase, MovingWalls>(P, v, p, static_cast<std::uint32_t>(i), g);
       }
     });
   }
@@ -224,10 +225,19 @@ std::vector<std::vector<char>> run(const Case& c, int slabs, int steps, const st
     w.take_share(initial, SlabLayout::uniform(L.cells[0], slabs));
     w.prepare(true);
     if (hook) hook(resident ? resident->device_store() : w.particles());
+    // Moving walls: the rigid map of every step, as the time loop sets it (sim/simulation.cpp).
+    const MotionSet motions(c.motions, c.dim);
+    PhysicsParams moving = P;
+    double time = 0.0;
     for (int k = 0; k < steps; ++k) {
       if (balance_every > 0 && k > 0 && k % balance_every == 0) w.rebalance(2);
       const float dt = static_cast<float>(t->min(w.local_time_step(TimeStepControl{})));
       step_sizes[s].push_back(dt);
+      if (motions.size() > 0) {
+        motions.set_step(moving, time, time + dt);
+        w.set_params(moving);
+      }
+      time += dt;
       const auto fault = w.step(dt);
       gone[s].insert(gone[s].end(), w.removed_ids().begin(), w.removed_ids().end());
       if (fault) {  // a fault is collective: every slab stops here
@@ -274,6 +284,13 @@ struct CheckedCase {
   Case c;
   int steps;
 };
+// The sloshing tank rolling and swaying fast (no ramp), so that its walls cross cells and slab faces
+// within a hundred steps; coarse, so that the steps are quick.
+Case moving_walls_case() {
+  return load_case(test::source_dir() + "/cases/sloshing_2d.yaml",
+                   {"dp=0.02", "tank.motion.ramp=0", "tank.motion.period=0.3", "tank.motion.rotation=4", "tank.motion.translation=[0.02, 0]"});
+}
+
 std::vector<CheckedCase> gpu_checked_cases() {
   auto load = [](const std::string& file, const std::vector<std::string>& overrides) {
     return load_case(test::source_dir() + "/cases/" + file, overrides);
@@ -286,6 +303,7 @@ std::vector<CheckedCase> gpu_checked_cases() {
             {"tank.size=[0.3, 0.2, 0.3]", "fluid_blocks=[{min: [0, 0, 0], max: [0.3, 0.2, 0.1]}]", "tank.periodic=[y]"}),
        50},
       {"summation", load("dam_break_2d.yaml", {"density.mode=summation"}), 100},
+      {"moving_walls", moving_walls_case(), 100},
       {"riemann", load("dam_break_2d.yaml", {"density.diffusion=riemann", "momentum.flux=riemann", "fluid.tension=false"}), 300},
       // Several fluids: the multiphase pair terms, the GPU's per-particle loop against the CPU's
       // batched one (oil over water, viscosities 50 times apart).
@@ -387,6 +405,28 @@ TEST(ResidentTopology, ReproducesTheCpuBackendOnOneTwoAndThreeSlabs) {
     EXPECT_EQ(dt_cpu, dt_res);
     expect_same(cpu, res);
   }
+}
+
+// Walls that move (rigid maps in the predictor, wall velocity and acceleration in the wall pass and
+// the fluid loop) on the device orchestration: the same bits as the CPU backend on 1 to 3 slabs, and
+// the walls really moved.
+TEST(ResidentTopology, MovingWallsMatchTheCpuBackend) {
+  const Case c = moving_walls_case();
+  for (int slabs : {1, 3}) {
+    SCOPED_TRACE(std::to_string(slabs) + " slabs");
+    std::vector<float> dt_cpu, dt_res;
+    const auto cpu = run(c, slabs, 60, nullptr, &dt_cpu);
+    const auto res = run(c, slabs, 60, [&] { return std::make_unique<ResidentKernels>(c.dim, true); }, &dt_res);
+    EXPECT_EQ(dt_cpu, dt_res);
+    expect_same(cpu, res);
+  }
+  // The tank's walls moved: the first field is x, ordered by id; particle 0 is a wall.
+  const ParticleStore initial = generate_particles(c);
+  ASSERT_FALSE(physics_params(c).is_fluid(initial.material[0]));
+  const auto after = run(c, 1, 60, nullptr);
+  float x0 = 0.0f;
+  std::memcpy(&x0, after[0].data(), sizeof x0);
+  EXPECT_NE(x0, initial.pos[0][0]);
 }
 
 // The impact options (Riemann pressure diffusion and flux with its wall term, no tension; issue 11)

@@ -43,14 +43,8 @@ void for_each_owned_cell(const CellGrid& grid, Body&& body) {
 void predict(ParticleStore& p, const PhysicsParams& P, float dt) {
   p.swap_rates();  // the rates of step n become the "previous" ones the corrector needs
   const auto n = static_cast<std::int64_t>(p.owned());
-  const int d = P.dim;
-  const bool continuity = P.density_mode == DensityMode::Continuity;
 #pragma omp parallel for schedule(static) if (n > kCheapGrain)
-  for (std::int64_t i = 0; i < n; ++i) {
-    if (!P.is_fluid(p.material[i])) continue;
-    for (int k = 0; k < d; ++k) predict_component(p.pos[k][i], p.vel[k][i], p.acc_prev[k][i], dt);
-    if (continuity) predict_density(p.density[i], p.density_rate_prev[i], dt);
-  }
+  for (std::int64_t i = 0; i < n; ++i) predict_particle(P, p, static_cast<std::uint32_t>(i), dt);
 }
 
 void correct(ParticleStore& p, const PhysicsParams& P, float dt) {
@@ -138,7 +132,7 @@ inline void add_lanes(float (&vec)[Dim][kLanes], float (&scalar)[kLanes], const 
   }
 }
 
-template <class Kernel, int Dim, bool Gamma7, bool Multiphase>
+template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls>
 void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params, std::uint32_t first_cell,
                          std::uint32_t last_cell) {
   const PhysicsParams P = params;  // a local copy: the vectoriser must see that nothing aliases it
@@ -174,12 +168,21 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
       std::uint8_t* ckind = batch.material.data();
       std::uint32_t* index = batch.index.data();
       NeighbourRecord* record = batch.record.data();
+      // Moving walls: what continuity sees of each candidate (a wall's prescribed velocity), once
+      // per candidate rather than once per pair.
+      float* cw[Dim];
+      SPATE_UNROLL for (int k = 0; k < Dim; ++k) cw[k] = batch.v[k].data();
       int m = 0;
       v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
         const int len = static_cast<int>(je - jb);
         SPATE_UNROLL for (int k = 0; k < Dim; ++k) std::copy_n(ps.pos[k].data() + jb, len, cx[k] + m);
         std::copy_n(ps.material.data() + jb, len, ckind + m);
         for (int q = 0; q < len; ++q) fill_record<Dim>(ps, jb + q, record[m + q]);
+        if constexpr (MovingWalls)
+          for (int q = 0; q < len; ++q) {
+            const Vec<Dim> w = boundary_velocity<Dim>(P, load_state<Dim>(ps, jb + q));
+            SPATE_UNROLL for (int k = 0; k < Dim; ++k) cw[k][m + q] = w[k];
+          }
         if constexpr (Multiphase) {
           for (int q = 0; q < len; ++q) {
             const NeighbourFluid f = neighbour_fluid(P, ckind[m + q]);
@@ -213,6 +216,8 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
           gather_records(record, chunk, len, fields);
           std::uint8_t jkind[kChunk];
           gather(ckind, chunk, len, jkind);
+          [[maybe_unused]] float jw[Dim][MovingWalls ? kChunk : 1];
+          if constexpr (MovingWalls) SPATE_UNROLL for (int k = 0; k < Dim; ++k) gather(cw[k], chunk, len, jw[k]);
           [[maybe_unused]] float jmass[Multiphase ? kChunk : 1], jc0[Multiphase ? kChunk : 1], jmu[Multiphase ? kChunk : 1];
           if constexpr (Multiphase) {
             gather(batch.mass.data(), chunk, len, jmass);
@@ -226,9 +231,11 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
             sj.rho = jf[kRecRho][n];
             sj.p = jf[kRecP][n];
             sj.material = jkind[n];
+            if constexpr (MovingWalls) SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.w[k] = jw[k][n];
             FluidRates<Dim> t;
-            if constexpr (Multiphase) t = multiphase_pair_terms<Kernel, Dim, Gamma7>(P, M, si, sj, NeighbourFluid{jmass[n], jc0[n], jmu[n]});
-            else t = fluid_pair_terms<Kernel, Dim, Gamma7>(P, M, si, sj);
+            if constexpr (Multiphase)
+              t = multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj, NeighbourFluid{jmass[n], jc0[n], jmu[n]});
+            else t = fluid_pair_terms<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj);
             SPATE_UNROLL for (int k = 0; k < Dim; ++k) tacc[k][n] = t.acc[k], twall[k][n] = t.wall_gradient[k];
             tdrho[n] = t.density_rate;
             tweight[n] = t.wall_weight;
@@ -313,7 +320,7 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
           sj.material = 0;  // a fluid (the wall sums do not look at it)
           accumulate_wall_pair<Kernel, Dim>(P, xw, sj, sums);
         }
-        const WallState<Dim> st = finish_wall(P, sums);
+        const WallState<Dim> st = finish_wall(P, sums, ps.material[w], xw);
         ps.pressure[w] = st.p;
         ps.density[w] = st.rho;
         SPATE_UNROLL for (int k = 0; k < Dim; ++k) ps.vel[k][w] = st.v[k];
@@ -326,8 +333,8 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
 
 void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P, std::uint32_t first_cell,
                  std::uint32_t last_cell) {
-  dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase>() {
-    fluid_rates_batched<Kernel, Dim, Gamma7, Multiphase>(p, grid, P, first_cell, last_cell);
+  dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls>() {
+    fluid_rates_batched<Kernel, Dim, Gamma7, Multiphase, MovingWalls>(p, grid, P, first_cell, last_cell);
   });
 }
 

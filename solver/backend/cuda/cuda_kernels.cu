@@ -35,11 +35,9 @@ __device__ void cell_coords(const Lattice& L, const DeviceFields& d, std::uint32
 
 __device__ std::uint32_t thread_index() { return blockIdx.x * blockDim.x + threadIdx.x; }
 
-__global__ void predict_kernel(DeviceFields d, int dim, std::uint32_t n, float dt, bool continuity, std::uint8_t fluids) {
+__global__ void predict_kernel(DeviceFields d, std::uint32_t n, float dt, PhysicsParams P) {
   const std::uint32_t i = thread_index();
-  if (i >= n || d.material[i] >= fluids) return;
-  for (int k = 0; k < dim; ++k) predict_component(d.pos[k][i], d.vel[k][i], d.acc_prev[k][i], dt);
-  if (continuity) predict_density(d.density[i], d.density_rate_prev[i], dt);
+  if (i < n) predict_particle(P, d, i, dt);
 }
 
 __global__ void correct_kernel(DeviceFields d, int dim, std::uint32_t n, float dt, bool continuity, PhysicsParams P) {
@@ -76,11 +74,11 @@ struct ShiftingPass {
     update_shift<Kernel, Dim>(P, v, d, i, g, dt);
   }
 };
-template <bool Gamma7, bool Multiphase>
+template <bool Gamma7, bool Multiphase, bool MovingWalls>
 struct FluidRatesPass {
   template <class Kernel, int Dim>
   __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
-    update_fluid_rates<Kernel, Dim, Gamma7, Multiphase>(P, v, d, i, g);
+    update_fluid_rates<Kernel, Dim, Gamma7, Multiphase, MovingWalls>(P, v, d, i, g);
   }
 };
 
@@ -126,8 +124,7 @@ class CudaKernels final : public StepKernels {
   void predict(ParticleStore&, const PhysicsParams& P, float dt) override {
     arrays_.select();
     arrays_.swap_rates();
-    launch(owned(), predict_kernel, arrays_.fields(), arrays_.dim(), owned32(), dt, P.density_mode == DensityMode::Continuity,
-           P.materials.fluids);
+    launch(owned(), predict_kernel, arrays_.fields(), owned32(), dt, P);
   }
   void correct(ParticleStore&, const PhysicsParams& P, float dt) override {
     arrays_.select();
@@ -145,14 +142,10 @@ class CudaKernels final : public StepKernels {
     neighbour_pass<WallStatePass>(P, ParticleRange{0, owned()});
   }
   void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
-    const bool gamma7 = all_fluids_gamma7(P);
-    if (P.materials.multiphase()) {
-      if (gamma7) neighbour_pass<FluidRatesPass<true, true>>(P, range);
-      else neighbour_pass<FluidRatesPass<false, true>>(P, range);
-    } else {
-      if (gamma7) neighbour_pass<FluidRatesPass<true, false>>(P, range);
-      else neighbour_pass<FluidRatesPass<false, false>>(P, range);
-    }
+    // The same choices as dispatch_pair_loop on the CPU.
+    const PairLoopFlags flags = pair_loop_flags(P);
+    dispatch_flags([&]<bool Gamma7, bool Multiphase, bool MovingWalls>() { neighbour_pass<FluidRatesPass<Gamma7, Multiphase, MovingWalls>>(P, range); },
+                   flags.gamma7, flags.multiphase, flags.moving_walls);
   }
   void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
     neighbour_pass<ShiftingPass>(P, ParticleRange{0, owned()}, dt);
