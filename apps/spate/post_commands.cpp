@@ -142,7 +142,17 @@ int post_command(const PostArgs& a) {
   const std::filesystem::path out = a.out.empty() ? run_dir / "post" : std::filesystem::path(a.out);
   omp_set_num_threads(a.threads > 0 ? a.threads : hardware_threads());
   std::unique_ptr<SavedProbes> probes;
-  if (!c.probes.empty()) probes = std::make_unique<SavedProbes>(c, out);
+  if (!c.probes.empty()) {
+    // The run's steering, so that steered wall motions are replayed (probes that follow a body).
+    std::vector<SteeringChange> steering;
+    const auto log = run_dir / "steering.log";
+    try {
+      if (std::filesystem::exists(log)) steering = read_log(log.string(), c.dim);
+      probes = std::make_unique<SavedProbes>(c, out, steering);
+    } catch (const std::runtime_error& e) {
+      throw BadInput(fmt::format("{}: {}", log.string(), e.what()));
+    }
+  }
 #ifdef SPATE_WITH_CATALYST
   std::unique_ptr<catalyst::CatalystSink> pipelines;
   if (!a.pipelines.empty()) {

@@ -101,7 +101,17 @@ Case run_case(const std::filesystem::path& run_dir, const std::vector<std::strin
   throw CaseError(run_dir.string() + ": not a spate run folder (no case.yaml, and no checkpoint that holds the case)");
 }
 
-SavedProbes::SavedProbes(const Case& c, const std::filesystem::path& out_dir) : case_(c), probes_(c, out_dir, true, false) {}
+SavedProbes::SavedProbes(const Case& c, const std::filesystem::path& out_dir, const std::vector<SteeringChange>& steering)
+    : case_(c), probes_(c, out_dir, true, false), motions_(c.motions, c.dim) {
+  // A motion keeps every change as a segment from its time on, so the whole log applied at once
+  // gives the motion of any saved time (steering.cpp applies them during the run the same way).
+  SteeringTarget target{nullptr, nullptr, &motions_};
+  for (const SteeringChange& change : steering) {
+    if (change.name != "motion_amplitude" && change.name != "motion_frequency") continue;
+    if (auto why = validate(change, c.dim, &motions_)) throw std::runtime_error("steering log, step " + std::to_string(change.step) + ": " + *why);
+    apply(change, target);
+  }
+}
 
 SavedProbes::~SavedProbes() = default;
 
@@ -111,16 +121,15 @@ std::vector<std::vector<double>> SavedProbes::sample(const SavedState& s) {
   const Lattice lattice = make_lattice(case_);
   InProcessHub hub(1);
   auto transport = hub.endpoint(0, lattice.periodic[0]);
-  // Moving walls where the case's motions put them at that time (probes that follow a body; the
-  // wall state of an old checkpoint). Steering changes of a motion during the run are not replayed.
-  const MotionSet motions(case_.motions, case_.dim);
+  // Moving walls where the run's motions (steered ones included) put them at that time: probes
+  // that follow a body, the wall state of an old checkpoint.
   PhysicsParams P = physics_params(case_);
-  motions.set_step(P, s.time, s.time);
+  motions_.set_step(P, s.time, s.time);
   SlabWorker w(lattice, P, *transport);
   w.take_share(merged(s.pieces, case_.dim), SlabLayout::uniform(lattice.cells[0], 1));
   if (s.derived_saved) w.prepare_saved();
   else w.prepare(false);
-  return probes_.sample(s.time, s.step, w, &motions);
+  return probes_.sample(s.time, s.step, w, &motions_);
 }
 
 }  // namespace spate

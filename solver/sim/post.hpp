@@ -10,8 +10,10 @@
 #include <vector>
 
 #include "../case/case.hpp"
+#include "../case/motion.hpp"
 #include "../particles/particle_store.hpp"
 #include "probes.hpp"
+#include "steering.hpp"
 
 namespace spate {
 
@@ -45,9 +47,11 @@ SavedState load_saved(const SavedStep& s, int dim);
 Case run_case(const std::filesystem::path& run_dir, const std::vector<std::string>& overrides = {});
 
 // Samples the case's probes on saved states into <out_dir>/probes/<name>.csv (the run's format).
+// `steering`: the run's accepted changes (its steering.log); the changes of a wall motion are
+// replayed, so that moving walls and the probes that follow them are where the run had them.
 class SavedProbes {
  public:
-  SavedProbes(const Case& c, const std::filesystem::path& out_dir);
+  SavedProbes(const Case& c, const std::filesystem::path& out_dir, const std::vector<SteeringChange>& steering = {});
   ~SavedProbes();
   // Returns the rows as ProbeSet::sample does. Old checkpoints without the saved pressures get
   // them recomputed from the densities (close to, not exactly, the run's values).
@@ -56,6 +60,7 @@ class SavedProbes {
  private:
   const Case& case_;
   ProbeSet probes_;
+  MotionSet motions_;
 };
 
 }  // namespace spate

@@ -226,6 +226,38 @@ def post_probes_from_the_command_line(env):
 
 
 @test
+def post_replays_steered_wall_motion(env):
+    """A run whose tank motion was steered (its steering.log): spate post puts the walls, and the
+    height gauge that rides with the tank, where the run had them, so it writes the run's rows
+    exactly; without the log the rows differ (the test can fail)."""
+    case = os.path.join(env.shipped, "sloshing_2d.yaml")
+    log = env.path("steer.log")
+    with open(log, "w") as f:
+        f.write("# amplitude x2 from step 20\n20 0.0 motion_amplitude 0 2\n")
+    out = env.path("run")
+    p = env.run("run", case, "--out", out, "--quiet", "--steering-log", log, "--set", "dp=0.02", "--set", "time.end=0.4",
+                "--set", "tank.motion.period=0.4", "--set", "tank.motion.ramp=0", "--set", "output.interval=0.05",
+                "--set", "output.probe_interval=0.05", "--set", "output.checkpoint_every=0")
+    check(p.returncode == 0, f"run with a steering log: exit {p.returncode}: {p.stderr[-400:]}")
+    check("motion_amplitude" in open(os.path.join(out, "steering.log")).read(), "the run's steering.log has no motion change")
+    snapshots = sorted(int(f[5:13]) for f in os.listdir(os.path.join(out, "snapshots")) if f.endswith(".vtm"))
+    p = env.run("post", out)
+    check(p.returncode == 0, f"post: exit {p.returncode}: {p.stderr[-400:]}")
+    check_reproduced(os.path.join(out, "probes"), os.path.join(out, "post", "probes"), [str(s) for s in snapshots], "steered")
+    os.rename(os.path.join(out, "steering.log"), os.path.join(out, "steering.off"))
+    p = env.run("post", out, "--out", env.path("unsteered"))
+    check(p.returncode == 0, f"post without the log: exit {p.returncode}")
+    run, plain = probe_rows(os.path.join(out, "probes")), probe_rows(env.path("unsteered", "probes"))
+    check(any(plain["wall"][1][s] != run["wall"][1][s] for s in plain["wall"][1]),
+          "the gauge reads the same with and without the steered motion: the test cannot tell")
+    # A log that names a motion the case does not have is bad input, naming the file.
+    with open(os.path.join(out, "steering.log"), "w") as f:
+        f.write("20 0.0 motion_amplitude 4 2\n")
+    p = env.run("post", out, "--out", env.path("bad"))
+    check(p.returncode == 2 and "steering.log" in p.stderr, f"a bad steering.log: exit {p.returncode}: {p.stderr[-300:]}")
+
+
+@test
 def post_reads_run_folders_of_earlier_versions(env):
     """A run folder of spate before 0.1 (raw snapshots without field data, a checkpoint without the
     pressures, no case.yaml): post takes the case from the checkpoint, reads the snapshots as they
