@@ -93,6 +93,7 @@ class SlabWorker {
  private:
   void rebuild();        // migrate, sort, halos
   void compute_rates();  // EOS, walls, fluid rates
+  void shift(float dt);    // particle shifting, when enabled (before the corrector applies it)
   void refresh_halo();   // the ghosts' Refresh fields, through the host store
   std::optional<ParticleFault> wrap_and_check_domain(bool wrap = true);
   void remove_escaped();  // host store

@@ -27,6 +27,9 @@ void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, st
 // after the fluid rates, the force added to the owned fluid particles' acceleration.
 void colour_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 void surface_tension(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+// Particle-shifting displacement (physics/shifting.hpp) of the owned fluid particles for a step
+// dt, into `shift`; correct() then adds it to the positions (only when P.shifting.enabled).
+void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt);
 // Smallest stable time step over owned fluid particles (infinity when there are none).
 float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c);
 
@@ -52,6 +55,7 @@ class Kernels final : public StepKernels {
   }
   void colour_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::colour_gradient(p, g, P); }
   void surface_tension(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::surface_tension(p, g, P); }
+  void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt) override { cpu::shifting(p, g, P, dt); }
   float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) override {
     return cpu::min_time_step(p, P, c);
   }
