@@ -11,6 +11,7 @@
 #include "../physics/integrator.hpp"
 #include "../physics/multiphase_interactions.hpp"
 #include "../physics/surface_tension.hpp"
+#include "../physics/shifting.hpp"
 #include "../physics/wall_boundary.hpp"
 
 namespace spate {
@@ -131,6 +132,24 @@ SPATE_HD void update_summation_density(const PhysicsParams& P, const CellGridVie
     for (std::uint32_t j = jb; j < je; ++j) rho += summation_density_term<Kernel, Dim>(P, M, xi, load_vec<Dim>(f.pos, j));
   });
   f.density[i] = rho < M.rho0 ? M.rho0 : rho;
+}
+
+// Particle-shifting displacement of fluid particle i for a step dt (shifting.hpp), into `shift`;
+// applied to the position by the corrector (apply_shift). Run after the fluid rates, before the
+// corrector changes any density, so that owned particles and ghosts read the same neighbour state.
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void update_shift(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3], float dt) {
+  if (!P.is_fluid(f.material[i])) return;
+  const FluidMaterial& M = P.materials.of(f.material[i]);
+  const Vec<Dim> xi = load_vec<Dim>(f.pos, i);
+  const float w_dp = Kernel::value(P.dp * P.inv_h, P.kernel_norm);
+  ShiftingSums<Dim> sums;
+  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+    for (std::uint32_t j = jb; j < je; ++j)
+      accumulate_shifting_pair<Kernel, Dim>(P, M, w_dp, xi, ParticleState<Dim>{load_vec<Dim>(f.pos, j), zero_vec<Dim>(), f.density[j], 0.0f, f.material[j], zero_vec<Dim>()}, sums);
+  });
+  const Vec<Dim> dr = shifting_displacement<Dim>(P, M, sums, dt);
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.shift[k][i] = dr[k];
 }
 
 }  // namespace spate

@@ -44,6 +44,12 @@ class StepKernels {
     (void)p, (void)g, (void)P;
     throw std::logic_error(std::string(name()) + " backend: no surface tension");
   }
+  // Particle shifting (only called when P.shifting.enabled): the displacement of the owned fluid
+  // particles into `shift`, after the fluid rates and before correct(), which applies it.
+  virtual void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt) {
+    (void)p, (void)g, (void)P, (void)dt;
+    throw std::logic_error(std::string(name()) + " backend: no particle shifting");
+  }
   virtual float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) = 0;
 
   // The backend's particles, on which the worker runs the step topology. The worker's host store

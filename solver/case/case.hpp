@@ -101,6 +101,10 @@ struct Case {
   double delta = 0.1;
   MomentumFlux flux = MomentumFlux::Central;
   double riemann_limiter = 3.0;
+  // Particle shifting (delta-plus-SPH; physics/shifting.hpp), key `shifting`.
+  bool shifting = false;
+  double shifting_coefficient = 1.0;
+  double shifting_mach = 0.1;
   Vec3d gravity{0, 0, -9.81};
   Vec3d body_force{0, 0, 0};
 

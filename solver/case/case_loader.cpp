@@ -641,6 +641,18 @@ Case read(Section& root, const std::string& file) {
     if (!(c.riemann_limiter >= 0)) m.fail(m.raw("riemann_limiter"), "riemann_limiter", "must be >= 0");
     m.finish();
   }
+  {
+    auto s = root.optional_child("shifting");
+    c.shifting = s.boolean("enabled", false);
+    c.shifting_coefficient = s.number("coefficient", 1.0);
+    if (!(c.shifting_coefficient >= 0 && c.shifting_coefficient <= 10))
+      s.fail(s.raw("coefficient"), "coefficient", "must be between 0 and 10");
+    c.shifting_mach = s.number("mach", 0.1);
+    if (!(c.shifting_mach > 0 && c.shifting_mach <= 1)) s.fail(s.raw("mach"), "mach", "must be in (0, 1]");
+    if (c.shifting && c.fluids.size() > 1)
+      s.fail(s.raw("enabled"), "enabled", "particle shifting is for one fluid (it would mix the fluids at an interface)");
+    s.finish();
+  }
   if (auto t = root.child("time")) {
     c.end_time = t->number("end");
     if (!(c.end_time > 0)) t->fail(t->raw("end"), "end", "must be > 0");
@@ -1002,6 +1014,9 @@ PhysicsParams physics_params(const Case& c) {
   P.flux = c.flux;
   P.riemann_limiter = static_cast<float>(c.riemann_limiter);
   P.density_mode = c.density_mode;
+  P.shifting.enabled = c.shifting;
+  P.shifting.coefficient = static_cast<float>(c.shifting_coefficient);
+  P.shifting.mach = static_cast<float>(c.shifting_mach);
   for (int k = 0; k < 3; ++k) {
     P.gravity[k] = static_cast<float>(c.gravity[k]);
     P.body_force[k] = static_cast<float>(c.body_force[k]);

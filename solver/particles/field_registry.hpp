@@ -53,6 +53,9 @@ struct FieldSpec {
   std::string_view exported;     // array name in snapshots and in situ ("" when not exported)
   std::string_view names[3];     // checkpoint dataset name of each component (scalars: names[0])
   constexpr bool has(std::uint16_t f) const { return (flags & f) == f; }
+  // No flag: per-step scratch, written after the cell sort and read before the next one (the
+  // shifting displacement): never permuted, moved, sent or saved.
+  constexpr bool scratch() const { return flags == 0; }
   constexpr int components(int dim) const { return shape == FieldShape::Vector ? dim : 1; }
   constexpr std::size_t elem_size() const { return field_type_size(type); }
 };
@@ -66,6 +69,8 @@ constexpr FieldType field_type_of() {
 }
 
 // F(member, C++ type, shape, role, flags, exported name, dataset name(s) ...)
+// `shift`: the particle-shifting displacement (physics/shifting.hpp), scratch between the fluid
+// rates and the corrector of one step (FieldSpec::scratch).
 // Order matters only for readability and the neighbour record layout (kNeighbour fields in this
 // order). Renaming a dataset is a checkpoint format change (kCheckpointFormatVersion, checkpoint.cpp).
 // clang-format off
@@ -83,7 +88,8 @@ constexpr FieldType field_type_of() {
   F(acc_prev, float, Vector, History, kMigrated, "", "ax_prev", "ay_prev", "az_prev")                                 \
   F(density_rate_prev, float, Scalar, History, kMigrated, "", "density_rate_prev")                                    \
   F(colour_gradient, float, Vector, Derived, kGhost | kRefreshed | kOptional, "", "colour_gradient_x",               \
-    "colour_gradient_y", "colour_gradient_z")
+    "colour_gradient_y", "colour_gradient_z")                                                                         \
+  F(shift, float, Vector, Derived, kOptional, "", "sx", "sy", "sz")
 // clang-format on
 
 #define SPATE_FIELD_SPEC(member, ctype, shape, role, flags, exported, ...) \

@@ -159,6 +159,7 @@ void ParticleStore::permute(std::size_t first, std::span<const std::uint32_t> pe
   if (runs_.empty()) return;
   scratch_.resize(n);
   for (const FieldRef& f : fields()) {
+    if (f.spec->scratch()) continue;
     if (f.elem_size == 4) permute_runs<4>(f.bytes(), first, perm, runs_, scratch_);
     else permute_runs<1>(f.bytes(), first, perm, runs_, scratch_);
   }

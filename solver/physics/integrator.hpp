@@ -28,5 +28,7 @@ SPATE_HD void correct_density(float& rho, float new_rate, float old_rate, float 
   rho = rho < floor ? floor : rho;
 }
 
+// The particle-shifting displacement (shifting.hpp), added after the corrector.
+SPATE_HD void apply_shift(float& x, float shift) { x += shift; }
 
 }  // namespace spate

@@ -27,6 +27,14 @@ struct SurfaceTensionTable {
   float largest[kMaxFluids] = {};
 };
 
+// Particle shifting of the delta-plus-SPH model (shifting.hpp; case key `shifting`). Off: no
+// shifting pass runs and the step is what it was without it.
+struct ShiftingParams {
+  bool enabled = false;
+  float coefficient = 1.0f;  // C of shifting.hpp (Sun et al. 2017: 1)
+  float mach = 0.1f;         // Ma = U / c0 of the flow's reference speed U
+};
+
 struct PhysicsParams {
   int dim = 3;
   KernelType kernel = KernelType::WendlandC2;
@@ -47,6 +55,7 @@ struct PhysicsParams {
   // eos.hpp fluid_pressure, integrator.hpp correct_density).
   bool tension = true;
   DensityMode density_mode = DensityMode::Continuity;
+  ShiftingParams shifting;
   // Only the first `dim` components are used; the last used axis is vertical (y in 2D, z in 3D).
   float gravity[3] = {0.0f, 0.0f, -9.81f};
   float body_force[3] = {0.0f, 0.0f, 0.0f};  // extra acceleration on fluid (Poiseuille driving)
@@ -81,5 +90,10 @@ SPATE_HD Vec<Dim> wall_velocity(const PhysicsParams& P, std::uint8_t m, const Ve
   const MotionState* s = P.motion_of(m);
   return s ? rigid_velocity<Dim>(*s, x) : zero_vec<Dim>();
 }
+
+// Whether a run needs the optional registry fields (kOptional: surface tension's colour gradient,
+// shifting's displacement): the stores of such a run carry them (OptionalFields), no other run pays
+// their bytes. One switch for all of them: a run with either feature carries both.
+inline bool needs_optional_fields(const PhysicsParams& P) { return P.surface_tension.on || P.shifting.enabled; }
 
 }  // namespace spate

@@ -121,6 +121,17 @@ double SlabWorker::fluid_rates_overlapping_refresh() {
   return seconds + since(t1);
 }
 
+// Particle shifting (physics/shifting.hpp), when the case asks for it: the displacements from the
+// state the rates were computed on (ghosts included, still current), applied by correct().
+void SlabWorker::shift(float dt) {
+  if (!params_.shifting.enabled) return;
+  const auto t = Clock::now();
+  kernels_->shifting(particles_, grid_, params_, dt);
+  const double seconds = since(t);
+  busy_seconds_ += seconds;
+  window_fluid_seconds_ += seconds;
+}
+
 void SlabWorker::prepare(bool rates) {
   rebuild();
   if (rates) {
@@ -175,6 +186,7 @@ std::optional<ParticleFault> SlabWorker::step(float dt) {
   if (auto fault = first_fault(transport_, position_fault_message(bad))) return fault;
   rebuild();
   compute_rates();
+  shift(dt);
   kernels_->correct(particles_, params_, dt);
   return std::nullopt;
 }

@@ -93,6 +93,7 @@ class SlabWorker {
  private:
   void rebuild();        // migrate, sort, halos
   void compute_rates();  // EOS, walls, fluid rates
+  void shift(float dt);  // particle shifting, when enabled (before the corrector applies it)
   void refresh_halo();   // the ghosts' Refresh fields
   SlabArrays& arrays() const { return kernels_->arrays(); }
   void sync_host();

@@ -380,6 +380,23 @@ def compare_split_independent(env):
 
 
 @test
+def shifting_split_independent(env):
+    # Particle shifting (a neighbour pass whose result moves the particles) on one and on three
+    # device slabs: bit-identical checkpoints; and it moves them (not the run without it).
+    paths = []
+    for devices, shifting in ((1, "true"), (3, "true"), (1, "false")):
+        out = env.path(f"shift{devices}{shifting}")
+        p = env.run("run", env.tiny, "--steps", "20", "--devices", str(devices), "--out", out, "--quiet",
+                    "--set", f"shifting.enabled={shifting}")
+        check(p.returncode == 0, f"--devices {devices}, shifting {shifting}: exit {p.returncode}")
+        paths.append(final_checkpoint(env, out, 20))
+    p = env.run("compare", paths[0], paths[1], "--tolerance", "0")
+    check(p.returncode == 0, "with shifting, 1 and 3 devices must give bit-identical results")
+    p = env.run("compare", paths[0], paths[2], "--tolerance", "0")
+    check(p.returncode != 0, "shifting must change the particles")
+
+
+@test
 def compare_restart_bit_identical(env):
     # 10 steps in one go against 5 steps + a restart for 5 more (on two devices).
     p = env.run("run", env.tiny, "--steps", "10", "--out", env.path("straight"), "--quiet")

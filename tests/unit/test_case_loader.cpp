@@ -141,6 +141,19 @@ TEST(CaseLoader, RiemannAndTensionKeysAreRead) {
   EXPECT_FALSE(P.tension);
 }
 
+// Particle shifting (delta-plus-SPH; docs/physics.md, "Particle shifting"): off by default.
+TEST(CaseLoader, ShiftingKeysAreRead) {
+  EXPECT_FALSE(physics_params(parse_case(kMinimal2D, "tiny.yaml")).shifting.enabled);
+  const Case c = parse_case(kMinimal2D, "tiny.yaml", {"shifting.enabled=true", "shifting.coefficient=0.5", "shifting.mach=0.14"});
+  const PhysicsParams P = physics_params(c);
+  EXPECT_TRUE(P.shifting.enabled);
+  EXPECT_FLOAT_EQ(P.shifting.coefficient, 0.5f);
+  EXPECT_FLOAT_EQ(P.shifting.mach, 0.14f);
+  EXPECT_NE(error_of(kMinimal2D, {"shifting.mach=0"}).find("mach"), std::string::npos);
+  EXPECT_NE(error_of(kMinimal2D, {"shifting.coefficient=-1"}).find("coefficient"), std::string::npos);
+  EXPECT_NE(error_of(kMinimal2D, {"shifting.enabled=true", "shifting.speed=1"}).find("speed"), std::string::npos);
+}
+
 TEST(CaseLoader, EveryKeyIsRead) {
   const Case c = parse_case(kFull3D, "full.yaml");
   EXPECT_EQ(c.kernel, KernelType::CubicSpline);

@@ -55,7 +55,7 @@ TEST(FieldRegistry, TheNeighbourRecordAndTheMemoryFigureFollowTheRegistry) {
   EXPECT_EQ(checkpoint_datasets(2, 1)[6].name, "kind");
 }
 
-// An optional field (kOptional: surface tension's colour gradient) is in the stores made while a
+// An optional field (kOptional: surface tension's colour gradient, shifting's displacement) is in the stores made while a
 // run that needs it holds OptionalFields(true), and costs every other run nothing: not in fields(),
 // not in the ghost or refresh sets, not in the bytes per particle.
 TEST(FieldRegistry, AnOptionalFieldIsOnlyInTheStoresOfRunsThatNeedIt) {
@@ -75,7 +75,8 @@ TEST(FieldRegistry, AnOptionalFieldIsOnlyInTheStoresOfRunsThatNeedIt) {
     const OptionalFields on(true);
     ParticleStore p(2);
     EXPECT_TRUE(has_colour(p));
-    EXPECT_EQ(p.bytes_per_particle(), plain.bytes_per_particle() + 2 * sizeof(float));
+    // The colour gradient and the shifting displacement, two floats each in 2D.
+    EXPECT_EQ(p.bytes_per_particle(), plain.bytes_per_particle() + 4 * sizeof(float));
     p.resize(5);
     EXPECT_EQ(p.colour_gradient[1].size(), 5u);
   }

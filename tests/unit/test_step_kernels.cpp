@@ -117,7 +117,7 @@ std::vector<std::vector<char>> run(const Case& c, int slabs, int steps, const st
                                    const ParticleHook& hook = {}, std::vector<std::uint32_t>* removed = nullptr) {
   const Lattice L = make_lattice(c);
   const PhysicsParams P = physics_params(c);
-  const OptionalFields optional_fields(P.surface_tension.on);  // as Simulation::run
+  const OptionalFields optional_fields(needs_optional_fields(P));  // as Simulation::run
   const ParticleStore initial = generate_particles(c);
   InProcessHub hub(slabs);
   std::vector<ParticleStore> finals(slabs);
@@ -375,7 +375,7 @@ TEST(ResidentTopology, DeviceHealthAndDomainChecksFindTheHostsFault) {
   const Case c = small_dam_break();
   const Lattice L = make_lattice(c);
   const PhysicsParams P = physics_params(c);
-  const OptionalFields optional_fields(P.surface_tension.on);  // as Simulation::run
+  const OptionalFields optional_fields(needs_optional_fields(P));  // as Simulation::run
   const ParticleStore initial = generate_particles(c);
   InProcessHub hub(1);
   auto t = hub.endpoint(0, L.periodic[0]);

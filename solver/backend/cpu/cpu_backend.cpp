@@ -51,11 +51,13 @@ void correct(ParticleStore& p, const PhysicsParams& P, float dt) {
   const auto n = static_cast<std::int64_t>(p.owned());
   const int d = P.dim;
   const bool continuity = P.density_mode == DensityMode::Continuity;
+  const bool shifting = P.shifting.enabled;
 #pragma omp parallel for schedule(static) if (n > kCheapGrain)
   for (std::int64_t i = 0; i < n; ++i) {
     if (!P.is_fluid(p.material[i])) continue;
     for (int k = 0; k < d; ++k) spate::correct(p.vel[k][i], p.acc[k][i], p.acc_prev[k][i], dt);
     if (continuity) correct_density(p.density[i], p.density_rate[i], p.density_rate_prev[i], dt, density_floor(P, p.material[i]));
+    if (shifting) for (int k = 0; k < d; ++k) apply_shift(p.pos[k][i], p.shift[k][i]);
   }
 }
 
@@ -362,6 +364,15 @@ void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P,
 
 void wall_state(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
   dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() { wall_state_batched<Kernel, Dim>(p, grid, P); });
+}
+
+void shifting(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P, float dt) {
+  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+    const CellGridView v = grid.view();
+    for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
+      for (std::uint32_t i = b; i < e; ++i) update_shift<Kernel, Dim>(P, v, p, i, g, dt);
+    });
+  });
 }
 
 float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) {

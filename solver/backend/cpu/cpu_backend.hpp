@@ -31,6 +31,9 @@ void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P,
 // after the fluid rates, the force added to the owned fluid particles' acceleration.
 void colour_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 void surface_tension(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+// Particle-shifting displacement (physics/shifting.hpp) of the owned fluid particles for a step
+// dt, into `shift`; correct() then adds it to the positions (only when P.shifting.enabled).
+void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt);
 // Smallest stable time step over owned fluid particles (infinity when there are none).
 float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c);
 
@@ -71,6 +74,9 @@ class Kernels : public StepKernels {
   }
   void surface_tension(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
     cpu::surface_tension(store(), arrays_->grid(), P);
+  }
+  void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
+    cpu::shifting(store(), arrays_->grid(), P, dt);
   }
   float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
     return cpu::min_time_step(store(), P, c);

@@ -45,6 +45,8 @@ __global__ void correct_kernel(DeviceFields d, int dim, std::uint32_t n, float d
   if (i >= n || !P.is_fluid(d.material[i])) return;
   for (int k = 0; k < dim; ++k) correct(d.vel[k][i], d.acc[k][i], d.acc_prev[k][i], dt);
   if (continuity) correct_density(d.density[i], d.density_rate[i], d.density_rate_prev[i], dt, density_floor(P, d.material[i]));
+  if (P.shifting.enabled)
+    for (int k = 0; k < dim; ++k) apply_shift(d.pos[k][i], d.shift[k][i]);
 }
 
 __global__ void eos_kernel(DeviceFields d, std::uint32_t n, PhysicsParams P) {
@@ -64,6 +66,12 @@ struct WallStatePass {
   template <class Kernel, int Dim>
   __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
     update_wall_state<Kernel, Dim>(P, v, d, i, g);
+  }
+};
+struct ShiftingPass {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3], float dt) {
+    update_shift<Kernel, Dim>(P, v, d, i, g, dt);
   }
 };
 template <bool Gamma7, bool Multiphase, bool MovingWalls>
@@ -88,14 +96,16 @@ struct SurfaceTensionPass {
 };
 
 // Owned particles [first, first + count): the whole slab, or the interior or a boundary range.
-template <class Update, class Kernel, int Dim>
-__global__ void neighbour_kernel(DeviceFields d, std::uint32_t first, std::uint32_t count, CellGridView v, Lattice L, PhysicsParams P) {
+// Extra arguments (the shifting pass's dt) go to the pass.
+template <class Update, class Kernel, int Dim, class... Extra>
+__global__ void neighbour_kernel(DeviceFields d, std::uint32_t first, std::uint32_t count, CellGridView v, Lattice L, PhysicsParams P,
+                                 Extra... extra) {
   const std::uint32_t k = thread_index();
   if (k >= count) return;
   const std::uint32_t i = first + k;
   int g[3];
   cell_coords<Dim>(L, d, i, g);
-  Update::template run<Kernel, Dim>(P, v, d, i, g);
+  Update::template run<Kernel, Dim>(P, v, d, i, g, extra...);
 }
 
 // Per-particle stable step (infinity for walls); the minimum is a CUB reduction (order-free, exact).
@@ -156,6 +166,9 @@ class CudaKernels final : public StepKernels {
   void surface_tension(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
     neighbour_pass<SurfaceTensionPass>(P, ParticleRange{0, owned()});
   }
+  void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
+    neighbour_pass<ShiftingPass>(P, ParticleRange{0, owned()}, dt);
+  }
   float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
     arrays_.select();
     float dt = INFINITY;
@@ -172,12 +185,12 @@ class CudaKernels final : public StepKernels {
   std::size_t owned() const { return arrays_.owned(); }
   std::uint32_t owned32() const { return static_cast<std::uint32_t>(arrays_.owned()); }
 
-  template <class Pass>
-  void neighbour_pass(const PhysicsParams& P, ParticleRange range) {
+  template <class Pass, class... Extra>
+  void neighbour_pass(const PhysicsParams& P, ParticleRange range, Extra... extra) {
     arrays_.select();
     dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-      launch(range.count, neighbour_kernel<Pass, Kernel, Dim>, arrays_.fields(), static_cast<std::uint32_t>(range.first),
-             static_cast<std::uint32_t>(range.count), arrays_.view(), arrays_.lattice(), P);
+      launch(range.count, neighbour_kernel<Pass, Kernel, Dim, Extra...>, arrays_.fields(), static_cast<std::uint32_t>(range.first),
+             static_cast<std::uint32_t>(range.count), arrays_.view(), arrays_.lattice(), P, extra...);
     });
   }
 

@@ -456,6 +456,7 @@ void DeviceSlabArrays::sort_by_key(std::size_t first, std::size_t last) {
   sorted_values_ = perm.selector;
   // Every field follows the permutation: gathered into the scratch word, copied back.
   for (auto& a : arrays_) {
+    if (a.meta.spec->scratch()) continue;
     char* at = a.data.get() + first * a.meta.elem_size;
     if (a.meta.elem_size == 4)
       launch(compute_.get(), n, gather_kernel<std::uint32_t>, reinterpret_cast<const std::uint32_t*>(at), perm.Current(),

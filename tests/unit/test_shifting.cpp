@@ -1,0 +1,88 @@
+// Particle shifting of delta-plus-SPH (solver/physics/shifting.hpp) on 2D lattices of spacing dp:
+// nothing moves on a perfect lattice, a displaced particle is pushed back towards its lattice site,
+// a particle on a free surface is never pushed out of the fluid, and a splashed one is left alone.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "case/case.hpp"
+#include "physics/shifting.hpp"
+
+namespace spate {
+namespace {
+
+const char* kCase = R"(name: lattice
+dimensions: 2
+dp: 0.01
+time:
+  end: 0.1
+tank:
+  size: [0.4, 0.4]
+fluid_blocks:
+  - min: [0, 0]
+    max: [0.1, 0.1]
+shifting:
+  enabled: true
+)";
+
+struct Lattice2D {
+  PhysicsParams P = physics_params(parse_case(kCase, "lattice.yaml"));
+  const FluidMaterial& M = P.materials.fluid[0];
+  float dt = 1e-4f;
+  // Fluid sites (i dp, j dp) for |i| <= 6 and -12 <= j <= top.
+  std::vector<ParticleState<2>> sites(int top) const {
+    std::vector<ParticleState<2>> out;
+    for (int i = -6; i <= 6; ++i)
+      for (int j = -12; j <= top; ++j) out.push_back(ParticleState<2>{{i * P.dp, j * P.dp}, {0, 0}, M.rho0, 0.0f, 0, {0, 0}});
+    return out;
+  }
+  Vec<2> shift_of(const Vec<2>& xi, const std::vector<ParticleState<2>>& all) const {
+    ShiftingSums<2> s;
+    const float w_dp = WendlandC2::value(P.dp * P.inv_h, P.kernel_norm);
+    for (const auto& j : all) accumulate_shifting_pair<WendlandC2, 2>(P, M, w_dp, xi, j, s);
+    return shifting_displacement<2>(P, M, s, dt);
+  }
+};
+
+TEST(Shifting, NothingMovesOnAPerfectLattice) {
+  Lattice2D L;
+  const Vec<2> dr = L.shift_of(Vec<2>{0, 0}, L.sites(6));
+  EXPECT_LT(std::hypot(dr[0], dr[1]), 1e-6f * L.P.dp);
+}
+
+TEST(Shifting, ADisplacedParticleIsPushedBackTowardsItsSite) {
+  Lattice2D L;
+  auto all = L.sites(6);
+  for (auto& p : all)
+    if (p.x[0] == 0.0f && p.x[1] == 0.0f) p.x[0] = 0.3f * L.P.dp;
+  const Vec<2> dr = L.shift_of(Vec<2>{0.3f * L.P.dp, 0}, all);
+  EXPECT_LT(dr[0], 0.0f);                       // back towards x = 0
+  EXPECT_GT(-dr[0], 1e-4f * L.P.dp);
+  EXPECT_LT(-dr[0], 0.3f * L.P.dp);             // never past the site in one step
+  EXPECT_NEAR(dr[1], 0.0f, 1e-6f * L.P.dp);     // the lattice is symmetric in y
+}
+
+TEST(Shifting, AFreeSurfaceParticleIsNotPushedOutOfTheFluid) {
+  Lattice2D L;
+  auto all = L.sites(0);  // the free surface is the row y = 0
+  const Vec<2> top = L.shift_of(Vec<2>{0, 0}, all);
+  EXPECT_LE(top[1], 1e-9f);
+  // One row below the surface the kernel is still cut: same rule.
+  const Vec<2> below = L.shift_of(Vec<2>{0, -L.P.dp}, all);
+  EXPECT_LE(below[1], 1e-9f);
+  // Deep inside, nothing to correct.
+  const Vec<2> deep = L.shift_of(Vec<2>{0, -5 * L.P.dp}, all);
+  EXPECT_LT(std::hypot(deep[0], deep[1]), 1e-6f * L.P.dp);
+}
+
+TEST(Shifting, ASplashedParticleIsLeftAlone) {
+  Lattice2D L;
+  std::vector<ParticleState<2>> pair{{{0, 0}, {0, 0}, L.M.rho0, 0.0f, 0, {0, 0}}, {{0.9f * L.P.dp, 0}, {0, 0}, L.M.rho0, 0.0f, 0, {0, 0}}};
+  const Vec<2> dr = L.shift_of(Vec<2>{0, 0}, pair);
+  EXPECT_EQ(dr[0], 0.0f);
+  EXPECT_EQ(dr[1], 0.0f);
+}
+
+}  // namespace
+}  // namespace spate
