@@ -63,18 +63,19 @@ HaloSends plan_halo_sends(const CellGrid& grid, std::span<const std::uint32_t> s
   return h;
 }
 
-OwnedSplit plan_owned_split(const CellGrid& grid, std::span<const std::uint32_t> starts) {
+OwnedSplit plan_owned_split(const CellGrid& grid, std::span<const std::uint32_t> starts, bool has_left, bool has_right) {
   check_starts(grid, starts);
   const std::size_t n = starts.size() - 1;
   OwnedSplit s;
-  if (n < 3) {
+  const std::size_t first = has_left ? 1 : 0, last = n - (has_right ? 1 : 0);
+  if (n < first + (has_right ? 1 : 0) + 1) {  // no column is free of both faces with a neighbour
     s.before = between(0, starts[n]);
     s.interior = s.after = {starts[n], 0};
     return s;
   }
-  s.before = between(starts[0], starts[1]);
-  s.interior = between(starts[1], starts[n - 1]);
-  s.after = between(starts[n - 1], starts[n]);
+  s.before = between(starts[0], starts[first]);
+  s.interior = between(starts[first], starts[last]);
+  s.after = between(starts[last], starts[n]);
   return s;
 }
 

@@ -80,13 +80,15 @@ struct HaloSends {
 };
 HaloSends plan_halo_sends(const CellGrid& grid, std::span<const std::uint32_t> column_starts, bool has_left, bool has_right);
 
-// Owned particles split for the overlap of the halo with the fluid loop: interior ones (columns
-// owned_lo + 1 ... owned_hi - 2) see owned particles and images of owned particles only, which
-// are ready before the halo arrives; the boundary ranges before and after need the halo.
+// Owned particles split for the overlap of the halo with the fluid loop: interior ones (every
+// column but the first if there is a left neighbour and the last if there is a right one) see
+// owned particles and images of owned particles only, which are ready before the halo arrives;
+// the boundary ranges before and after need the halo (empty on a side without a neighbour, so that
+// a lone slab computes its rates in one pass).
 struct OwnedSplit {
   ParticleRange before, interior, after;
 };
-OwnedSplit plan_owned_split(const CellGrid& grid, std::span<const std::uint32_t> column_starts);
+OwnedSplit plan_owned_split(const CellGrid& grid, std::span<const std::uint32_t> column_starts, bool has_left, bool has_right);
 
 // Table entries to read back for the column starts: first, stride (cells per x column), count.
 struct TableRead {

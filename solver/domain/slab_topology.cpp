@@ -1,8 +1,19 @@
 #include "slab_topology.hpp"
 
+#include <chrono>
 #include <stdexcept>
 
 namespace spate {
+
+namespace {
+// Runs body() and adds its seconds to `total`.
+template <class Body>
+void timed(double& total, Body&& body) {
+  const auto t = std::chrono::steady_clock::now();
+  body();
+  total += std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+}  // namespace
 
 std::int64_t SlabTopology::rebuild(SlabArrays& a, const CellGrid& grid, const SlabLayout& layout, SlabTransport& t) {
   const std::int64_t moved = migrate(a, grid, layout, t);
@@ -24,9 +35,11 @@ std::int64_t SlabTopology::migrate(SlabArrays& a, const CellGrid& grid, const Sl
   const KeyBins bins{grid.cell_count()};
   std::int64_t total = 0;
   for (;;) {
-    a.compute_keys(grid, 0, a.owned(), true);
-    a.sort_by_key(0, a.owned());
-    a.build_table(grid);
+    timed(sort_seconds_, [&] {
+      a.compute_keys(grid, 0, a.owned(), true);
+      a.sort_by_key(0, a.owned());
+      a.build_table(grid);
+    });
     // Starts of the left-emigrant, right-emigrant and lost bins, and the end.
     const auto e = a.table_entries(TableRead{bins.emigrant_left(), 1, 4});
     // The simulation stops runs with particles outside the domain before this; reaching it is a
@@ -50,8 +63,9 @@ std::int64_t SlabTopology::migrate(SlabArrays& a, const CellGrid& grid, const Sl
 void SlabTopology::build_halo(SlabArrays& a, const CellGrid& grid, SlabTransport& t) {
   const int s = t.slab();
   const auto starts = a.table_entries(column_starts_read(grid));
-  sends_ = plan_halo_sends(grid, starts, t.left_of(s) >= 0, t.right_of(s) >= 0);
-  split_ = plan_owned_split(grid, starts);
+  const bool has_left = t.left_of(s) >= 0, has_right = t.right_of(s) >= 0;
+  sends_ = plan_halo_sends(grid, starts, has_left, has_right);
+  split_ = plan_owned_split(grid, starts, has_left, has_right);
   a.stage(kLeft, FieldSet::Ghost, sends_.range[kLeft], sends_.shift[kLeft]);
   a.stage(kRight, FieldSet::Ghost, sends_.range[kRight], sends_.shift[kRight]);
   const auto received = a.exchange(t, FieldSet::Ghost);
@@ -62,9 +76,11 @@ void SlabTopology::build_halo(SlabArrays& a, const CellGrid& grid, SlabTransport
   for (int axis = 1; axis < L.dim; ++axis)
     if (L.periodic[axis]) a.make_images(grid, axis);
   const std::size_t owned = a.owned();
-  a.compute_keys(grid, owned, a.size(), false);
-  a.sort_by_key(owned, a.size());
-  a.build_table(grid);
+  timed(sort_seconds_, [&] {
+    a.compute_keys(grid, owned, a.size(), false);
+    a.sort_by_key(owned, a.size());
+    a.build_table(grid);
+  });
   const KeyBins bins{grid.cell_count()};
   const auto lost = a.table_entries(TableRead{bins.lost(), 1, 2});
   if (lost[0] != lost[1]) throw std::logic_error("SlabTopology: ghost outside the local grid");

@@ -2,8 +2,8 @@
 // The topology of one step for a slab whose particles stay in their own arrays (SlabArrays: the
 // GPU's device memory): migration to the owning slab, the (cell, id) sort, the halo and its
 // refreshes. Only small metadata comes back to the host (emigrant counts, column starts); the
-// plan (slab_plan.hpp) decides, the arrays move. The same code runs on HostSlabArrays in the CPU
-// tests, which must reproduce the CPU backend (Halo, migrate, CellGrid) bit for bit.
+// plan (slab_plan.hpp) decides, the arrays move. The same code runs on HostSlabArrays, the CPU
+// backend's particles.
 #include <cstdint>
 #include <vector>
 
@@ -30,6 +30,9 @@ class SlabTopology {
   const OwnedSplit& split() const { return split_; }
   const HaloSends& sends() const { return sends_; }
   std::size_t ghosts() const { return ghosts_; }
+  // Seconds spent so far in the key computations, sorts and cell tables (the per-particle work of a
+  // rebuild, without the waits for the neighbours; host time around a device's launches).
+  double sort_seconds() const { return sort_seconds_; }
 
  private:
   std::int64_t migrate(SlabArrays& a, const CellGrid& grid, const SlabLayout& layout, SlabTransport& t);
@@ -40,6 +43,7 @@ class SlabTopology {
   HaloSends sends_;
   OwnedSplit split_;
   std::size_t ghosts_ = 0;
+  double sort_seconds_ = 0.0;
 };
 
 }  // namespace spate

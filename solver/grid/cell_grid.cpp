@@ -1,7 +1,5 @@
 #include "cell_grid.hpp"
 
-#include "../backend/cpu/parallel.hpp"
-
 #include <algorithm>
 #include <numeric>
 #include <stdexcept>
@@ -55,7 +53,6 @@ std::uint32_t CellGrid::local_cell_of(const float* const pos[3], std::size_t i) 
   return local_cell(c[0], c[1], c[2]);
 }
 
-
 void CellGrid::global_coords(std::uint32_t c, int out[3]) const {
   const int ny = lattice_.dim >= 2 ? lattice_.cells[1] : 1;
   const int nz = lattice_.dim >= 3 ? lattice_.cells[2] : 1;
@@ -74,7 +71,6 @@ void CellGrid::global_coords(std::uint32_t c, int out[3]) const {
 void CellGrid::assign_starts(const CellGridView& built_for, std::span<const std::uint32_t> table) {
   require_geometry(built_for, table.size());
   std::copy(table.begin(), table.begin() + static_cast<std::ptrdiff_t>(start_.size()), start_.begin());
-  ghost_perm_.clear();
 }
 
 void CellGrid::require_geometry(const CellGridView& built_for, std::size_t entries) const {
@@ -83,78 +79,6 @@ void CellGrid::require_geometry(const CellGridView& built_for, std::size_t entri
                            std::to_string(built_for.cell_count()) + " cells (owned columns " + std::to_string(built_for.owned_lo) + "-" +
                            std::to_string(built_for.owned_hi) + ") given to a grid of " + std::to_string(cell_count()) + " cells (owned columns " +
                            std::to_string(owned_lo_) + "-" + std::to_string(owned_hi_) + ")");
-}
-
-void CellGrid::sort(ParticleStore& particles) {
-  sort_owned(particles);
-  sort_ghosts(particles);
-}
-
-void CellGrid::sort_owned(ParticleStore& particles) {
-  particles.resize(particles.owned());  // any ghosts are stale once owned particles move
-  keys_.resize(particles.size());
-  sort_range(particles, 0, particles.owned());
-  ghost_perm_.clear();
-  rebuild_table();
-}
-
-void CellGrid::sort_ghosts(ParticleStore& particles) {
-  keys_.resize(particles.size());
-  sort_range(particles, particles.owned(), particles.size());
-  ghost_perm_.assign(perm_.begin(), perm_.begin() + static_cast<std::ptrdiff_t>(particles.ghosts()));
-  rebuild_table();
-}
-
-void CellGrid::rebuild_table() {
-  std::fill(start_.begin(), start_.end(), 0u);
-  for (const std::uint32_t k : keys_) ++start_[k + 1];
-  for (std::size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
-}
-
-// Counting sort of [first, last) by cell, then by id inside each cell (insertion sort: the order
-// from the previous step is nearly right). The fields and keys_ follow the permutation.
-void CellGrid::sort_range(ParticleStore& particles, std::size_t first, std::size_t last) {
-  const std::size_t n = last - first;
-  perm_.resize(n);
-  if (n == 0) return;
-  const float* pos[3] = {particles.pos[0].data(), particles.pos[1].data(),
-                         lattice_.dim == 3 ? particles.pos[2].data() : nullptr};
-  std::size_t outside = 0;
-#pragma omp parallel for schedule(static) reduction(+ : outside) if (n > cpu::kCheapGrain)
-  for (std::size_t i = first; i < last; ++i) {
-    keys_[i] = local_cell_of(pos, i);
-    outside += keys_[i] == kOutside;
-  }
-  // The simulation stops runs with particles outside the domain before sorting; reaching this is a
-  // bug in ownership, not bad input.
-  if (outside) throw std::logic_error("CellGrid::sort: particle outside the local grid");
-
-  const std::uint32_t cells = cell_count();
-  counts_.assign(cells + 1, 0u);
-  for (std::size_t i = first; i < last; ++i) ++counts_[keys_[i] + 1];
-  for (std::uint32_t c = 0; c < cells; ++c) counts_[c + 1] += counts_[c];
-  for (std::size_t i = first; i < last; ++i) perm_[counts_[keys_[i]]++] = static_cast<std::uint32_t>(i - first);
-  // counts_[c] is now the end of cell c within the range.
-  const std::uint32_t* ids = particles.id.data() + first;
-#pragma omp parallel for schedule(dynamic, 256) if (n > cpu::kCheapGrain)
-  for (std::int64_t c = 0; c < static_cast<std::int64_t>(cells); ++c) {
-    const std::uint32_t e = counts_[c];
-    const std::uint32_t b = c == 0 ? 0u : counts_[c - 1];
-    for (std::uint32_t k = b + 1; k < e; ++k) {
-      const std::uint32_t v = perm_[k];
-      std::uint32_t m = k;
-      while (m > b && ids[perm_[m - 1]] > ids[v]) {
-        perm_[m] = perm_[m - 1];
-        --m;
-      }
-      perm_[m] = v;
-    }
-  }
-  particles.permute(first, perm_);
-  // The sorted keys are the cells in order, each as often as it holds particles.
-  std::uint32_t* sorted = keys_.data() + first;
-  for (std::uint32_t c = 0, b = 0; c < cells; b = counts_[c++])
-    std::fill(sorted + b, sorted + counts_[c], c);
 }
 
 }  // namespace spate

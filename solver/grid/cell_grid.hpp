@@ -4,7 +4,8 @@
 // numbered first, x slowest then y then z, so owned particles are contiguous after the sort and
 // z-consecutive cells are contiguous in memory; ghost cells follow, in the same order.
 //
-// Particles are sorted by (cell, id): a pure function of the particle state, so the neighbour
+// Particles are sorted by (cell, id) (SlabTopology over the backend's SlabArrays, which hand this
+// grid the cell table): a pure function of the particle state, so the neighbour
 // order, and therefore every floating-point sum, is the same however the domain is split.
 #include <cstdint>
 #include <span>
@@ -35,18 +36,11 @@ class CellGrid {
   std::uint32_t local_cell_of(const float* const pos[3], std::size_t i) const;
   bool owns_column(int ix) const { return ix >= owned_lo_ && ix < owned_hi_; }
 
-  // Sort owned particles [0, owned) then ghosts [owned, size) by (cell, id) and fill the cell
-  // table. Particles outside the grid are a logic error (the simulation stops such runs first).
-  void sort(ParticleStore& particles);
-  // The two halves of sort(): owned particles (dropping ghosts), then the ghosts appended since.
-  void sort_owned(ParticleStore& particles);
-  void sort_ghosts(ParticleStore& particles);
-
   // Particles of local cell c are [begin(c), end(c)).
   std::uint32_t begin(std::uint32_t c) const { return start_[c]; }
   std::uint32_t end(std::uint32_t c) const { return start_[c + 1]; }
   const std::vector<std::uint32_t>& starts() const { return start_; }
-  // Takes the table from elsewhere (a device-resident slab sorted its particles itself): `table`
+  // Takes the table from the arrays that sorted the particles (SlabArrays::build_table): `table`
   // was computed for a grid whose view was `built_for`, and its first cell_count() + 1 entries
   // become this grid's. A table of another geometry (a grid reconfigured since, e.g. by a
   // balancing pass) would number cells differently or end early: std::logic_error.
@@ -58,18 +52,10 @@ class CellGrid {
   void global_coords(std::uint32_t c, int out[3]) const;
 
   const CellGridView& view() const { return view_; }
-  // After sort(): ghost slot k (counted from owned()) holds the ghost that was at owned() + perm[k].
-  const std::vector<std::uint32_t>& ghost_permutation() const { return ghost_perm_; }
-  // Right after sort_owned(): owned slot k holds the particle that was at perm[k] (overwritten by
-  // the next sort of either half).
-  const std::vector<std::uint32_t>& owned_permutation() const { return perm_; }
 
   std::size_t bytes() const { return start_.capacity() * sizeof(std::uint32_t); }
 
  private:
-  void sort_range(ParticleStore& particles, std::size_t first, std::size_t last);
-  void rebuild_table();
-
   Lattice lattice_;
   int owned_lo_ = 0, owned_hi_ = 0;
   int lo_[3] = {0, 0, 0}, hi_[3] = {0, 0, 0};  // full local box including ghost layers
@@ -77,7 +63,6 @@ class CellGrid {
   std::uint32_t owned_cells_ = 0, ghost_cells_ = 0;
   std::vector<std::uint32_t> start_;  // cell_count + 1 prefix offsets
   CellGridView view_{};
-  std::vector<std::uint32_t> keys_, perm_, counts_, ghost_perm_;
 };
 
 }  // namespace spate

@@ -21,7 +21,7 @@ double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::
 
 SlabWorker::SlabWorker(const Lattice& lattice, const PhysicsParams& params, SlabTransport& transport)
     : lattice_(lattice), params_(params), transport_(transport), particles_(lattice.dim),
-      kernels_(std::make_unique<cpu::Kernels>()) {}
+      kernels_(std::make_unique<cpu::Kernels>(particles_, grid_)) {}
 
 SlabWorker::~SlabWorker() = default;
 
@@ -46,51 +46,33 @@ void SlabWorker::take_share(const ParticleStore& global, const SlabLayout& layou
   }
   particles_.set_owned(particles_.size());
   grid_.configure(lattice_, layout.faces[s], layout.faces[s + 1]);
-  if (auto* r = resident()) {
-    std::uint64_t id_bound = 0;
-    for (const std::uint32_t id : global.id) id_bound = std::max<std::uint64_t>(id_bound, std::uint64_t{id} + 1);
-    r->set_id_bound(static_cast<std::uint32_t>(std::min<std::uint64_t>(id_bound, 0xffffffffu)));
-    r->upload(particles_);
-  }
+  std::uint64_t id_bound = 0;
+  for (const std::uint32_t id : global.id) id_bound = std::max<std::uint64_t>(id_bound, std::uint64_t{id} + 1);
+  arrays().set_id_bound(static_cast<std::uint32_t>(std::min<std::uint64_t>(id_bound, 0xffffffffu)));
+  arrays().upload(particles_);  // nothing to copy on the CPU backend: its arrays are this store
   host_stale_ = false;
 }
 
 void SlabWorker::sync_host() {
   if (!host_stale_) return;
-  resident()->download(particles_, grid_);
+  arrays().download(particles_, grid_);
   host_stale_ = false;
 }
 
 void SlabWorker::rebuild() {
-  if (auto* r = resident()) {
-    (faces_moved_ ? handovers_ : crossings_) += topology_.rebuild(*r, grid_, layout_, transport_);
-    faces_moved_ = false;
-    host_stale_ = true;
-    return;
-  }
-  (faces_moved_ ? handovers_ : crossings_) += migrate(particles_, layout_.faces, lattice_, transport_);
+  const double sorting = topology_.sort_seconds();
+  (faces_moved_ ? handovers_ : crossings_) += topology_.rebuild(arrays(), grid_, layout_, transport_);
   faces_moved_ = false;
-  halo_.send(particles_, grid_, transport_);
-  // The sort and the ghosts' arrival: per-particle work in the same stretch as the loops.
-  const auto t = Clock::now();
-  halo_.receive(particles_, grid_);
-  const double seconds = since(t);
+  host_stale_ = true;
+  // The sorts: per-particle work in the same stretch as the loops (not the waits for the neighbours).
+  const double seconds = topology_.sort_seconds() - sorting;
   busy_seconds_ += seconds;
   window_sort_seconds_ += seconds;
-  kernels_->publish(particles_, grid_);
 }
 
-// Ghosts travel through the host store: the owners' Refresh fields come back from the backend, the
-// halo moves them, the ghosts' copies go back (no-ops on the CPU backend).
 void SlabWorker::refresh_halo() {
-  if (auto* r = resident()) {
-    topology_.begin_refresh(*r);
-    topology_.finish_refresh(*r, transport_);
-    return;
-  }
-  kernels_->fetch(particles_, FieldSet::Refresh, 0, particles_.owned());
-  halo_.refresh(particles_, transport_);
-  kernels_->publish_fields(particles_, FieldSet::Refresh, particles_.owned(), particles_.size());
+  topology_.begin_refresh(arrays());
+  topology_.finish_refresh(arrays(), transport_);
 }
 
 void SlabWorker::compute_rates() {
@@ -127,35 +109,15 @@ void SlabWorker::compute_rates() {
 // only need to agree on wall + fluid time, not on each phase. Each particle's rates depend only
 // on its own neighbour loop, so the split changes no result. Returns the seconds spent computing.
 double SlabWorker::fluid_rates_overlapping_refresh() {
-  if (SlabArrays* r = resident()) {
-    const auto t0 = Clock::now();
-    topology_.begin_refresh(*r);
-    kernels_->fluid_rates_range(grid_, params_, topology_.split().interior);
-    double seconds = since(t0);
-    topology_.finish_refresh(*r, transport_);
-    const auto t1 = Clock::now();
-    kernels_->fluid_rates_range(grid_, params_, topology_.split().before);
-    kernels_->fluid_rates_range(grid_, params_, topology_.split().after);
-    return seconds + since(t1);
-  }
-  // Interior: x columns without halo ghosts within one cell (all of them at a slab without
-  // neighbours); a column is ny * nz consecutive owned cells.
-  const int s = transport_.slab();
-  const int width = grid_.owned_hi() - grid_.owned_lo();
-  const std::uint32_t per_column = width > 0 ? grid_.owned_cell_count() / static_cast<std::uint32_t>(width) : 0;
-  const int first = transport_.left_of(s) >= 0 ? 1 : 0;
-  const int last = std::max(first, width - (transport_.right_of(s) >= 0 ? 1 : 0));
+  SlabArrays& a = arrays();
   const auto t0 = Clock::now();
-  kernels_->fetch(particles_, FieldSet::Refresh, 0, particles_.owned());
-  halo_.begin_refresh(particles_, transport_);
-  kernels_->publish_fields(particles_, FieldSet::Refresh, particles_.owned(), particles_.size());  // local images
-  kernels_->fluid_rates_cells(particles_, grid_, params_, first * per_column, last * per_column);
+  topology_.begin_refresh(a);
+  kernels_->fluid_rates_range(grid_, params_, topology_.split().interior);
   double seconds = since(t0);
-  halo_.finish_refresh(particles_, transport_);
-  kernels_->publish_fields(particles_, FieldSet::Refresh, particles_.owned(), particles_.size());
+  topology_.finish_refresh(a, transport_);
   const auto t1 = Clock::now();
-  kernels_->fluid_rates_cells(particles_, grid_, params_, 0, first * per_column);
-  kernels_->fluid_rates_cells(particles_, grid_, params_, last * per_column, grid_.owned_cell_count());
+  kernels_->fluid_rates_range(grid_, params_, topology_.split().before);
+  kernels_->fluid_rates_range(grid_, params_, topology_.split().after);
   return seconds + since(t1);
 }
 
@@ -180,26 +142,25 @@ void SlabWorker::prepare(bool rates) {
     kernels_->wall_state(particles_, grid_, params_);
     refresh_halo();
   }
-  if (!resident()) kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
 }
 
 void SlabWorker::refresh_ghosts() {
   refresh_halo();
-  if (resident()) host_stale_ = true;  // the device's ghosts changed; the host mirror follows on demand
+  host_stale_ = true;  // the arrays' ghosts changed; a device backend's host mirror follows on demand
 }
 
-void SlabWorker::prepare_saved() {
-  rebuild();
-  if (!resident()) kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
-}
+void SlabWorker::prepare_saved() { rebuild(); }
 
-std::optional<ParticleFault> SlabWorker::wrap_and_check_domain(bool wrap) {
+// The host's description of the position fault of the lowest faulty id (the arrays' reduction
+// found it with the same predicates; positions on periodic axes are wrapped already).
+std::optional<ParticleFault> SlabWorker::position_fault_message(std::uint32_t id) {
+  if (id == SlabArrays::kNoFault) return std::nullopt;
+  sync_host();
   std::optional<ParticleFault> fault;
   for (int a = 0; a < lattice_.dim; ++a) {
-    float* x = particles_.pos[a].data();
+    const float* x = particles_.pos[a].data();
     const float lo = lattice_.origin[a], hi = lattice_.upper(a);
     for (std::size_t i = 0; i < particles_.owned(); ++i) {
-      if (wrap) wrap_periodic(lattice_, x[i], a);
       // A NaN or infinite position is reported as such (and never converted to a cell index).
       const PositionFault f = position_fault(lattice_, x[i], a);
       if (f != PositionFault::None && (!fault || particles_.id[i] < fault->id)) {
@@ -210,72 +171,30 @@ std::optional<ParticleFault> SlabWorker::wrap_and_check_domain(bool wrap) {
       }
     }
   }
-  return fault;
-}
-
-void SlabWorker::remove_escaped() {
-  removed_.clear();
-  if (!open_.open) return;
-  const ParticleStore& p = particles_;
-  std::vector<std::uint8_t> gone;
-  for (std::size_t i = 0; i < p.owned(); ++i) {
-    float x[3] = {0, 0, 0};
-    for (int a = 0; a < lattice_.dim; ++a) x[a] = p.pos[a][i];
-    if (!escaped(open_, lattice_.dim, p.material[i], x)) continue;
-    if (gone.empty()) gone.assign(p.owned(), 0);
-    gone[i] = 1;
-    removed_.push_back(p.id[i]);
-  }
-  if (removed_.empty()) return;
-  particles_.remove_owned_if(gone);
-  std::sort(removed_.begin(), removed_.end());
-}
-
-// Between steps the host store holds the owned particles' whole state (health checks, probes, output
-// and the next rebuild read it), whichever backend computed it.
-std::optional<ParticleFault> SlabWorker::step(float dt) {
-  if (auto* r = resident()) {
-    // Device-resident: nothing comes back to the host but the lowest faulty id (and, on a fault,
-    // the particles, so that the message is the host's).
-    kernels_->predict(particles_, params_, dt);
-    host_stale_ = true;
-    removed_ = r->remove_escaped(open_);
-    const std::uint32_t bad = r->wrap_and_find_position_fault(lattice_);
-    if (auto fault = first_fault(transport_, position_fault_message(bad))) return fault;
-    rebuild();
-    compute_rates();
-    shift(dt);
-    kernels_->correct(particles_, params_, dt);
-    return std::nullopt;
-  }
-  kernels_->predict(particles_, params_, dt);
-  kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
-  remove_escaped();
-  if (auto fault = first_fault(transport_, wrap_and_check_domain())) return fault;
-  rebuild();
-  compute_rates();
-  shift(dt);
-  kernels_->correct(particles_, params_, dt);
-  kernels_->fetch(particles_, FieldSet::All, 0, particles_.owned());
-  return std::nullopt;
-}
-
-// The host's message for the position fault a device reduction found (the same predicates: the
-// host check on the mirror, already wrapped, finds the same lowest id).
-std::optional<ParticleFault> SlabWorker::position_fault_message(std::uint32_t id) {
-  if (id == SlabArrays::kNoFault) return std::nullopt;
-  sync_host();
-  auto fault = wrap_and_check_domain(false);
   if (fault && fault->id == id) return fault;
   return ParticleFault{id, "left the domain"};
 }
 
+// Nothing comes back to the host but the lowest faulty id (and, on a fault, the particles, so that
+// the message is the host's). Between steps the arrays hold the owned particles' whole state.
+std::optional<ParticleFault> SlabWorker::step(float dt) {
+  SlabArrays& a = arrays();
+  kernels_->predict(particles_, params_, dt);
+  host_stale_ = true;
+  removed_ = a.remove_escaped(open_);
+  const std::uint32_t bad = a.wrap_and_find_position_fault(lattice_);
+  if (auto fault = first_fault(transport_, position_fault_message(bad))) return fault;
+  rebuild();
+  compute_rates();
+  shift(dt);
+  kernels_->correct(particles_, params_, dt);
+  return std::nullopt;
+}
+
 std::optional<ParticleFault> SlabWorker::health(float min_ratio, float max_ratio) {
-  if (auto* r = resident()) {
-    const std::uint32_t bad = r->find_unhealthy(HealthLimits(params_.materials, min_ratio, max_ratio));
-    if (bad == SlabArrays::kNoFault) return std::nullopt;
-    sync_host();  // the host check below writes the message for the same particle
-  }
+  const std::uint32_t bad = arrays().find_unhealthy(HealthLimits(params_.materials, min_ratio, max_ratio));
+  if (bad == SlabArrays::kNoFault) return std::nullopt;
+  sync_host();  // the host check below writes the message for the same particle
   std::optional<ParticleFault> fault;
   const auto& p = particles_;
   const HealthLimits limits(params_.materials, min_ratio, max_ratio);
@@ -304,7 +223,7 @@ float SlabWorker::local_time_step(const TimeStepControl& c) const { return kerne
 
 std::vector<std::int64_t> SlabWorker::slab_particle_counts() {
   std::vector<std::int64_t> counts(transport_.slab_count(), 0);
-  counts[transport_.slab()] = static_cast<std::int64_t>(resident() ? resident()->owned() : particles_.owned());
+  counts[transport_.slab()] = static_cast<std::int64_t>(arrays().owned());
   transport_.sum(counts);
   return counts;
 }
@@ -351,7 +270,7 @@ PhaseCosts measured_column_costs(const ParticleStore& p, const Lattice& lattice,
 }
 
 double SlabWorker::rebalance(int min_columns) {
-  sync_host();  // resident backends: the owned positions and kinds for the cost histogram
+  sync_host();  // device backends: the owned positions and kinds for the cost histogram
   // One exact integer sum of both phase histograms: every slab ends up with the same numbers and
   // therefore the same faces, although the timings themselves differ from run to run. Faces do not
   // change the physics (neighbour order is (cell, id)), so results stay bit-identical.

@@ -1,7 +1,8 @@
 #pragma once
 // One device's share of the simulation: its slab of owned particles, their ghosts, the cell grid
-// and the step pieces in the order the design prescribes. The CPU backend's driver does the
-// arithmetic; the worker only sequences it and talks to the neighbours through the transport.
+// and the step pieces in the order the design prescribes. The backend (StepKernels) holds the
+// particles and does the arithmetic; the worker sequences it, runs the step topology on the
+// backend's arrays (SlabTopology) and talks to the neighbours through the transport.
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -10,7 +11,6 @@
 
 #include "../backend/step_kernels.hpp"
 #include "../comm/transport.hpp"
-#include "../domain/halo.hpp"
 #include "../domain/slab_layout.hpp"
 #include "../domain/slab_topology.hpp"
 #include "../grid/cell_grid.hpp"
@@ -72,9 +72,9 @@ class SlabWorker {
 
   void set_params(const PhysicsParams& p) { params_ = p; }
   const PhysicsParams& params() const { return params_; }
-  // The host store and grid. With a device-resident backend they are a mirror, brought up to date
-  // here when a step changed the device copy (output steps: probes, snapshots, checkpoints, in
-  // situ); otherwise the only copy.
+  // The host store and grid. With a device backend they are a mirror, brought up to date here when
+  // a step changed the device copy (output steps: probes, snapshots, checkpoints, in situ); with
+  // the CPU backend they are its arrays.
   ParticleStore& particles() {
     sync_host();
     return particles_;
@@ -93,12 +93,9 @@ class SlabWorker {
  private:
   void rebuild();        // migrate, sort, halos
   void compute_rates();  // EOS, walls, fluid rates
-  void shift(float dt);    // particle shifting, when enabled (before the corrector applies it)
-  void refresh_halo();   // the ghosts' Refresh fields, through the host store
-  std::optional<ParticleFault> wrap_and_check_domain(bool wrap = true);
-  void remove_escaped();  // host store
-  // The device-resident path (kernels_->resident() set): the same step on the backend's arrays.
-  SlabArrays* resident() const { return kernels_->resident(); }
+  void shift(float dt);  // particle shifting, when enabled (before the corrector applies it)
+  void refresh_halo();   // the ghosts' Refresh fields
+  SlabArrays& arrays() const { return kernels_->arrays(); }
   void sync_host();
   double fluid_rates_overlapping_refresh();
   std::optional<ParticleFault> position_fault_message(std::uint32_t id);
@@ -109,8 +106,7 @@ class SlabWorker {
   SlabLayout layout_;
   ParticleStore particles_;
   CellGrid grid_;
-  Halo halo_;
-  SlabTopology topology_;  // resident path only
+  SlabTopology topology_;
   bool host_stale_ = false;
   double busy_seconds_ = 0.0;
   // Loop seconds since the last balancing pass, per synchronised phase (see PhaseCosts).

@@ -82,19 +82,27 @@ TEST(SlabPlan, InteriorOnlyWithThreeColumns) {
   CellGrid g;
   g.configure(L, 2, 6);
   const std::vector<std::uint32_t> starts{0, 10, 25, 40, 50};
-  OwnedSplit s = plan_owned_split(g, starts);
+  OwnedSplit s = plan_owned_split(g, starts, true, true);
   EXPECT_EQ(s.before, (ParticleRange{0, 10}));
   EXPECT_EQ(s.interior, (ParticleRange{10, 30}));
   EXPECT_EQ(s.after, (ParticleRange{40, 10}));
-  // Two columns: every particle is next to a face.
+  // A side without a neighbour has no halo: its edge column is interior.
+  s = plan_owned_split(g, starts, false, true);
+  EXPECT_EQ(s.before.count, 0u);
+  EXPECT_EQ(s.interior, (ParticleRange{0, 40}));
+  EXPECT_EQ(s.after, (ParticleRange{40, 10}));
+  s = plan_owned_split(g, starts, false, false);
+  EXPECT_EQ(s.interior, (ParticleRange{0, 50}));
+  EXPECT_EQ(s.before.count + s.after.count, 0u);
+  // Two columns between two neighbours: every particle is next to a face.
   g.configure(L, 2, 4);
-  s = plan_owned_split(g, std::vector<std::uint32_t>{0, 10, 25});
+  s = plan_owned_split(g, std::vector<std::uint32_t>{0, 10, 25}, true, true);
   EXPECT_EQ(s.before, (ParticleRange{0, 25}));
   EXPECT_EQ(s.interior.count + s.after.count, 0u);
   // Periodic y: the same split (images of owned columns are refreshed before the interior pass).
   L = lattice(3, 10, 4, 4, false, true);
   g.configure(L, 2, 6);
-  s = plan_owned_split(g, starts);
+  s = plan_owned_split(g, starts, true, true);
   EXPECT_EQ(s.interior, (ParticleRange{10, 30}));
 }
 

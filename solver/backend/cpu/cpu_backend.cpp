@@ -151,20 +151,26 @@ inline void add_lanes(float (&vec)[Dim][kLanes], float (&scalar)[kLanes], const 
 }
 
 template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls>
-void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params, std::uint32_t first_cell,
-                         std::uint32_t last_cell) {
+void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params, ParticleRange range) {
   const PhysicsParams P = params;  // a local copy: the vectoriser must see that nothing aliases it
   const CellGridView v = grid.view();
-  const auto cells = static_cast<std::int64_t>(std::min(last_cell, grid.owned_cell_count()));
-  const auto first = static_cast<std::int64_t>(std::min<std::int64_t>(first_cell, cells));
-  const auto particles = static_cast<std::int64_t>(v.start[cells] - v.start[first]);
+  // The owned cells holding particles of the range; their candidates are gathered whole, their
+  // particles outside the range are left alone.
+  const std::uint32_t owned_end = v.start[grid.owned_cell_count()];
+  const auto lo = static_cast<std::uint32_t>(std::min<std::size_t>(range.first, owned_end));
+  const auto hi = static_cast<std::uint32_t>(std::clamp<std::size_t>(range.end(), lo, owned_end));
+  const std::uint32_t* starts = v.start;
+  const std::uint32_t* starts_end = v.start + grid.owned_cell_count() + 1;
+  const auto first = static_cast<std::int64_t>(std::upper_bound(starts, starts_end, lo) - starts) - 1;
+  const auto cells = static_cast<std::int64_t>(std::lower_bound(starts, starts_end, hi) - starts);
+  const auto particles = static_cast<std::int64_t>(hi - lo);
 #pragma omp parallel if (particles > kPairGrain)
   {
     NeighbourBatch<Dim> batch;
 #pragma omp for schedule(dynamic, 64)
-    for (std::int64_t c = first; c < cells; ++c) {
-      const std::uint32_t b = v.start[c], e = v.start[c + 1];
-      if (b == e) continue;
+    for (std::int64_t c = std::max<std::int64_t>(first, 0); c < cells; ++c) {
+      const std::uint32_t b = std::max(v.start[c], lo), e = std::min(v.start[c + 1], hi);
+      if (b >= e) continue;
       bool any_fluid = false;
       for (std::uint32_t i = b; i < e; ++i) {
         if (P.is_fluid(ps.material[i])) {
@@ -350,10 +356,9 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
 
 }  // namespace
 
-void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P, std::uint32_t first_cell,
-                 std::uint32_t last_cell) {
+void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P, ParticleRange range) {
   dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls>() {
-    fluid_rates_batched<Kernel, Dim, Gamma7, Multiphase, MovingWalls>(p, grid, P, first_cell, last_cell);
+    fluid_rates_batched<Kernel, Dim, Gamma7, Multiphase, MovingWalls>(p, grid, P, range);
   });
 }
 

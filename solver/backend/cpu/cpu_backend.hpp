@@ -1,6 +1,9 @@
 #pragma once
 // The OpenMP driver: loops over owned particles (or cells) and calls the shared physics bodies in
 // solver/physics. Nothing here knows a formula; it only knows where the arrays are.
+#include <limits>
+
+#include "../../domain/slab_plan.hpp"
 #include "../../grid/cell_grid.hpp"
 #include "../../particles/particle_store.hpp"
 #include "../../physics/params.hpp"
@@ -17,11 +20,12 @@ void equation_of_state(ParticleStore& p, const PhysicsParams& P);
 void summation_density(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 // Adami wall pressure, density and no-slip velocity of owned wall particles.
 void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
-// Acceleration and density rate of the owned fluid particles in owned cells [first_cell,
-// last_cell) (all by default). Each particle's rates depend only on its own neighbour loop, so a
-// pass split into cell ranges gives the same bits as one pass.
-void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, std::uint32_t first_cell = 0,
-                 std::uint32_t last_cell = 0xffffffffu);
+// Acceleration and density rate of the owned fluid particles [range.first, range.end()) (all by
+// default): the cells the range touches are visited, their particles outside it keep their rates.
+// Each particle's rates depend only on its own neighbour loop, so a pass split into ranges gives
+// the same bits as one pass.
+void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P,
+                 ParticleRange range = {0, std::numeric_limits<std::size_t>::max()});
 // Surface tension (physics/surface_tension.hpp), only when the case has a coefficient: the colour
 // gradient of the owned particles (before the halo refresh that carries it to the ghosts), then,
 // after the fluid rates, the force added to the owned fluid particles' acceleration.
@@ -36,28 +40,51 @@ float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeSt
 }  // namespace spate::cpu
 
 #include "../step_kernels.hpp"
+#include "../../domain/host_slab_arrays.hpp"
+
+#include <memory>
+#include <utility>
 
 namespace spate::cpu {
-// The OpenMP loops behind the StepKernels interface; the host store is the only copy.
-class Kernels final : public StepKernels {
+// The OpenMP loops behind the StepKernels interface, resident over HostSlabArrays: the worker runs
+// the same step topology (SlabTopology: migration, sort, halo, refreshes with the interior /
+// boundary overlap) as on a GPU. The arrays are the worker's host store itself, so nothing is
+// copied between a "device" and the host; the loops use the arrays' cell table.
+class Kernels : public StepKernels {
  public:
+  // Over the worker's store (the CPU backend), or over arrays of their own (the tests' stand-in
+  // for a device, whose host store is then only a mirror).
+  Kernels(ParticleStore& store, CellGrid& grid) : arrays_(std::make_unique<HostSlabArrays>(store, grid)) {}
+  explicit Kernels(std::unique_ptr<HostSlabArrays> arrays) : arrays_(std::move(arrays)) {}
   const char* name() const override { return "cpu"; }
-  void predict(ParticleStore& p, const PhysicsParams& P, float dt) override { cpu::predict(p, P, dt); }
-  void correct(ParticleStore& p, const PhysicsParams& P, float dt) override { cpu::correct(p, P, dt); }
-  void equation_of_state(ParticleStore& p, const PhysicsParams& P) override { cpu::equation_of_state(p, P); }
-  void summation_density(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override {
-    cpu::summation_density(p, g, P);
+  void predict(ParticleStore&, const PhysicsParams& P, float dt) override { cpu::predict(store(), P, dt); }
+  void correct(ParticleStore&, const PhysicsParams& P, float dt) override { cpu::correct(store(), P, dt); }
+  void equation_of_state(ParticleStore&, const PhysicsParams& P) override { cpu::equation_of_state(store(), P); }
+  void summation_density(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::summation_density(store(), arrays_->grid(), P);
   }
-  void wall_state(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::wall_state(p, g, P); }
-  void fluid_rates_cells(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, std::uint32_t first_cell,
-                         std::uint32_t last_cell) override {
-    cpu::fluid_rates(p, g, P, first_cell, last_cell);
+  void wall_state(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::wall_state(store(), arrays_->grid(), P);
   }
-  void colour_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::colour_gradient(p, g, P); }
-  void surface_tension(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) override { cpu::surface_tension(p, g, P); }
-  void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt) override { cpu::shifting(p, g, P, dt); }
-  float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) override {
-    return cpu::min_time_step(p, P, c);
+  void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
+    cpu::fluid_rates(store(), arrays_->grid(), P, range);
   }
+  void colour_gradient(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::colour_gradient(store(), arrays_->grid(), P);
+  }
+  void surface_tension(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::surface_tension(store(), arrays_->grid(), P);
+  }
+  void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
+    cpu::shifting(store(), arrays_->grid(), P, dt);
+  }
+  float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
+    return cpu::min_time_step(store(), P, c);
+  }
+  HostSlabArrays& arrays() override { return *arrays_; }
+
+ private:
+  ParticleStore& store() { return arrays_->store(); }
+  std::unique_ptr<HostSlabArrays> arrays_;
 };
 }  // namespace spate::cpu

@@ -131,7 +131,7 @@ class CudaKernels final : public StepKernels {
  public:
   CudaKernels(int device, int dim) : arrays_(device, dim) {}
   const char* name() const override { return "cuda"; }
-  SlabArrays* resident() override { return &arrays_; }
+  SlabArrays& arrays() override { return arrays_; }
 
   // The rates of step n become the "previous" ones (ParticleStore::swap_rates, on the pointers).
   void predict(ParticleStore&, const PhysicsParams& P, float dt) override {
