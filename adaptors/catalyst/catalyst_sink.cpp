@@ -366,11 +366,7 @@ struct CatalystSink::Impl : ScriptObserver {
   // A fresh helper's steering proxy starts with the values steered so far.
   void remember_steered(const SteeringChange& c) {
     if (!has_live() || validate(c, static_cast<int>(dimensions())).has_value()) return;
-    SteeringInitial& i = options.live->initial;
-    if (c.name == "gravity" && c.value.size() == 3) i.gravity = {c.value[0], c.value[1], c.value[2]};
-    if (c.name == "viscosity") i.viscosity = c.value.at(0);
-    if (c.name == "artificial_viscosity") i.artificial_viscosity = c.value.at(0);
-    if (c.name == "insitu_every") i.insitu_every = static_cast<int>(c.value.at(0));
+    options.live->initial.take(c);
   }
   double dimensions() const {
     for (auto& [name, value] : options.constants)

@@ -32,6 +32,17 @@ bool is_switch(const std::string& name) { return name == "write_checkpoint" || n
 
 }  // namespace
 
+void SteeringInitial::take(const SteeringChange& c) {
+  const auto& v = c.value;
+  if (c.name == "gravity" && v.size() == 3) gravity = {v[0], v[1], v[2]};
+  if (c.name == "viscosity" && v.size() == 1) viscosity = v[0];
+  if (c.name == "phase_viscosity" && v.size() == 2) phase_viscosity = {v[0], v[1]};
+  if (c.name == "artificial_viscosity" && v.size() == 1) artificial_viscosity = v[0];
+  if (c.name == "insitu_every" && v.size() == 1) insitu_every = static_cast<int>(v[0]);
+  if (c.name == "motion_amplitude" && v.size() == 2) motion_amplitude = {v[0], v[1]};
+  if (c.name == "motion_frequency" && v.size() == 2) motion_frequency = {v[0], v[1]};
+}
+
 CatalystSteering::CatalystSteering(const std::filesystem::path& xml, const SteeringInitial& initial) {
   vtkSMSessionProxyManager* pxm = session_proxy_manager();
   if (!pxm) throw InSituLoadError("steering: ParaView's proxy manager is not running (start Catalyst first)");
@@ -47,6 +58,7 @@ CatalystSteering::CatalystSteering(const std::filesystem::path& xml, const Steer
   controller->InitializeProxy(proxy);
   vtkSMPropertyHelper(proxy, "gravity").Set(initial.gravity.data(), 3);
   vtkSMPropertyHelper(proxy, "viscosity").Set(initial.viscosity);
+  vtkSMPropertyHelper(proxy, "phase_viscosity").Set(initial.phase_viscosity.data(), 2);
   vtkSMPropertyHelper(proxy, "artificial_viscosity").Set(initial.artificial_viscosity);
   vtkSMPropertyHelper(proxy, "motion_amplitude").Set(initial.motion_amplitude.data(), 2);
   vtkSMPropertyHelper(proxy, "motion_frequency").Set(initial.motion_frequency.data(), 2);

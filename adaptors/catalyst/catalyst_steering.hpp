@@ -23,10 +23,15 @@ namespace spate::catalyst {
 struct SteeringInitial {
   std::array<double, 3> gravity{0.0, -9.81, 0.0};
   double viscosity = 0.0;
+  std::array<double, 2> phase_viscosity{0.0, 0.0};   // fluid number, its dynamic viscosity [Pa s]
   double artificial_viscosity = 0.0;
   std::array<double, 2> motion_amplitude{0.0, 1.0};  // motion number, amplitude scale
   std::array<double, 2> motion_frequency{0.0, 0.0};  // motion number, frequency [Hz]
   int insitu_every = 1;
+
+  // Shows an accepted change (a restart's history, or one steered before a fresh in-situ helper
+  // started), so that a client sees the run's current values.
+  void take(const SteeringChange& change);
 };
 
 class CatalystSteering final : public SteeringSource {

@@ -243,6 +243,7 @@ int run_case(const RunArgs& a, RunRecord& record) {
       // untouched parameter never shows up as a change.
       for (int k = 0; k < 3; ++k) init.gravity[k] = k < c.dim ? c.gravity[k] : 0.0;
       init.viscosity = c.fluids[0].viscosity;
+      init.phase_viscosity = {0.0, c.fluids[0].viscosity};
       init.artificial_viscosity = c.artificial_viscosity;
       init.insitu_every = insitu_every;
       if (!c.motions.empty()) init.motion_frequency = {0.0, MotionSet(c.motions, c.dim).frequency(0)};
@@ -251,14 +252,7 @@ int run_case(const RunArgs& a, RunRecord& record) {
         try {
           ParticleStore ignored;
           const CheckpointMeta meta = read_checkpoint(*o.restart, ignored);
-          for (const SteeringChange& ch : parse_log(meta.steering_log, o.restart->string(), c.dim)) {
-            if (ch.name == "gravity" && ch.value.size() == 3) init.gravity = {ch.value[0], ch.value[1], ch.value[2]};
-            if (ch.name == "viscosity" && !ch.value.empty()) init.viscosity = ch.value[0];
-            if (ch.name == "artificial_viscosity" && !ch.value.empty()) init.artificial_viscosity = ch.value[0];
-            if (ch.name == "insitu_every" && !ch.value.empty()) init.insitu_every = static_cast<int>(ch.value[0]);
-            if (ch.name == "motion_amplitude" && ch.value.size() == 2) init.motion_amplitude = {ch.value[0], ch.value[1]};
-            if (ch.name == "motion_frequency" && ch.value.size() == 2) init.motion_frequency = {ch.value[0], ch.value[1]};
-          }
+          for (const SteeringChange& ch : parse_log(meta.steering_log, o.restart->string(), c.dim)) init.take(ch);
         } catch (const std::exception&) {
           // an unreadable checkpoint is reported by the run itself (exit 2)
         }

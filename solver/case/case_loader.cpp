@@ -799,12 +799,12 @@ Case read(Section& root, const std::string& file) {
                                      {{"pressure", ProbeType::Pressure}, {"velocity", ProbeType::Velocity}, {"height", ProbeType::Height},
                                       {"force", ProbeType::Force}, {"front", ProbeType::Front}, {"wall_pressure", ProbeType::WallPressure},
                                       {"centroid", ProbeType::Centroid}});
-    // A phase (fluid) to measure: required by a centroid, optional for a point or a gauge.
+    // A phase (fluid) to measure: required by a centroid, optional for a point, a gauge or a front.
     const bool phased = probe.type == ProbeType::Pressure || probe.type == ProbeType::Velocity ||
-                        probe.type == ProbeType::Height || probe.type == ProbeType::Centroid;
+                        probe.type == ProbeType::Height || probe.type == ProbeType::Centroid || probe.type == ProbeType::Front;
     if (probe.type == ProbeType::Centroid && !p.has("phase")) p.text("phase");  // reports it as required
     if (p.has("phase")) {
-      if (!phased) p.fail(p.raw("phase"), "phase", "only pressure, velocity, height and centroid probes take a phase");
+      if (!phased) p.fail(p.raw("phase"), "phase", "only pressure, velocity, height, front and centroid probes take a phase");
       probe.phase = fluid_index(p, "phase", c);
       probe.phase_name = c.fluids[probe.phase].name;
     }

@@ -231,12 +231,12 @@ double front_level(const ProbeSpec& front, const Case& c) {
   return c.tank_origin[c.dim - 1] + front.min_depth - 0.5 * c.dp;
 }
 
-double local_front(SlabWorker& w, int axis, double lowest) {
+double local_front(SlabWorker& w, int axis, double lowest, int phase) {
   const ParticleStore& p = w.particles();
   const int v = p.dim() - 1;
   double front = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < p.owned(); ++i)
-    if (w.params().is_fluid(p.material[i]) && p.pos[v][i] >= lowest) front = std::max(front, static_cast<double>(p.pos[axis][i]));
+    if (in_phase(w.params(), p.material[i], phase) && p.pos[v][i] >= lowest) front = std::max(front, static_cast<double>(p.pos[axis][i]));
   return front;
 }
 
@@ -385,7 +385,7 @@ std::string probe_description(const ProbeSpec& p, int dim) {
     case ProbeType::Force:
       return "pressure force on solid '" + p.solid + "'" + (p.face >= 0 ? fmt::format(" face {}{}", p.face % 2 ? "+" : "-", axes[p.face / 2]) : "");
     case ProbeType::Front:
-      return fmt::format("front along {}", axes[p.axis]) + (p.min_depth > 0 ? fmt::format(" (water at least {:g} m deep)", p.min_depth) : "");
+      return fmt::format("front{} along {}", of_phase, axes[p.axis]) + (p.min_depth > 0 ? fmt::format(" (water at least {:g} m deep)", p.min_depth) : "");
   }
   return "";
 }
@@ -512,7 +512,7 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
         row.resize(case_.dim);
         break;
       }
-      case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis, front_level(p, case_)))); break;
+      case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis, front_level(p, case_), p.phase))); break;
       case ProbeType::Centroid: row = sample_centroid(w, p.phase); break;
     }
     rows.push_back(row);

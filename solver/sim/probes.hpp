@@ -82,9 +82,9 @@ Vec3d followed_position(const ProbeSpec& gauge, const Case& c, const MotionSet& 
 // Collective: the centroid (dim coordinates) and mean velocity (dim components) of the particles of
 // fluid `phase` on all slabs (equal masses within a phase); NaN when it has none.
 std::vector<double> sample_centroid(SlabWorker& w, int phase);
-// Furthest fluid particle along `axis` whose vertical coordinate is at least `lowest`; -infinity
-// when there is none on this slab.
-double local_front(SlabWorker& w, int axis, double lowest = -std::numeric_limits<double>::infinity());
+// Furthest particle of fluid `phase` (-1: any fluid) along `axis` whose vertical coordinate is at
+// least `lowest`; -infinity when there is none on this slab.
+double local_front(SlabWorker& w, int axis, double lowest = -std::numeric_limits<double>::infinity(), int phase = -1);
 // A front probe's `lowest`: a particle stands for water from its centre - dp/2 to centre + dp/2, so
 // water at least min_depth deep has a particle centre at floor + min_depth - dp/2 or above
 // (-infinity for min_depth 0: every fluid particle).

@@ -353,7 +353,7 @@ class Worker {
       for (auto& change : share_changes(t_, asked)) {
         change.step = step;
         change.time = time;
-        if (auto why = validate(change, s_.c.dim, &motions)) {
+        if (auto why = validate(change, s_.c.dim, &motions, static_cast<int>(s_.c.fluids.size()))) {
           if (writer) spdlog::warn("steering: rejected {} at step {}: {}", change.name, step, *why);
           if (writer) ++s_.result.steering_rejected;
           continue;
@@ -685,6 +685,10 @@ RunResult Simulation::run() {
         throw std::runtime_error(options_.restart->string() + " (attribute steering_log): a change at step " +
                                  std::to_string(s.steering_history.back().step) + ", after the checkpoint's step " +
                                  std::to_string(s.start.step));
+      // The fluid a phase_viscosity change names must be one of this case's.
+      for (const SteeringChange& change : s.steering_history)
+        if (auto why = validate(change, case_.dim, nullptr, static_cast<int>(case_.fluids.size())))
+          throw std::runtime_error(options_.restart->string() + " (attribute steering_log), step " + std::to_string(change.step) + ": " + *why);
     } catch (const std::exception& e) {
       throw InputError(e.what());
     }

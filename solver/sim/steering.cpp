@@ -18,6 +18,7 @@ const std::vector<SteeringParameter>& steering_parameters() {
   static const std::vector<SteeringParameter> p = {
       {"gravity", 3, 0.0, 100.0, "m/s2", "gravity vector (its magnitude at most 100 m/s2); tilt it to start sloshing"},
       {"viscosity", 1, 0.0, 10.0, "Pa s", "dynamic viscosity mu of eq. 8 (of the fluid, material 0)"},
+      {"phase_viscosity", 2, 0.0, 10.0, "Pa s", "fluid number (the case's order, as spate info lists them), its dynamic viscosity mu"},
       {"artificial_viscosity", 1, 0.0, 1.0, "", "Monaghan alpha (0 switches it off)"},
       {"motion_amplitude", 2, 0.0, kMaxMotionAmplitudeScale, "",
        "motion number, amplitude scale (1: the case's amplitude; blends over one period, no jump)"},
@@ -29,7 +30,7 @@ const std::vector<SteeringParameter>& steering_parameters() {
   return p;
 }
 
-std::optional<std::string> validate(const SteeringChange& c, int dim, const MotionSet* motions) {
+std::optional<std::string> validate(const SteeringChange& c, int dim, const MotionSet* motions, int fluids) {
   const SteeringParameter* spec = nullptr;
   for (auto& p : steering_parameters())
     if (p.name == c.name) spec = &p;
@@ -62,6 +63,21 @@ std::optional<std::string> validate(const SteeringChange& c, int dim, const Moti
     if (why) return c.name + ": " + *why;
     return std::nullopt;
   }
+  if (c.name == "phase_viscosity") {
+    const double k = c.value[0];
+    if (k != std::floor(k) || k < 0) return "phase_viscosity: the fluid number must be a whole number >= 0";
+    if (fluids > 0 && k >= fluids)
+      return "phase_viscosity: the case has " + std::to_string(fluids) + " fluid(s), numbered from 0; there is no fluid " +
+             std::to_string(static_cast<long long>(k));
+    if (k >= kMaxFluids) return "phase_viscosity: there is no fluid " + std::to_string(static_cast<long long>(k));
+    const double v = c.value[1];
+    if (v < spec->min || v > spec->max) {
+      std::ostringstream s;
+      s << "phase_viscosity: " << v << " is outside [" << spec->min << ", " << spec->max << "] " << spec->unit;
+      return s.str();
+    }
+    return std::nullopt;
+  }
   const double v = c.value[0];
   if (v < spec->min || v > spec->max) {
     std::ostringstream s;
@@ -77,6 +93,8 @@ void apply(const SteeringChange& c, SteeringTarget& t) {
     for (int k = 0; k < 3; ++k) t.params->gravity[k] = static_cast<float>(c.value[k]);
   } else if (c.name == "viscosity") {
     t.params->materials.fluid[0].viscosity = static_cast<float>(c.value[0]);
+  } else if (c.name == "phase_viscosity") {
+    t.params->materials.fluid[static_cast<int>(c.value[0])].viscosity = static_cast<float>(c.value[1]);
   } else if (c.name == "artificial_viscosity") {
     t.params->artificial_viscosity = static_cast<float>(c.value[0]);
   } else if (c.name == "motion_amplitude") {

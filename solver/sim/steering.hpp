@@ -20,8 +20,8 @@ struct SteeringParameter {
   std::string unit, doc;
 };
 
-// The documented set (docs/live.md): gravity, viscosity, artificial_viscosity, motion_amplitude,
-// motion_frequency, insitu_every, write_checkpoint, stop.
+// The documented set (docs/live.md): gravity, viscosity, phase_viscosity, artificial_viscosity,
+// motion_amplitude, motion_frequency, insitu_every, write_checkpoint, stop.
 const std::vector<SteeringParameter>& steering_parameters();
 
 struct SteeringChange {
@@ -42,8 +42,9 @@ struct SteeringTarget {
 
 // Reason for rejection, or nothing when the change is acceptable. `motions`: the run's wall
 // motions (a motion change names one of them); null: not known (a recorded log read before the
-// run), only the ranges are checked.
-std::optional<std::string> validate(const SteeringChange& change, int dim, const MotionSet* motions = nullptr);
+// run), only the ranges are checked. `fluids`: the case's number of fluids (phase_viscosity names
+// one of them); 0: not known, only the ranges are checked.
+std::optional<std::string> validate(const SteeringChange& change, int dim, const MotionSet* motions = nullptr, int fluids = 0);
 void apply(const SteeringChange& change, SteeringTarget& target);
 
 // One line per change: "<step> <time> <name> <v0> [<v1> <v2>]", '#' starts a comment.
