@@ -281,10 +281,10 @@ TEST(Validation, CircularityOfALatticeDiscIsOne) {
 
 // Hysing et al. (2009), test case 1 (cases/bubble_rise_2d.yaml, surface tension sigma = 24.5,
 // free-slip sides): the rise velocity's maximum, 0.2417 at t = 0.9213, and the centroid height at
-// t = 3, 1.0813, within 5% (measured at dp = 1/40: 0.2477, +2.5%, and 1.0758, -0.5%). The maximum
-// comes late (measured t = 1.22) and the velocity then decays faster than the centroid alone would
+// t = 3, 1.0813, within 5% (measured at dp = 1/40: 0.2392, -1.0%, and 1.0852, +0.4%). The maximum
+// comes late (measured t = 1.16) and the velocity then decays faster than the centroid alone would
 // tell (docs/validation.md, "Rising bubble"): its time is asserted within 0.4 only. The
-// circularity at t = 3 (measured 0.905; the reference's minimum 0.9013 at t = 1.9) is printed and
+// circularity at t = 3 (measured 0.921; the reference's minimum 0.9013 at t = 1.9) is printed and
 // must stay above 0.85 (a bubble that broke up or flattened reads far less).
 TEST(Validation, BubbleRiseAgainstHysing) {
   Case c = load_case(test::case_path("bubble_rise_2d.yaml"));
