@@ -82,7 +82,8 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
   const float z_j = rho_j * c_j;
   // Eq. 6, normalised continuity with the neighbour's volume; across an interface with the
   // velocity of the pair's acoustic interface instead of j's (see above): v_i - v* = Z_j/(Z_i+Z_j) v_ij.
-  const float interface = j_is_fluid && same_fluid == 0.0f ? 2.0f * z_j / (z_i + z_j) : 1.0f;
+  const float inv_z_sum = 1.0f / (z_i + z_j);
+  const float interface = j_is_fluid && same_fluid == 0.0f ? 2.0f * z_j * inv_z_sum : 1.0f;
   float drho = i.rho * volume_j * vr * F * interface;
   // Density diffusion and the Riemann options within i's fluid only (the terms of
   // fluid_pair_terms, times same_fluid).
@@ -92,7 +93,7 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
 
   // Eq. 7 with the acoustic interface pressure: p_i + p_j -> 2 p*_ij (plus, with momentum.flux
   // riemann, the limiter's dissipation between particles of one fluid).
-  const float p_pair = 2.0f * (z_j * i.p + z_i * j.p) / (z_i + z_j) + riemann.p_dissipation;
+  const float p_pair = 2.0f * (z_j * i.p + z_i * j.p) * inv_z_sum + riemann.p_dissipation;
   // Monaghan (1992) artificial viscosity with the pair's mean sound speed and density.
   const float mu_ij = P.h * (vr < 0.0f ? vr : 0.0f) * inv_r2_eta;
   const float pi_ij = -P.artificial_viscosity * (M.c0 + c_j) * mu_ij / (i.rho + rho_j);
