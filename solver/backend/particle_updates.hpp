@@ -33,8 +33,9 @@ SPATE_HD void predict_particle(const PhysicsParams& P, Fields& f, std::uint32_t 
 
 // Acceleration and density rate of fluid particle i (zero rates for walls). Multiphase: the pair
 // terms of multiphase_interactions.hpp with each neighbour's own fluid. MovingWalls: walls carry
-// their prescribed velocity into continuity (ParticleState::w).
-template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, class Fields>
+// their prescribed velocity into continuity (ParticleState::w). Riemann: the Riemann options'
+// terms (dispatch_pair_flags).
+template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann, class Fields>
 SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
   if (!P.is_fluid(f.material[i])) {
     SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = 0.0f;
@@ -52,9 +53,9 @@ SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, 
         ParticleState<Dim> sj = load_state<Dim>(f, j);
         if constexpr (MovingWalls) sj.w = boundary_velocity<Dim>(P, sj);
         if constexpr (Multiphase) {
-          accumulate_multiphase_pair<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj, rates);
+          accumulate_multiphase_pair<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj, rates);
         } else {
-          accumulate_fluid_pair<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj, rates);
+          accumulate_fluid_pair<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj, rates);
         }
       }
     }

@@ -40,22 +40,40 @@ void dispatch_flags(F&& f, bool first, Rest... rest) {
 // The fluid pair loop's compile-time choices: Gamma7 (every fluid has the Tait exponent 7: the
 // exact product instead of pow), Multiphase (several fluids: the interface-consistent pair terms
 // of multiphase_interactions.hpp), MovingWalls (some walls move: their prescribed velocity in
-// continuity). One static fluid keeps the single-phase loop, unchanged.
+// continuity), Riemann (the Riemann options' pair terms and wall sums, fluid_interactions.hpp:
+// `density.diffusion: riemann` or `momentum.flux: riemann`). One static fluid keeps the
+// single-phase loop, unchanged.
 struct PairLoopFlags {
-  bool gamma7, multiphase, moving_walls;
+  bool gamma7, multiphase, moving_walls, riemann;
 };
 inline PairLoopFlags pair_loop_flags(const PhysicsParams& P) {
-  return PairLoopFlags{all_fluids_gamma7(P), P.materials.multiphase(), P.moving_walls()};
+  return PairLoopFlags{all_fluids_gamma7(P), P.materials.multiphase(), P.moving_walls(),
+                       P.flux == MomentumFlux::Riemann || P.diffusion == DensityDiffusion::Riemann};
+}
+
+// f.template operator()<Gamma7, Multiphase, MovingWalls, Riemann>() for `flags`. Only the plain
+// loop (one fluid, static walls) is compiled without the Riemann terms as well: it is the one the
+// loads and the benchmarks run, and without them it is about 10% faster (docs/performance.md);
+// the other loops always carry them (multiplied by zero when the options are off), which keeps
+// the number of compiled loops at 10 per kernel and dimension instead of 16.
+template <class F>
+void dispatch_pair_flags(const PairLoopFlags& flags, F&& f) {
+  if (!flags.riemann && !flags.multiphase && !flags.moving_walls)
+    dispatch_flags([&]<bool Gamma7>() { f.template operator()<Gamma7, false, false, false>(); }, flags.gamma7);
+  else
+    dispatch_flags([&]<bool Gamma7, bool Multiphase, bool MovingWalls>() { f.template operator()<Gamma7, Multiphase, MovingWalls, true>(); },
+                   flags.gamma7, flags.multiphase, flags.moving_walls);
 }
 
 // As dispatch_kernel_dim, for the fluid pair loop: f.template operator()<Kernel, Dim, Gamma7,
-// Multiphase, MovingWalls>().
+// Multiphase, MovingWalls, Riemann>().
 template <class F>
 void dispatch_pair_loop(const PhysicsParams& P, F&& f) {
   const PairLoopFlags flags = pair_loop_flags(P);
   dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-    dispatch_flags([&]<bool Gamma7, bool Multiphase, bool MovingWalls>() { f.template operator()<Kernel, Dim, Gamma7, Multiphase, MovingWalls>(); },
-                   flags.gamma7, flags.multiphase, flags.moving_walls);
+    dispatch_pair_flags(flags, [&]<bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>() {
+      f.template operator()<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>();
+    });
   });
 }
 

@@ -130,12 +130,12 @@ SPATE_HD RiemannPairTerms riemann_pair_terms(const PhysicsParams& P, const Fluid
 
 // A pair's rates from its radial (times r_ij) and laminar (times v_ij) accelerations and its
 // density rate, with the wall sums of the Riemann wall term (finish_fluid_rates) when j is a wall
-// (j_fluid = 0): V_j grad_i W_ij and V_j dW/dr.
-template <int Dim>
+// (j_fluid = 0): V_j grad_i W_ij and V_j dW/dr. WallSums false: those are zero (no Riemann option).
+template <int Dim, bool WallSums = true>
 SPATE_HD FluidRates<Dim> pair_rates(const PairKinematics<Dim>& pk, float radial, float laminar, float drho, float j_fluid,
                                     float volume_j) {
   FluidRates<Dim> out;
-  const float wall_volume = (1.0f - j_fluid) * volume_j * pk.F;
+  const float wall_volume = WallSums ? (1.0f - j_fluid) * volume_j * pk.F : 0.0f;
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
     out.acc[k] = radial * pk.r[k] + laminar * pk.v_ij_visc[k];
     out.wall_gradient[k] = wall_volume * pk.r[k];
@@ -150,7 +150,9 @@ SPATE_HD FluidRates<Dim> pair_rates(const PairKinematics<Dim>& pk, float radial,
 // j = i the offset r is 0, so every term vanishes by itself and adds +0 to the sums (which leaves
 // them unchanged). Gamma7: M.gamma == 7 (the exact product instead of pow, chosen per run).
 // MovingWalls: some walls move (j.w holds what continuity sees of j); without it walls are at rest.
-template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false>
+// Riemann: the Riemann options' terms (riemann_pair_terms and the wall sums); without it they are
+// left out, which gives the same result when neither option is on (they would add exactly zero).
+template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false, bool Riemann = true>
 SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
                                           const ParticleState<Dim>& j) {
   const float j_fluid = P.is_fluid(j.material) ? 1.0f : 0.0f;
@@ -165,20 +167,24 @@ SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const FluidMat
   // diffusion and the Riemann solver's pressure diffusion between fluid particles.
   float drho = i.rho * volume_j * vr * F;
   drho += density_diffusion<Gamma7>(P, M, j_fluid, i.rho, j.rho, pk.g_dot_rji, r2, F, inv_r2_eta, volume_j);
-  const RiemannPairTerms riemann = riemann_pair_terms<Dim>(P, M, j_fluid, i, j, pk, volume_j);
-  drho += riemann.density_rate;
+  RiemannPairTerms riemann{0.0f, 0.0f};
+  if constexpr (Riemann) {
+    riemann = riemann_pair_terms<Dim>(P, M, j_fluid, i, j, pk, volume_j);
+    drho += riemann.density_rate;
+  }
 
   // Eq. 7, pressure force, and Monaghan (1992) artificial viscosity for approaching pairs (vr < 0;
   // alpha = 0 switches it off).
   const float mu_ij = P.h * (vr < 0.0f ? vr : 0.0f) * inv_r2_eta;
   const float pi_ij = -P.artificial_viscosity * M.c0 * mu_ij / (0.5f * (i.rho + j.rho));
-  const float radial = -M.mass * ((i.p + j.p + riemann.p_dissipation) * inv_rho_i * inv_rho_j + pi_ij) * F;
+  const float p_sum = Riemann ? i.p + j.p + riemann.p_dissipation : i.p + j.p;
+  const float radial = -M.mass * (p_sum * inv_rho_i * inv_rho_j + pi_ij) * F;
   // Eq. 8, inter-particle-averaged viscosity of Hu & Adams (2006): 2 mu_i mu_j / (mu_i + mu_j) = mu
   // for one fluid. The paper prints 4 mu_i mu_j / (mu_i + mu_j), twice the Hu & Adams (and Morris
   // 1997) value; with it the Poiseuille test settles at half the analytic velocity (docs/physics.md).
   const float laminar = M.viscosity / M.mass * (volume_i * volume_i + volume_j * volume_j) * (r2 * F) * inv_r2_eta;
 
-  return pair_rates<Dim>(pk, radial, laminar, drho, j_fluid, volume_j);
+  return pair_rates<Dim, Riemann>(pk, radial, laminar, drho, j_fluid, volume_j);
 }
 
 template <int Dim>
@@ -191,10 +197,10 @@ SPATE_HD void add_pair_rates(FluidRates<Dim>& out, const FluidRates<Dim>& t) {
   out.wall_weight += t.wall_weight;
 }
 
-template <class Kernel, int Dim, bool Gamma7, bool MovingWalls>
+template <class Kernel, int Dim, bool Gamma7, bool MovingWalls, bool Riemann = true>
 SPATE_HD void accumulate_fluid_pair(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
                                     const ParticleState<Dim>& j, FluidRates<Dim>& out) {
-  add_pair_rates(out, fluid_pair_terms<Kernel, Dim, Gamma7, MovingWalls>(P, M, i, j));
+  add_pair_rates(out, fluid_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, i, j));
 }
 
 // Once per fluid particle after the pair sum: the Riemann solver's wall term, then body forces.

@@ -59,8 +59,8 @@ SPATE_HD NeighbourFluid neighbour_fluid(const PhysicsParams& P, std::uint8_t mat
 // The contribution of neighbour j (of fluid properties Nj, see neighbour_fluid) to fluid particle
 // i of material M. Branch-free like fluid_pair_terms (selects, no jumps), so the CPU driver's loop
 // over neighbours vectorises; zero beyond the support and for j = i. MovingWalls: as
-// fluid_pair_terms (j.w is what continuity sees of j).
-template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false>
+// fluid_pair_terms (j.w is what continuity sees of j). Riemann: as fluid_pair_terms.
+template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false, bool Riemann = true>
 SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
                                                const ParticleState<Dim>& j, const NeighbourFluid& Nj) {
   const bool j_is_fluid = P.is_fluid(j.material);
@@ -88,12 +88,16 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
   // Density diffusion and the Riemann options within i's fluid only (the terms of
   // fluid_pair_terms, times same_fluid).
   drho += density_diffusion<Gamma7>(P, M, same_fluid, i.rho, j.rho, pk.g_dot_rji, r2, F, inv_r2_eta, volume_j);
-  const RiemannPairTerms riemann = riemann_pair_terms<Dim>(P, M, same_fluid, i, j, pk, volume_j);
-  drho += riemann.density_rate;
+  RiemannPairTerms riemann{0.0f, 0.0f};
+  if constexpr (Riemann) {
+    riemann = riemann_pair_terms<Dim>(P, M, same_fluid, i, j, pk, volume_j);
+    drho += riemann.density_rate;
+  }
 
   // Eq. 7 with the acoustic interface pressure: p_i + p_j -> 2 p*_ij (plus, with momentum.flux
   // riemann, the limiter's dissipation between particles of one fluid).
-  const float p_pair = 2.0f * (z_j * i.p + z_i * j.p) * inv_z_sum + riemann.p_dissipation;
+  const float p_interface = 2.0f * (z_j * i.p + z_i * j.p) * inv_z_sum;
+  const float p_pair = Riemann ? p_interface + riemann.p_dissipation : p_interface;
   // Monaghan (1992) artificial viscosity with the pair's mean sound speed and density.
   const float mu_ij = P.h * (vr < 0.0f ? vr : 0.0f) * inv_r2_eta;
   const float pi_ij = -P.artificial_viscosity * (M.c0 + c_j) * mu_ij / (i.rho + rho_j);
@@ -103,13 +107,13 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
   const float mu_pair = mu_sum > 0.0f ? 2.0f * M.viscosity * mu_j / mu_sum : 0.0f;
   const float laminar = mu_pair / M.mass * (volume_i * volume_i + volume_j * volume_j) * (r2 * F) * inv_r2_eta;
 
-  return pair_rates<Dim>(pk, radial, laminar, drho, j_fluid, volume_j);
+  return pair_rates<Dim, Riemann>(pk, radial, laminar, drho, j_fluid, volume_j);
 }
 
-template <class Kernel, int Dim, bool Gamma7, bool MovingWalls>
+template <class Kernel, int Dim, bool Gamma7, bool MovingWalls, bool Riemann = true>
 SPATE_HD void accumulate_multiphase_pair(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
                                          const ParticleState<Dim>& j, FluidRates<Dim>& out) {
-  add_pair_rates(out, multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls>(P, M, i, j, neighbour_fluid(P, j.material)));
+  add_pair_rates(out, multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, i, j, neighbour_fluid(P, j.material)));
 }
 
 }  // namespace spate

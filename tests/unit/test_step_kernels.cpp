@@ -97,11 +97,11 @@ class GpuOrderKernels final : public ResidentKernels {
     ParticleStore& p = device_store();
     const CellGridView v = arrays().grid().view();
     const Lattice& L = arrays().grid().lattice();
-    dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls>() {
+    dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>() {
       for (std::size_t i = range.first; i < range.end(); ++i) {
         int g[3] = {0, 0, 0};
         for (int a = 0; a < Dim; ++a) g[a] = L.cell_of(p.pos[a][i], a);
-        update_fluid_rates<Kernel, Dim, Gamma7, Multiphase, MovingWalls>(P, v, p, static_cast<std::uint32_t>(i), g);
+        update_fluid_rates<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, v, p, static_cast<std::uint32_t>(i), g);
       }
     });
   }

@@ -150,7 +150,7 @@ inline void add_lanes(float (&vec)[Dim][kLanes], float (&scalar)[kLanes], const 
   }
 }
 
-template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls>
+template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>
 void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params, ParticleRange range) {
   const PhysicsParams P = params;  // a local copy: the vectoriser must see that nothing aliases it
   const CellGridView v = grid.view();
@@ -229,7 +229,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
         float acc[Dim][kLanes] = {};
         float drho[kLanes] = {};
         // The wall sums for the Riemann wall term (finish_fluid_rates), only when it is on.
-        const bool wall_sums = P.flux == MomentumFlux::Riemann;
+        const bool wall_sums = Riemann && P.flux == MomentumFlux::Riemann;
         float wall_gradient[Dim][kLanes] = {};
         float wall_weight[kLanes] = {};
         for (int s0 = 0; s0 < count; s0 += kChunk) {
@@ -258,11 +258,14 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
             if constexpr (MovingWalls) SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.w[k] = jw[k][n];
             FluidRates<Dim> t;
             if constexpr (Multiphase)
-              t = multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj, NeighbourFluid{jmass[n], jc0[n], jmu[n]});
-            else t = fluid_pair_terms<Kernel, Dim, Gamma7, MovingWalls>(P, M, si, sj);
-            SPATE_UNROLL for (int k = 0; k < Dim; ++k) tacc[k][n] = t.acc[k], twall[k][n] = t.wall_gradient[k];
+              t = multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj, NeighbourFluid{jmass[n], jc0[n], jmu[n]});
+            else t = fluid_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj);
+            SPATE_UNROLL for (int k = 0; k < Dim; ++k) tacc[k][n] = t.acc[k];
             tdrho[n] = t.density_rate;
-            tweight[n] = t.wall_weight;
+            if constexpr (Riemann) {
+              SPATE_UNROLL for (int k = 0; k < Dim; ++k) twall[k][n] = t.wall_gradient[k];
+              tweight[n] = t.wall_weight;
+            }
           }
           add_lanes<Dim>(acc, drho, tacc, tdrho, len);
           if (wall_sums) add_lanes<Dim>(wall_gradient, wall_weight, twall, tweight, len);
@@ -357,8 +360,8 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
 }  // namespace
 
 void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P, ParticleRange range) {
-  dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls>() {
-    fluid_rates_batched<Kernel, Dim, Gamma7, Multiphase, MovingWalls>(p, grid, P, range);
+  dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>() {
+    fluid_rates_batched<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(p, grid, P, range);
   });
 }
 

@@ -74,11 +74,11 @@ struct ShiftingPass {
     update_shift<Kernel, Dim>(P, v, d, i, g, dt);
   }
 };
-template <bool Gamma7, bool Multiphase, bool MovingWalls>
+template <bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>
 struct FluidRatesPass {
   template <class Kernel, int Dim>
   __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
-    update_fluid_rates<Kernel, Dim, Gamma7, Multiphase, MovingWalls>(P, v, d, i, g);
+    update_fluid_rates<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, v, d, i, g);
   }
 };
 
@@ -156,9 +156,9 @@ class CudaKernels final : public StepKernels {
   }
   void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
     // The same choices as dispatch_pair_loop on the CPU.
-    const PairLoopFlags flags = pair_loop_flags(P);
-    dispatch_flags([&]<bool Gamma7, bool Multiphase, bool MovingWalls>() { neighbour_pass<FluidRatesPass<Gamma7, Multiphase, MovingWalls>>(P, range); },
-                   flags.gamma7, flags.multiphase, flags.moving_walls);
+    dispatch_pair_flags(pair_loop_flags(P), [&]<bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>() {
+      neighbour_pass<FluidRatesPass<Gamma7, Multiphase, MovingWalls, Riemann>>(P, range);
+    });
   }
   void colour_gradient(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
     neighbour_pass<ColourGradientPass>(P, ParticleRange{0, owned()});
