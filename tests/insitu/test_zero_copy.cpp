@@ -4,6 +4,8 @@
 // buffers. The pipeline (record_arrays.py) reports the addresses of the raw buffers it received
 // and every particle's values; this test compares them with what the solver held at that step.
 #include <gtest/gtest.h>
+
+#include "../source_dir.hpp"
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 #include <vtkDataArray.h>
@@ -122,9 +124,9 @@ void run_and_check(int devices, const std::string& tag) {
   fs::create_directories(out / "record");
   setenv("SPATE_RECORD_DIR", (out / "record").c_str(), 1);
 
-  Case c = load_case(SPATE_SOURCE_DIR "/cases/dam_break_2d.yaml", {"output.interval=0", "probes=[]"});
+  Case c = load_case(test::source_dir() + "/cases/dam_break_2d.yaml", {"output.interval=0", "probes=[]"});
   catalyst::CatalystOptions co;
-  co.scripts = {SPATE_SOURCE_DIR "/tests/insitu/record_arrays.py"};
+  co.scripts = {test::source_dir() + "/tests/insitu/record_arrays.py"};
   co.every = 2;
   co.working_dir = out;
   co.helper_program = SPATE_BINARY;
@@ -205,7 +207,7 @@ TEST(CatalystZeroCopy, ArraysOutsideTheArenaAreCopiedForTheHelper) {
     p.id[i] = static_cast<std::uint32_t>(100 + i);
   }
   catalyst::CatalystOptions co;
-  co.scripts = {SPATE_SOURCE_DIR "/tests/insitu/record_arrays.py"};
+  co.scripts = {test::source_dir() + "/tests/insitu/record_arrays.py"};
   co.working_dir = out;
   co.helper_program = SPATE_BINARY;
   catalyst::CatalystSink sink(co);

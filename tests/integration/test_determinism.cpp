@@ -53,12 +53,12 @@ TEST(Restart, SensorAverageContinues) {
 // Checkpoints written before the field registry (format version 1, tests/fixtures/README.md) still
 // restart, and continue bit-identically to a straight run of this build.
 TEST(Restart, ReadsFormatVersionOneBitIdentically) {
-  const std::filesystem::path fixture = std::string(SPATE_SOURCE_DIR) + "/tests/fixtures/checkpoint_v1_tiny_2d_step10.h5";
+  const std::filesystem::path fixture = test::source_dir() + "/tests/fixtures/checkpoint_v1_tiny_2d_step10.h5";
   ParticleStore p;
   const CheckpointMeta meta = read_checkpoint(fixture, p);
   ASSERT_EQ(meta.format_version, 1);
   ASSERT_EQ(meta.step, 10);
-  const Case c = load_case(std::string(SPATE_SOURCE_DIR) + "/tests/cases/tiny_2d.yaml");
+  const Case c = load_case(test::source_dir() + "/tests/cases/tiny_2d.yaml");
   RunOptions o;
   o.steps = 20;
   const RunResult straight = test::run_case(c, test::scratch("v1-straight"), o);

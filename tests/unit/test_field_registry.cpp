@@ -3,6 +3,8 @@
 // consumers. A test-only field, registered as one FieldSpec, is followed through every layer.
 #include <gtest/gtest.h>
 
+#include "../source_dir.hpp"
+
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
@@ -91,7 +93,7 @@ TEST(FieldRegistry, AnOptionalFieldIsOnlyInTheStoresOfRunsThatNeedIt) {
 // in-situ view carry each particle's own value.
 TEST(FieldRegistry, AnEntryAloneCarriesATestFieldThroughHaloMigrationCheckpointSnapshotAndInSitu) {
   const FieldExtension registered(kTracer);
-  const Case c = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/dam_break_2d.yaml", {"tank.size=[0.16, 0.12]"});
+  const Case c = load_case(test::source_dir() + "/cases/dam_break_2d.yaml", {"tank.size=[0.16, 0.12]"});
   const Lattice L = make_lattice(c);
   const PhysicsParams P = physics_params(c);
   ParticleStore initial = generate_particles(c);

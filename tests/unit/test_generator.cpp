@@ -3,6 +3,8 @@
 // site.
 #include <gtest/gtest.h>
 
+#include "../source_dir.hpp"
+
 #include <chrono>
 #include <cmath>
 #include <random>
@@ -237,12 +239,12 @@ TEST(Generator, ClosedFormCountsEqualTheSiteLoop) {
 // The counts of the paper's case at a spacing of billions of particles come without visiting the
 // sites (spate info on the column case at dp = 0.0002 m).
 TEST(Generator, CountsAtAnySpacingAreImmediate) {
-  const Case coarse = load_case(SPATE_SOURCE_DIR "/cases/dam_break_column_3d.yaml", {"dp=0.01"});
+  const Case coarse = load_case(test::source_dir() + "/cases/dam_break_column_3d.yaml", {"dp=0.01"});
   const ParticleCounts ref = count_particles(coarse);
   const ParticleStore p = generate_particles(coarse);
   EXPECT_EQ(static_cast<std::int64_t>(p.size()), ref.total());
   const auto t0 = std::chrono::steady_clock::now();
-  const Case fine = load_case(SPATE_SOURCE_DIR "/cases/dam_break_column_3d.yaml", {"dp=0.0002"});
+  const Case fine = load_case(test::source_dir() + "/cases/dam_break_column_3d.yaml", {"dp=0.0002"});
   const ParticleCounts n = count_particles(fine);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_GT(n.total(), 1'000'000'000);

@@ -3,6 +3,8 @@
 // what the case loader accepts.
 #include <gtest/gtest.h>
 
+#include "../source_dir.hpp"
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -198,7 +200,7 @@ TEST(MotionSet, SteeringChangesAmplitudeAndFrequencyWithoutAJump) {
 }
 
 TEST(CaseLoader, MotionsOfTheTankAndOfSolidsNameTheirMaterials) {
-  const Case c = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/wave_flume_2d.yaml");
+  const Case c = load_case(test::source_dir() + "/cases/wave_flume_2d.yaml");
   ASSERT_EQ(c.motions.size(), 1u);
   EXPECT_EQ(c.motions[0].body, "piston");
   EXPECT_EQ(c.solids[0].motion, 0);
@@ -211,13 +213,13 @@ TEST(CaseLoader, MotionsOfTheTankAndOfSolidsNameTheirMaterials) {
   // outer wall at -0.2 - 3 dp, less twice the 0.02 m amplitude, less one kernel support.
   const Lattice L = make_lattice(c);
   EXPECT_NEAR(L.origin[0], -0.26 - 2 * 0.02 - 2 * c.smoothing_ratio * 0.02 * 1.001, 1e-5);
-  const Case slosh = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/sloshing_2d.yaml");
+  const Case slosh = load_case(test::source_dir() + "/cases/sloshing_2d.yaml");
   EXPECT_EQ(slosh.tank_motion, 0);
   EXPECT_EQ(physics_params(slosh).materials.motion[1], 1);
 }
 
 TEST(CaseLoader, BadMotionsAreRefusedWithTheKey) {
-  const std::string file = std::string(SPATE_SOURCE_DIR) + "/cases/sloshing_2d.yaml";
+  const std::string file = test::source_dir() + "/cases/sloshing_2d.yaml";
   auto refuse = [&](std::vector<std::string> sets, const std::string& needle) {
     try {
       load_case(file, sets);
@@ -240,7 +242,7 @@ TEST(CaseLoader, BadMotionsAreRefusedWithTheKey) {
   refuse({"momentum.flux=riemann"}, "'momentum.flux'");
   refuse({"probes=[{name: s, type: wall_pressure, position: [0.0, 0.05]}]"}, "on a moving wall is not supported");
   // In the flume a sensor on the moving piston is refused, one on the static far wall is fine.
-  const std::string flume = std::string(SPATE_SOURCE_DIR) + "/cases/wave_flume_2d.yaml";
+  const std::string flume = test::source_dir() + "/cases/wave_flume_2d.yaml";
   EXPECT_THROW(load_case(flume, {"probes=[{name: s, type: wall_pressure, position: [0, 0.05]}]"}), CaseError);
   const Case far = load_case(flume, {"probes=[{name: s, type: wall_pressure, position: [10.0, 0.05]}]"});
   EXPECT_EQ(far.probes.at(0).type, ProbeType::WallPressure);

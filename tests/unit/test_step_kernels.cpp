@@ -476,7 +476,7 @@ TEST(OpenSides, AParticleThroughAWallOrUnderAClosedLidIsStillAFault) {
   EXPECT_TRUE(faulted);
   EXPECT_TRUE(removed.empty());
   // Up through a closed lid.
-  c = load_case(std::string(SPATE_SOURCE_DIR) + "/cases/dam_break_2d.yaml", {"tank.size=[0.16, 0.12]", "tank.open_top=false"});
+  c = load_case(test::source_dir() + "/cases/dam_break_2d.yaml", {"tank.size=[0.16, 0.12]", "tank.open_top=false"});
   EXPECT_FALSE(open_sides(c).open);
   auto up = [=](ParticleStore& p) {
     for (std::size_t i = 0; i < p.owned(); ++i)

@@ -2,13 +2,15 @@
 // gaps around solids are reported below three particle layers, with the dp that resolves them.
 #include <gtest/gtest.h>
 
+#include "../source_dir.hpp"
+
 #include "case/case.hpp"
 #include "case/thin_features.hpp"
 
 namespace spate {
 namespace {
 
-std::string column_case() { return std::string(SPATE_SOURCE_DIR) + "/cases/dam_break_column_3d.yaml"; }
+std::string column_case() { return test::source_dir() + "/cases/dam_break_column_3d.yaml"; }
 
 TEST(ThinFeatures, ColumnCaseWetBedAtDp0015) {
   const Case c = load_case(column_case(), {"dp=0.015"});
