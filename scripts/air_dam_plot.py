@@ -2,7 +2,6 @@
 (cases/dam_break_2d.yaml): the pressure field of the water and of the air at T = t sqrt(2g/a) = 1
 and 2, and the water's front. Usage: air_dam_plot.py AIR_RUN SINGLE_RUN OUT.png (called by
 scripts/validation-report; both runs with snapshots at T = 1 and 2)."""
-import csv
 import math
 import sys
 from pathlib import Path
@@ -12,8 +11,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from vtk.util.numpy_support import vtk_to_numpy  # noqa: E402
-import vtk  # noqa: E402
+from run_output import probe_table, snapshot_arrays  # noqa: E402
 
 air_run, single_run, out = Path(sys.argv[1]), Path(sys.argv[2]), Path(sys.argv[3])
 A, H, G = 0.0572, 0.1144, 9.81  # column width and height, gravity (the cases')
@@ -21,26 +19,11 @@ T_OF_T = math.sqrt(2 * G / A)
 RHO_G_H = 1000 * G * H
 
 
-def probe(path):
-    with open(path) as f:
-        rows = list(csv.reader(f))[1:]
-    return np.array([[float(v) for v in r] for r in rows])
-
-
 def snapshot(step_dir):
     """Positions, pressures and phases of the fluid particles of one saved step (every slab)."""
-    cols = []
-    for piece in sorted(step_dir.glob("*.vtp")):
-        r = vtk.vtkXMLPolyDataReader()
-        r.SetFileName(str(piece))
-        r.Update()
-        d = r.GetOutput()
-        pd = d.GetPointData()
-        pts = vtk_to_numpy(d.GetPoints().GetData())
-        p = vtk_to_numpy(pd.GetArray("pressure"))
-        phase = vtk_to_numpy(pd.GetArray("phase")) if pd.GetArray("phase") else np.where(vtk_to_numpy(pd.GetArray("kind")) == 0, 0, -1)
-        cols.append(np.c_[pts[:, :2], p, phase])
-    s = np.concatenate(cols)
+    pts, a = snapshot_arrays(step_dir, ["pressure", "phase", "kind"])
+    phase = a["phase"] if a["phase"] is not None else np.where(a["kind"] == 0, 0, -1)
+    s = np.c_[pts[:, :2], a["pressure"], phase]
     return s[s[:, 3] >= 0]
 
 
@@ -78,7 +61,7 @@ for ax in axes[2, :]:
     ax.remove()
 ax = fig.add_subplot(gs[2, :])
 for run, label in ((single_run, "single phase (dam_break_2d)"), (air_run, "with air (dam_break_air_2d)")):
-    f = probe(run / "probes" / "front.csv")
+    f = probe_table(run / "probes" / "front.csv")
     ax.plot(f[:, 0] * T_OF_T, f[:, 2] / A, label=label)
 ax.set_xlabel("T = t sqrt(2g/a)")
 ax.set_ylabel("water front x / a")

@@ -1,7 +1,6 @@
 """The rising bubble (cases/bubble_rise_2d.yaml) against Hysing et al. (2009), test case 1: rise
 velocity and centroid height from the `bubble` probe, the bubble's shape and circularity from the
 snapshots. Usage: bubble_plot.py RUN_DIR OUT.png (called by scripts/validation-report)."""
-import csv
 import math
 import sys
 from pathlib import Path
@@ -11,32 +10,17 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from vtk.util.numpy_support import vtk_to_numpy  # noqa: E402
-import vtk  # noqa: E402
+from run_output import probe_table, snapshot_arrays  # noqa: E402
 
 run, out = Path(sys.argv[1]), Path(sys.argv[2])
 DP, H = 0.025, 1.3 * 0.025  # the case's dp and smoothing length
 BUBBLE = 1                 # the bubble's phase (second fluid)
 
 
-def probe(path):
-    with open(path) as f:
-        rows = list(csv.reader(f))[1:]
-    return np.array([[float(v) for v in r] for r in rows])
-
-
 def snapshot(step_dir):
     """Positions of the bubble's particles in one saved step (every slab)."""
-    xs = []
-    for piece in sorted(step_dir.glob("*.vtp")):
-        r = vtk.vtkXMLPolyDataReader()
-        r.SetFileName(str(piece))
-        r.Update()
-        d = r.GetOutput()
-        pts = vtk_to_numpy(d.GetPoints().GetData())
-        phase = vtk_to_numpy(d.GetPointData().GetArray("phase"))
-        xs.append(pts[phase == BUBBLE, :2])
-    return np.concatenate(xs)
+    pts, a = snapshot_arrays(step_dir, ["phase"])
+    return pts[a["phase"] == BUBBLE, :2]
 
 
 def colour_field(x):
@@ -65,7 +49,7 @@ def circularity(x, ax=None, **style):
     return 2 * math.sqrt(math.pi * len(x) * DP * DP) / perimeter
 
 
-p = probe(run / "probes" / "bubble.csv")  # time, step, x, y, vx, vy
+p = probe_table(run / "probes" / "bubble.csv")  # time, step, x, y, vx, vy
 t, y, vy = p[:, 0], p[:, 3], p[:, 5]
 k = int(np.argmax(vy))
 y3 = float(np.interp(3.0, t, y))
