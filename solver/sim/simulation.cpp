@@ -685,10 +685,6 @@ RunResult Simulation::run() {
         throw std::runtime_error(options_.restart->string() + " (attribute steering_log): a change at step " +
                                  std::to_string(s.steering_history.back().step) + ", after the checkpoint's step " +
                                  std::to_string(s.start.step));
-      // The fluid a phase_viscosity change names must be one of this case's.
-      for (const SteeringChange& change : s.steering_history)
-        if (auto why = validate(change, case_.dim, nullptr, static_cast<int>(case_.fluids.size())))
-          throw std::runtime_error(options_.restart->string() + " (attribute steering_log), step " + std::to_string(change.step) + ": " + *why);
     } catch (const std::exception& e) {
       throw InputError(e.what());
     }

@@ -211,6 +211,7 @@ def crafted_checkpoints(env, source):
         ("steering_too_strong", steering("2 0.0001 gravity 0 -1e30 0\n"), ["steering_log", "exceeds 100"]),
         ("steering_overflow", steering("2 0.0001 viscosity 1e400\n"), ["steering_log", "out of range"]),
         ("steering_garbage", steering("no numbers here\n"), ["steering_log", "not a step number"]),
+        ("steering_unknown_fluid", steering("2 0.0001 phase_viscosity 3 0.5\n"), ["steering_log", "no fluid 3"]),
         ("steering_after_step", steering("99 0.1 viscosity 0.002\n"), ["steering_log", "after the checkpoint's step"]),
         ("format", attr("format", np.bytes_(b"something-else")), ["not a spate checkpoint"]),
         ("second_yaml_document", case_text(case_yaml + "\n---\nname: other\n"), ["case_yaml", "second YAML document"]),
@@ -249,7 +250,7 @@ def checkpoint_values(env):
 @test
 def checkpoint_header_and_history(env):
     check_crafted(env, {"steering_malformed", "steering_too_strong", "steering_overflow", "steering_garbage",
-                        "steering_after_step", "second_yaml_document", "case_garbage", "hash_of_other_geometry",
+                        "steering_unknown_fluid", "steering_after_step", "second_yaml_document", "case_garbage", "hash_of_other_geometry",
                         "header_edited"})
 
 
