@@ -70,15 +70,9 @@ std::optional<std::string> validate(const SteeringChange& c, int dim, const Moti
       return "phase_viscosity: the case has " + std::to_string(fluids) + " fluid(s), numbered from 0; there is no fluid " +
              std::to_string(static_cast<long long>(k));
     if (k >= kMaxFluids) return "phase_viscosity: there is no fluid " + std::to_string(static_cast<long long>(k));
-    const double v = c.value[1];
-    if (v < spec->min || v > spec->max) {
-      std::ostringstream s;
-      s << "phase_viscosity: " << v << " is outside [" << spec->min << ", " << spec->max << "] " << spec->unit;
-      return s.str();
-    }
-    return std::nullopt;
   }
-  const double v = c.value[0];
+  // The value's range (phase_viscosity: its second value, after the fluid number).
+  const double v = c.value.back();
   if (v < spec->min || v > spec->max) {
     std::ostringstream s;
     s << c.name << ": " << v << " is outside [" << spec->min << ", " << spec->max << "]" << (spec->unit.empty() ? "" : " " + spec->unit);
