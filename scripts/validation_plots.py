@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 work, data, images = (Path(a) for a in sys.argv[1:4])
 sys.path.insert(0, str(Path(__file__).parent))
 import impact_metrics as im  # noqa: E402
+from impact_plot import impact_figure  # noqa: E402
 
 
 def probe(path, column):
@@ -140,37 +141,5 @@ SCHEMES = [("default", "default (delta-SPH Fourtakas, central)"),
            ("riemann_notension", "Riemann + no tension")]
 
 
-def impact_figure(case, window_s, out):
-    spec = im.CASES[case]
-    H = spec["H"]
-    w = window_s * math.sqrt(g / H)
-    runs = [(work / f"{case}_{k}", label) for k, label in SCHEMES if (work / f"{case}_{k}").exists()]
-    n = len(spec["sensors"])
-    fig, axs = plt.subplots(n, 1, figsize=(7.5, 2.7 * n + 0.4), squeeze=False)
-    for ax, (probe, name) in zip(axs[:, 0], spec["sensors"]):
-        raw = im.read_experiment(data / name)
-        avg = im.moving_average(raw, w)
-        ax.plot([t for t, _ in raw], [p for _, p in raw], ".", color="0.6", ms=2, label="experiment")
-        ax.plot([t for t, _ in avg], [p for _, p in avg], "k-", lw=1.2, label=f"experiment, {1e3 * window_s:.0f} ms mean")
-        for run, label in runs:
-            rec = im.moving_average(im.read_sensor(run, probe, H), w)
-            ax.plot([t for t, _ in rec], [p for _, p in rec], "-", lw=0.9, label=label)
-        ax.axhline(0, color="k", lw=0.5)
-        ax.set_xlim(2, 6.5)
-        ax.set_ylim(-1, 4.5)
-        ax.set_title(f"{case}: sensor {probe}, {1e3 * window_s:.0f} ms mean", fontsize=9)
-        ax.set_ylabel("p / (rho g H)")
-        ax.grid(alpha=0.3)
-    axs[-1, 0].set_xlabel("tau = t sqrt(g/H)")
-    axs[0, 0].legend(fontsize=7, loc="upper right")
-    fig.tight_layout()
-    fig.savefig(images / out, dpi=110)
-    for run, label in runs:
-        for probe, e, m in im.compare(run, case, data, window_s):
-            print(f"{case} {probe} {label}: arrival {m['arrival']:.3f} ({1e3 * (m['arrival'] - e['arrival']) / math.sqrt(g / H):+.1f} ms), "
-                  f"peak {m['peak']:.3f} ({100 * (m['peak'] / e['peak'] - 1):+.0f}%), plateau {m['plateau']:.3f} "
-                  f"({100 * (m['plateau'] / e['plateau'] - 1):+.1f}%), lowest after arrival {m['lowest']:+.3f}")
-
-
 for case in im.CASES:
-    impact_figure(case, im.WINDOW_TAU * math.sqrt(im.CASES[case]["H"] / g), f"validation_{case}.png")
+    impact_figure(case, [(work / f"{case}_{k}", label) for k, label in SCHEMES], data, images / f"validation_{case}.png")
