@@ -295,9 +295,9 @@ output: {interval: 0}
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (!P.is_fluid(p.material[i])) continue;
     const double pressure = fluid_pressure(P, P.materials.of(p.material[i]), p.density[i]);
-    const double r = std::hypot(p.pos[0][i] - 0.5, p.pos[1][i] - 0.5);
-    if (p.material[i] == 1 && r < R - 2 * h) p_in += pressure, ++n_in;
-    if (p.material[i] == 0 && r > R + 2 * h && r < 0.4) p_out += pressure, ++n_out;
+    const double radius = std::hypot(p.pos[0][i] - 0.5, p.pos[1][i] - 0.5);
+    if (p.material[i] == 1 && radius < R - 2 * h) p_in += pressure, ++n_in;
+    if (p.material[i] == 0 && radius > R + 2 * h && radius < 0.4) p_out += pressure, ++n_out;
     v_max = std::max(v_max, std::hypot(double(p.vel[0][i]), double(p.vel[1][i])));
   }
   ASSERT_GT(n_in, 0);
