@@ -4,7 +4,9 @@
 // tests/integration.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <string>
 
 #include "../source_dir.hpp"
@@ -247,10 +249,36 @@ TEST(CaseLoader, SeveralFluidsAndTheBlocksThatNameThem) {
 }
 
 TEST(CaseLoader, LoadCaseReadsShippedCases) {
-  for (const char* name : {"dam_break_2d.yaml", "dam_break_column_3d.yaml", "two_layer_hydrostatic_2d.yaml"}) {
-    const Case c = load_case(test::source_dir() + "/cases/" + name);
-    EXPECT_FALSE(c.name.empty()) << name;
-    EXPECT_FALSE(c.fluid_blocks.empty()) << name;
+  int n = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(test::source_dir() + "/cases")) {
+    if (entry.path().extension() != ".yaml") continue;
+    const std::string name = entry.path().filename().string();
+    const Case c = load_case(entry.path().string());
+    EXPECT_EQ(c.name + ".yaml", name) << "a shipped case is named after its file";
+    EXPECT_TRUE(!c.fluid_blocks.empty() || c.wet_bed > 0) << name << ": no fluid";
+    ++n;
+  }
+  EXPECT_GE(n, 15);
+}
+
+// The 3D narrow tank puts the 2D section's sensors at the tank's mid-width, at the same heights.
+TEST(CaseLoader, LobovskyThreeDimensionalSensorsMatchTheSection) {
+  const Case flat = load_case(test::source_dir() + "/cases/dam_break_lobovsky.yaml");
+  const Case tank = load_case(test::source_dir() + "/cases/dam_break_lobovsky_3d.yaml");
+  ASSERT_EQ(tank.dim, 3);
+  for (const char* name : {"p1", "p3", "p4"}) {
+    const auto find = [&](const Case& c) {
+      return std::find_if(c.probes.begin(), c.probes.end(), [&](const auto& p) { return p.name == name; });
+    };
+    const auto a = find(flat), b = find(tank);
+    ASSERT_NE(a, flat.probes.end()) << name;
+    ASSERT_NE(b, tank.probes.end()) << name;
+    // On the end wall of each: 1.61 m, which the 3D lattice (dp = 7.5 mm) rounds up to 1.6125 m.
+    EXPECT_NEAR(b->position[0], a->position[0], 0.5 * tank.dp) << name;
+    EXPECT_DOUBLE_EQ(b->position[1], 0.5 * tank.tank_size[1]) << name;
+    EXPECT_DOUBLE_EQ(b->position[2], a->position[1]) << name;
+    EXPECT_DOUBLE_EQ(b->diameter, a->diameter) << name;
+    EXPECT_DOUBLE_EQ(b->window, a->window) << name;
   }
 }
 
