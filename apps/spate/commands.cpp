@@ -252,7 +252,7 @@ int run_case(const RunArgs& a, RunRecord& record) {
         try {
           ParticleStore ignored;
           const CheckpointMeta meta = read_checkpoint(*o.restart, ignored);
-          for (const SteeringChange& ch : parse_log(meta.steering_log, o.restart->string(), c.dim)) init.take(ch);
+          for (const SteeringChange& ch : meta.steering_history) init.take(ch);
         } catch (const std::exception&) {
           // an unreadable checkpoint is reported by the run itself (exit 2)
         }

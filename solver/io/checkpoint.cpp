@@ -569,7 +569,7 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
   const Case& domain_case = run_case ? *run_case : own;
   const ParticleCounts generated = count_particles(domain_case);
   // The steering history through the checks a live change gets.
-  std::vector<SteeringChange> history;
+  std::vector<SteeringChange>& history = meta.steering_history;
   try {
     history = parse_log(meta.steering_log, path.string() + " (attribute steering_log)", dim);
   } catch (const std::exception& e) {

@@ -25,6 +25,7 @@
 
 #include "../case/case.hpp"
 #include "../particles/particle_store.hpp"
+#include "../sim/steering.hpp"
 
 namespace spate {
 
@@ -56,6 +57,9 @@ struct CheckpointMeta {
   std::string case_name;
   std::string case_yaml;    // the effective case (after --set)
   std::string steering_log; // accepted steering changes so far (may be empty)
+  // Read: steering_log parsed and checked as a live change is (no step after `step`, fluids of
+  // the case); what a restart replays. Not written (steering_log is the file's form).
+  std::vector<SteeringChange> steering_history;
   std::int64_t removed = 0;  // fluid particles removed through open sides before this step
   std::string geometry_hash;  // geometry_hash() of the case (generator.hpp); empty before version 3
   int format_version = kCheckpointFormatVersion;  // of the file read (writes use the current one)

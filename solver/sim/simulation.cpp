@@ -679,15 +679,7 @@ RunResult Simulation::run() {
       throw InputError(e.what());
     }
     s.restarted = true;
-    try {
-      s.steering_history = parse_log(s.start.steering_log, options_.restart->string() + " (attribute steering_log)", case_.dim);
-      if (!s.steering_history.empty() && s.steering_history.back().step > s.start.step)
-        throw std::runtime_error(options_.restart->string() + " (attribute steering_log): a change at step " +
-                                 std::to_string(s.steering_history.back().step) + ", after the checkpoint's step " +
-                                 std::to_string(s.start.step));
-    } catch (const std::exception& e) {
-      throw InputError(e.what());
-    }
+    s.steering_history = s.start.steering_history;  // checked by read_checkpoint
   } else {
     s.initial = generate_particles(case_);
   }
