@@ -7,6 +7,7 @@
 
 #include "../grid/cell_grid_view.hpp"
 #include "../particles/particle_access.hpp"
+#include "../physics/density_gradient.hpp"
 #include "../physics/fluid_interactions.hpp"
 #include "../physics/integrator.hpp"
 #include "../physics/multiphase_interactions.hpp"
@@ -151,6 +152,40 @@ SPATE_HD void update_shift(const PhysicsParams& P, const CellGridView& v, Fields
   });
   const Vec<Dim> dr = shifting_displacement<Dim>(P, M, sums, dt);
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.shift[k][i] = dr[k];
+}
+
+// Antuono delta-SPH diffusion, pass 1: the renormalised density gradient of fluid particle i (zero
+// for walls) into `density_gradient`, which the halo refresh then sends to the ghosts
+// (physics/density_gradient.hpp).
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void update_density_gradient(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
+  Vec<Dim> grad = zero_vec<Dim>();
+  if (P.is_fluid(f.material[i])) {
+    const ParticleState<Dim> si = load_state<Dim>(f, i);
+    const FluidMaterial& M = P.materials.of(si.material);
+    DensityGradientSums<Dim> sums;
+    v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+      for (std::uint32_t j = jb; j < je; ++j) accumulate_density_gradient<Kernel, Dim>(P, M, si, load_state<Dim>(f, j), sums);
+    });
+    grad = renormalised_gradient<Dim>(sums);
+  }
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.density_gradient[k][i] = grad[k];
+}
+
+// Antuono delta-SPH diffusion, pass 2: the diffusion of fluid particle i from both particles'
+// gradients, added to the density rate of the fluid pass.
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void add_antuono_diffusion(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
+  if (!P.is_fluid(f.material[i])) return;
+  const ParticleState<Dim> si = load_state<Dim>(f, i);
+  const FluidMaterial& M = P.materials.of(si.material);
+  const Vec<Dim> grad_i = load_vec<Dim>(f.density_gradient, i);
+  float diffusion = 0.0f;
+  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+    for (std::uint32_t j = jb; j < je; ++j)
+      diffusion += antuono_diffusion_term<Kernel, Dim>(P, M, si, grad_i, load_state<Dim>(f, j), load_vec<Dim>(f.density_gradient, j));
+  });
+  f.density_rate[i] += diffusion;
 }
 
 }  // namespace spate

@@ -44,6 +44,17 @@ class StepKernels {
     (void)p, (void)g, (void)P;
     throw std::logic_error(std::string(name()) + " backend: no surface tension");
   }
+  // Antuono delta-SPH diffusion (only when uses_antuono_diffusion(P), physics/density_gradient.hpp): the
+  // renormalised density gradient of the owned particles, before the halo refresh; the diffusion,
+  // after the fluid rates (owned fluid).
+  virtual void density_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) {
+    (void)p, (void)g, (void)P;
+    throw std::logic_error(std::string(name()) + " backend: no renormalised density diffusion");
+  }
+  virtual void antuono_diffusion(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) {
+    (void)p, (void)g, (void)P;
+    throw std::logic_error(std::string(name()) + " backend: no renormalised density diffusion");
+  }
   // Particle shifting (only called when P.shifting.enabled): the displacement of the owned fluid
   // particles into `shift`, after the fluid rates and before correct(), which applies it.
   virtual void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt) {

@@ -623,7 +623,7 @@ Case read(Section& root, const std::string& file) {
     c.diffusion = s.choice<DensityDiffusion>(
         "diffusion", DensityDiffusion::Fourtakas,
         {{"fourtakas", DensityDiffusion::Fourtakas}, {"molteni_colagrossi", DensityDiffusion::MolteniColagrossi},
-         {"riemann", DensityDiffusion::Riemann}, {"none", DensityDiffusion::None}});
+         {"riemann", DensityDiffusion::Riemann}, {"antuono", DensityDiffusion::Antuono}, {"none", DensityDiffusion::None}});
     c.delta = s.number("delta", 0.1);
     if (c.delta < 0 || c.delta > 1) s.fail(s.raw("delta"), "delta", "must be between 0 and 1");
     c.density_min_ratio = s.number("min_ratio", 0.5);

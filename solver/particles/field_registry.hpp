@@ -70,7 +70,8 @@ constexpr FieldType field_type_of() {
 
 // F(member, C++ type, shape, role, flags, exported name, dataset name(s) ...)
 // `shift`: the particle-shifting displacement (physics/shifting.hpp), scratch between the fluid
-// rates and the corrector of one step (FieldSpec::scratch).
+// rates and the corrector of one step (FieldSpec::scratch). `density_gradient`: the renormalised
+// density gradient of `density.diffusion: antuono` (physics/density_gradient.hpp), sent to ghosts.
 // Order matters only for readability and the neighbour record layout (kNeighbour fields in this
 // order). Renaming a dataset is a checkpoint format change (kCheckpointFormatVersion, checkpoint.cpp).
 // clang-format off
@@ -89,7 +90,9 @@ constexpr FieldType field_type_of() {
   F(density_rate_prev, float, Scalar, History, kMigrated, "", "density_rate_prev")                                    \
   F(colour_gradient, float, Vector, Derived, kGhost | kRefreshed | kOptional, "", "colour_gradient_x",               \
     "colour_gradient_y", "colour_gradient_z")                                                                         \
-  F(shift, float, Vector, Derived, kOptional, "", "sx", "sy", "sz")
+  F(shift, float, Vector, Derived, kOptional, "", "sx", "sy", "sz")                                                   \
+  F(density_gradient, float, Vector, Derived, kGhost | kRefreshed | kOptional, "", "density_gradient_x",             \
+    "density_gradient_y", "density_gradient_z")
 // clang-format on
 
 #define SPATE_FIELD_SPEC(member, ctype, shape, role, flags, exported, ...) \

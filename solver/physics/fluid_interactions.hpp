@@ -48,16 +48,24 @@ struct FluidRates {
 // pair's mean density, c0^2 (rho/rho0)^(gamma - 1), not c0^2: at depth the Tait hydrostatic density
 // gradient is a few percent below the linear one, and diffusing towards the linear profile biases
 // deep pressures upward. Not with `density.diffusion: riemann` (riemann_pair_terms instead).
-// Switches are factors, not branches, so the loop stays vectorisable.
+// Switches are factors, not branches, so the loop stays vectorisable. Not with `antuono` either:
+// its pass adds the diffusion after the fluid pass (density_gradient.hpp).
+//
+// The diffusion flux itself, delta h c0 psi_ij r_ji . grad_i W_ij / (r^2 + eta^2) V_j with the
+// pair's half jump psi_ij / 2 = drho_ji, times `factor`; every variant's jump goes through it.
+SPATE_HD float diffusion_flux(const PhysicsParams& P, const FluidMaterial& M, float factor, float drho_ji, float r2, float F,
+                              float inv_r2_eta, float volume_j) {
+  return factor * (P.delta * P.h * M.c0 * 2.0f) * drho_ji * (-r2 * F) * inv_r2_eta * volume_j;
+}
+
 template <bool Gamma7>
 SPATE_HD float density_diffusion(const PhysicsParams& P, const FluidMaterial& M, float factor, float rho_i, float rho_j,
                                  float g_dot_rji, float r2, float F, float inv_r2_eta, float volume_j) {
   const bool delta_sph = P.diffusion == DensityDiffusion::MolteniColagrossi || P.diffusion == DensityDiffusion::Fourtakas;
-  const float diffusion = (delta_sph ? 1.0f : 0.0f) * (P.delta * P.h * M.c0 * 2.0f);
   const float hydrostatic = (P.diffusion == DensityDiffusion::Fourtakas ? 1.0f : 0.0f) * (M.rho0 / (M.c0 * M.c0));
   const float s = 0.5f * (rho_i + rho_j) / M.rho0;
   const float drho_ji = (rho_j - rho_i) - hydrostatic * g_dot_rji / tait_sound_speed_ratio2<Gamma7>(s, M.gamma);
-  return factor * diffusion * drho_ji * (-r2 * F) * inv_r2_eta * volume_j;
+  return diffusion_flux(P, M, factor * (delta_sph ? 1.0f : 0.0f), drho_ji, r2, F, inv_r2_eta, volume_j);
 }
 
 // What every pair term needs of the pair's geometry and motion: r_ij, its square, the kernel

@@ -12,7 +12,8 @@ namespace spate {
 
 enum class DensityMode : std::uint8_t { Continuity, Summation };
 // Riemann: the pressure diffusion of the acoustic Riemann solver's interface velocity (fluid_interactions.hpp).
-enum class DensityDiffusion : std::uint8_t { None, MolteniColagrossi, Fourtakas, Riemann };
+// Antuono: delta-SPH with renormalised density gradients, in passes of its own (density_gradient.hpp).
+enum class DensityDiffusion : std::uint8_t { None, MolteniColagrossi, Fourtakas, Riemann, Antuono };
 // The pressure term of the momentum equation: central (p_i + p_j, eq. 7) or the interface pressure
 // of a linearised Riemann solver with a low-dissipation limiter (Zhang, Hu & Adams 2017).
 enum class MomentumFlux : std::uint8_t { Central, Riemann };
@@ -92,8 +93,11 @@ SPATE_HD Vec<Dim> wall_velocity(const PhysicsParams& P, std::uint8_t m, const Ve
 }
 
 // Whether a run needs the optional registry fields (kOptional: surface tension's colour gradient,
-// shifting's displacement): the stores of such a run carry them (OptionalFields), no other run pays
-// their bytes. One switch for all of them: a run with either feature carries both.
-inline bool needs_optional_fields(const PhysicsParams& P) { return P.surface_tension.on || P.shifting.enabled; }
+// shifting's displacement, the renormalised density gradient of `density.diffusion: antuono`): the
+// stores of such a run carry them (OptionalFields), no other run pays their bytes. One switch for
+// all of them: a run with any of these features carries all.
+inline bool needs_optional_fields(const PhysicsParams& P) {
+  return P.surface_tension.on || P.shifting.enabled || P.diffusion == DensityDiffusion::Antuono;
+}
 
 }  // namespace spate

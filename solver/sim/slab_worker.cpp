@@ -10,6 +10,7 @@
 
 #include "../backend/cpu/cpu_backend.hpp"
 #include "../domain/particle_checks.hpp"
+#include "../physics/density_gradient.hpp"
 
 namespace spate {
 
@@ -87,16 +88,18 @@ void SlabWorker::compute_rates() {
   kernels_->wall_state(particles_, grid_, params_);
   // Surface tension: the colour gradient rides on the refresh below to the ghosts, whose normals
   // the force pass after the fluid rates reads (physics/surface_tension.hpp).
+  // Antuono's diffusion: the same for the renormalised density gradient (density_gradient.hpp).
   const bool tension = params_.surface_tension.on;
+  const bool antuono = uses_antuono_diffusion(params_);
   if (tension) kernels_->colour_gradient(particles_, grid_, params_);
+  if (antuono) kernels_->density_gradient(particles_, grid_, params_);
   const double wall = since(t0);
   // The fluid phase excludes the wait for the halo (on a GPU: host time around the launches).
   double fluid = fluid_rates_overlapping_refresh();
-  if (tension) {
-    const auto t1 = Clock::now();
-    kernels_->surface_tension(particles_, grid_, params_);
-    fluid += since(t1);
-  }
+  const auto t1 = Clock::now();
+  if (tension) kernels_->surface_tension(particles_, grid_, params_);
+  if (antuono) kernels_->antuono_diffusion(particles_, grid_, params_);
+  fluid += since(t1);
   busy_seconds_ += wall + fluid;
   window_wall_seconds_ += wall;
   window_fluid_seconds_ += fluid;

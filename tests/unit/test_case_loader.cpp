@@ -11,6 +11,7 @@
 
 #include "../source_dir.hpp"
 #include "case/case.hpp"
+#include "physics/density_gradient.hpp"
 
 namespace spate {
 namespace {
@@ -127,6 +128,15 @@ TEST(CaseLoader, MinimalCaseGetsDefaults) {
   EXPECT_FLOAT_EQ(P.support2, 4.0f * 0.013f * 0.013f);
   EXPECT_FLOAT_EQ(P.materials.fluid[0].mass, 1000.0f * 0.01f * 0.01f);
   EXPECT_FLOAT_EQ(P.materials.fluid[0].tait_b, P.materials.fluid[0].c0 * P.materials.fluid[0].c0 * 1000.0f / 7.0f);
+}
+
+TEST(CaseLoader, AntuonoDiffusionIsReadAndCarriesTheGradientField) {
+  const Case c = parse_case(kMinimal2D, "tiny.yaml", {"density.diffusion=antuono"});
+  EXPECT_EQ(c.diffusion, DensityDiffusion::Antuono);
+  const PhysicsParams P = physics_params(c);
+  EXPECT_TRUE(uses_antuono_diffusion(P));
+  EXPECT_TRUE(needs_optional_fields(P));
+  EXPECT_FALSE(needs_optional_fields(physics_params(parse_case(kMinimal2D, "tiny.yaml"))));
 }
 
 // The impact options of issue 11 (docs/physics.md, "Impact pressures").

@@ -77,8 +77,8 @@ TEST(FieldRegistry, AnOptionalFieldIsOnlyInTheStoresOfRunsThatNeedIt) {
     const OptionalFields on(true);
     ParticleStore p(2);
     EXPECT_TRUE(has_colour(p));
-    // The colour gradient and the shifting displacement, two floats each in 2D.
-    EXPECT_EQ(p.bytes_per_particle(), plain.bytes_per_particle() + 4 * sizeof(float));
+    // The colour gradient, the shifting displacement and the density gradient, two floats each in 2D.
+    EXPECT_EQ(p.bytes_per_particle(), plain.bytes_per_particle() + 6 * sizeof(float));
     p.resize(5);
     EXPECT_EQ(p.colour_gradient[1].size(), 5u);
   }

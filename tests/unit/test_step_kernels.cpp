@@ -216,6 +216,8 @@ std::vector<CheckedCase> gpu_checked_cases() {
       {"summation", load("dam_break_2d.yaml", {"density.mode=summation"}), 100},
       {"moving_walls", moving_walls_case(), 100},
       {"riemann", load("dam_break_2d.yaml", {"density.diffusion=riemann", "momentum.flux=riemann", "fluid.tension=false"}), 300},
+      // Antuono's diffusion: the density-gradient and diffusion passes.
+      {"antuono", load("dam_break_2d.yaml", {"density.diffusion=antuono"}), 300},
       // Several fluids: the multiphase pair terms, the GPU's per-particle loop against the CPU's
       // batched one (oil over water, viscosities 50 times apart).
       {"two_fluids", load("two_layer_hydrostatic_2d.yaml", {"probes=[]"}), 100},
@@ -315,6 +317,17 @@ TEST(ResidentTopology, RiemannOptionsAreSplitIndependentAndMatchTheCpuBackend) {
   const auto three = run(c, 3, 12, nullptr);
   expect_same(run(c, 1, 12, nullptr), three);
   expect_same(three, run(c, 3, 12, [&] { return std::make_unique<ResidentKernels>(c.dim, true); }));
+}
+
+// Antuono's delta-SPH diffusion (the renormalised density gradient, refreshed to the ghosts, then
+// the diffusion pass): 1 and 3 slabs bit-identical, the device's orchestration (host twin) the CPU
+// backend's bits, and a different answer from the default diffusion.
+TEST(ResidentTopology, AntuonoDiffusionIsSplitIndependentAndMatchesTheCpuBackend) {
+  const Case c = load_case(test::source_dir() + "/cases/dam_break_2d.yaml", {"tank.size=[0.16, 0.12]", "density.diffusion=antuono"});
+  const auto three = run(c, 3, 12, nullptr);
+  expect_same(run(c, 1, 12, nullptr), three);
+  expect_same(three, run(c, 3, 12, [&] { return std::make_unique<ResidentKernels>(c.dim, true); }));
+  EXPECT_NE(three, run(small_dam_break(), 3, 12, nullptr));
 }
 
 // Surface tension (the colour gradient, refreshed to the ghosts, then the force): 1 and 3 slabs

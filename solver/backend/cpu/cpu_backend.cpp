@@ -68,30 +68,45 @@ void equation_of_state(ParticleStore& p, const PhysicsParams& P) {
     if (P.is_fluid(p.material[i])) p.pressure[i] = fluid_pressure(P, P.materials.of(p.material[i]), p.density[i]);
 }
 
-void summation_density(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+// Runs one of the shared per-particle bodies (backend/particle_updates.hpp) over every owned
+// particle: body.template operator()<Kernel, Dim>(view, i, g).
+template <class Body>
+void per_particle_pass(const CellGrid& grid, const PhysicsParams& P, Body&& body) {
   dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
     const CellGridView v = grid.view();
     for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
-      for (std::uint32_t i = b; i < e; ++i) update_summation_density<Kernel, Dim>(P, v, p, i, g);
+      for (std::uint32_t i = b; i < e; ++i) body.template operator()<Kernel, Dim>(v, i, g);
     });
+  });
+}
+
+void summation_density(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  per_particle_pass(grid, P, [&]<class Kernel, int Dim>(const CellGridView& v, std::uint32_t i, const int g[3]) {
+    update_summation_density<Kernel, Dim>(P, v, p, i, g);
   });
 }
 
 void colour_gradient(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
-  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-    const CellGridView v = grid.view();
-    for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
-      for (std::uint32_t i = b; i < e; ++i) update_colour_gradient<Kernel, Dim>(P, v, p, i, g);
-    });
+  per_particle_pass(grid, P, [&]<class Kernel, int Dim>(const CellGridView& v, std::uint32_t i, const int g[3]) {
+    update_colour_gradient<Kernel, Dim>(P, v, p, i, g);
   });
 }
 
 void surface_tension(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
-  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-    const CellGridView v = grid.view();
-    for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
-      for (std::uint32_t i = b; i < e; ++i) add_surface_tension<Kernel, Dim>(P, v, p, i, g);
-    });
+  per_particle_pass(grid, P, [&]<class Kernel, int Dim>(const CellGridView& v, std::uint32_t i, const int g[3]) {
+    add_surface_tension<Kernel, Dim>(P, v, p, i, g);
+  });
+}
+
+void density_gradient(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  per_particle_pass(grid, P, [&]<class Kernel, int Dim>(const CellGridView& v, std::uint32_t i, const int g[3]) {
+    update_density_gradient<Kernel, Dim>(P, v, p, i, g);
+  });
+}
+
+void antuono_diffusion(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  per_particle_pass(grid, P, [&]<class Kernel, int Dim>(const CellGridView& v, std::uint32_t i, const int g[3]) {
+    add_antuono_diffusion<Kernel, Dim>(P, v, p, i, g);
   });
 }
 
@@ -370,11 +385,8 @@ void wall_state(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) 
 }
 
 void shifting(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P, float dt) {
-  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-    const CellGridView v = grid.view();
-    for_each_owned_cell(grid, [&](std::uint32_t b, std::uint32_t e, const int g[3]) {
-      for (std::uint32_t i = b; i < e; ++i) update_shift<Kernel, Dim>(P, v, p, i, g, dt);
-    });
+  per_particle_pass(grid, P, [&]<class Kernel, int Dim>(const CellGridView& v, std::uint32_t i, const int g[3]) {
+    update_shift<Kernel, Dim>(P, v, p, i, g, dt);
   });
 }
 

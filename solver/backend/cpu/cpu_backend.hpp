@@ -31,6 +31,11 @@ void fluid_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P,
 // after the fluid rates, the force added to the owned fluid particles' acceleration.
 void colour_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 void surface_tension(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+// Antuono delta-SPH diffusion (physics/density_gradient.hpp), only with `density.diffusion:
+// antuono`: the renormalised density gradient of the owned particles (before the halo refresh),
+// then, after the fluid rates, the diffusion added to the owned fluid particles' density rate.
+void density_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+void antuono_diffusion(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 // Particle-shifting displacement (physics/shifting.hpp) of the owned fluid particles for a step
 // dt, into `shift`; correct() then adds it to the positions (only when P.shifting.enabled).
 void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt);
@@ -74,6 +79,12 @@ class Kernels : public StepKernels {
   }
   void surface_tension(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
     cpu::surface_tension(store(), arrays_->grid(), P);
+  }
+  void density_gradient(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::density_gradient(store(), arrays_->grid(), P);
+  }
+  void antuono_diffusion(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::antuono_diffusion(store(), arrays_->grid(), P);
   }
   void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
     cpu::shifting(store(), arrays_->grid(), P, dt);

@@ -88,6 +88,18 @@ struct ColourGradientPass {
     update_colour_gradient<Kernel, Dim>(P, v, d, i, g);
   }
 };
+struct DensityGradientPass {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
+    update_density_gradient<Kernel, Dim>(P, v, d, i, g);
+  }
+};
+struct AntuonoDiffusionPass {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
+    add_antuono_diffusion<Kernel, Dim>(P, v, d, i, g);
+  }
+};
 struct SurfaceTensionPass {
   template <class Kernel, int Dim>
   __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
@@ -165,6 +177,12 @@ class CudaKernels final : public StepKernels {
   }
   void surface_tension(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
     neighbour_pass<SurfaceTensionPass>(P, ParticleRange{0, owned()});
+  }
+  void density_gradient(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    neighbour_pass<DensityGradientPass>(P, ParticleRange{0, owned()});
+  }
+  void antuono_diffusion(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    neighbour_pass<AntuonoDiffusionPass>(P, ParticleRange{0, owned()});
   }
   void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
     neighbour_pass<ShiftingPass>(P, ParticleRange{0, owned()}, dt);
