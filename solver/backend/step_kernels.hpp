@@ -44,9 +44,9 @@ class StepKernels {
     (void)p, (void)g, (void)P;
     throw std::logic_error(std::string(name()) + " backend: no surface tension");
   }
-  // Antuono delta-SPH diffusion (only when uses_antuono_diffusion(P), physics/density_gradient.hpp): the
-  // renormalised density gradient of the owned particles, before the halo refresh; the diffusion,
-  // after the fluid rates (owned fluid).
+  // Antuono delta-SPH diffusion (only when uses_antuono_diffusion(P), physics/params.hpp; the
+  // physics: physics/density_gradient.hpp): the renormalised density gradient of the owned
+  // particles, before the halo refresh; the diffusion, after the fluid rates (owned fluid).
   virtual void density_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) {
     (void)p, (void)g, (void)P;
     throw std::logic_error(std::string(name()) + " backend: no renormalised density diffusion");

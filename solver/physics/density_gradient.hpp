@@ -29,10 +29,6 @@ namespace spate {
 // gradient, i.e. the plain difference of Molteni & Colagrossi for its half of psi.
 constexpr float kMinRenormalisationMoment = 0.25f;
 
-inline bool uses_antuono_diffusion(const PhysicsParams& P) {
-  return P.diffusion == DensityDiffusion::Antuono && P.density_mode == DensityMode::Continuity;
-}
-
 // The sums of pass 1: the renormalisation matrix L_i^-1 (symmetric: (x_j - x_i) (x) grad_i W_ij =
 // -F r_ij (x) r_ij) and the raw gradient sum_j (rho_j - rho_i) grad_i W_ij V_j.
 template <int Dim>

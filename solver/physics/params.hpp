@@ -92,12 +92,18 @@ SPATE_HD Vec<Dim> wall_velocity(const PhysicsParams& P, std::uint8_t m, const Ve
   return s ? rigid_velocity<Dim>(*s, x) : zero_vec<Dim>();
 }
 
+// Antuono's diffusion runs (its two passes, physics/density_gradient.hpp) only with continuity:
+// summation density has no diffusion term.
+inline bool uses_antuono_diffusion(const PhysicsParams& P) {
+  return P.diffusion == DensityDiffusion::Antuono && P.density_mode == DensityMode::Continuity;
+}
+
 // Whether a run needs the optional registry fields (kOptional: surface tension's colour gradient,
-// shifting's displacement, the renormalised density gradient of `density.diffusion: antuono`): the
-// stores of such a run carry them (OptionalFields), no other run pays their bytes. One switch for
-// all of them: a run with any of these features carries all.
+// shifting's displacement, the renormalised density gradient of Antuono's diffusion): the stores
+// of such a run carry them (OptionalFields), no other run pays their bytes. One switch for all of
+// them: a run with any of these features carries all.
 inline bool needs_optional_fields(const PhysicsParams& P) {
-  return P.surface_tension.on || P.shifting.enabled || P.diffusion == DensityDiffusion::Antuono;
+  return P.surface_tension.on || P.shifting.enabled || uses_antuono_diffusion(P);
 }
 
 }  // namespace spate

@@ -10,7 +10,6 @@
 
 #include "../backend/cpu/cpu_backend.hpp"
 #include "../domain/particle_checks.hpp"
-#include "../physics/density_gradient.hpp"
 
 namespace spate {
 

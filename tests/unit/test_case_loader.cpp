@@ -137,6 +137,10 @@ TEST(CaseLoader, AntuonoDiffusionIsReadAndCarriesTheGradientField) {
   EXPECT_TRUE(uses_antuono_diffusion(P));
   EXPECT_TRUE(needs_optional_fields(P));
   EXPECT_FALSE(needs_optional_fields(physics_params(parse_case(kMinimal2D, "tiny.yaml"))));
+  // Summation density has no diffusion term: nothing runs, nothing is carried.
+  const PhysicsParams summation = physics_params(parse_case(kMinimal2D, "tiny.yaml", {"density.diffusion=antuono", "density.mode=summation"}));
+  EXPECT_FALSE(uses_antuono_diffusion(summation));
+  EXPECT_FALSE(needs_optional_fields(summation));
 }
 
 // The impact options of issue 11 (docs/physics.md, "Impact pressures").
