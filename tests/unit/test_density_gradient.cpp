@@ -10,39 +10,13 @@
 #include <stdexcept>
 #include <vector>
 
-#include "case/case.hpp"
+#include "lattice_params.hpp"
 #include "physics/density_gradient.hpp"
 
 namespace spate {
 namespace {
 
-const char* kCase2D = R"(name: lattice
-dimensions: 2
-dp: 0.01
-time:
-  end: 0.1
-tank:
-  size: [0.4, 0.4]
-fluid_blocks:
-  - min: [0, 0]
-    max: [0.1, 0.1]
-density:
-  diffusion: antuono
-)";
-
-const char* kCase3D = R"(name: lattice
-dimensions: 3
-dp: 0.01
-time:
-  end: 0.1
-tank:
-  size: [0.2, 0.2, 0.2]
-fluid_blocks:
-  - min: [0, 0, 0]
-    max: [0.1, 0.1, 0.1]
-density:
-  diffusion: antuono
-)";
+const std::string kAntuono = "density:\n  diffusion: antuono\n";
 
 template <int Dim>
 struct LatticeBlock {
@@ -50,8 +24,8 @@ struct LatticeBlock {
   const FluidMaterial* M;
   std::vector<ParticleState<Dim>> all;
   // Sites k dp for -8 <= k <= top along every axis, with density rho(x).
-  LatticeBlock(const char* yaml, int top, const std::function<float(const Vec<Dim>&)>& rho)
-      : P(physics_params(parse_case(yaml, "lattice.yaml"))), M(&P.materials.fluid[0]) {
+  LatticeBlock(int top, const std::function<float(const Vec<Dim>&)>& rho)
+      : P(lattice_params(Dim, kAntuono)), M(&P.materials.fluid[0]) {
     int k[3] = {-8, -8, -8};
     for (k[0] = -8; k[0] <= top; ++k[0])
       for (k[1] = -8; k[1] <= top; ++k[1])
@@ -108,7 +82,7 @@ float linear(const Vec<Dim>& x) {
 }
 
 TEST(DensityGradient, RenormalisedGradientOfALinearDensityIsExactInsideAtTheSurfaceAndInACorner) {
-  LatticeBlock<2> L(kCase2D, 0, linear<2>);  // free surfaces at x = 0 and y = 0: (0, 0) is a corner
+  LatticeBlock<2> L(0, linear<2>);  // free surfaces at x = 0 and y = 0: (0, 0) is a corner
   for (const Vec<2> x : {Vec<2>{-0.04f, -0.04f}, Vec<2>{-0.04f, 0.0f}, Vec<2>{0.0f, 0.0f}, Vec<2>{-0.01f, 0.0f}}) {
     const Vec<2> g = L.gradient(L.at(x));
     SCOPED_TRACE(testing::Message() << "at (" << x[0] << ", " << x[1] << ")");
@@ -124,7 +98,7 @@ TEST(DensityGradient, RenormalisedGradientOfALinearDensityIsExactInsideAtTheSurf
 }
 
 TEST(DensityGradient, RenormalisedGradientIsExactIn3D) {
-  LatticeBlock<3> L(kCase3D, 0, linear<3>);
+  LatticeBlock<3> L(0, linear<3>);
   // Inside, on an edge (two free surfaces) and in a corner (three).
   for (const Vec<3> x : {Vec<3>{-0.04f, -0.04f, -0.04f}, Vec<3>{0.0f, -0.03f, 0.0f}, Vec<3>{0.0f, 0.0f, 0.0f}}) {
     const Vec<3> g = L.gradient(L.at(x));
@@ -135,7 +109,7 @@ TEST(DensityGradient, RenormalisedGradientIsExactIn3D) {
 }
 
 TEST(DensityGradient, ASparseNeighbourhoodTakesNoGradient) {
-  LatticeBlock<2> L(kCase2D, 0, linear<2>);
+  LatticeBlock<2> L(0, linear<2>);
   // A lone particle with one neighbour: the matrix is singular.
   std::vector<ParticleState<2>> pair = {L.all[0], L.all[1]};
   DensityGradientSums<2> s;
@@ -146,7 +120,7 @@ TEST(DensityGradient, ASparseNeighbourhoodTakesNoGradient) {
 }
 
 TEST(DensityGradient, AntuonoDiffusionOfALinearDensityIsZeroEvenAtTheSurface) {
-  LatticeBlock<2> L(kCase2D, 0, linear<2>);
+  LatticeBlock<2> L(0, linear<2>);
   for (const Vec<2> x : {Vec<2>{-0.04f, -0.04f}, Vec<2>{-0.04f, 0.0f}, Vec<2>{0.0f, 0.0f}}) {
     const ParticleState<2>& i = L.at(x);
     // The scale: what Molteni & Colagrossi's form (no gradient correction) gives at the surface.
@@ -159,7 +133,7 @@ TEST(DensityGradient, AntuonoDiffusionOfALinearDensityIsZeroEvenAtTheSurface) {
 TEST(DensityGradient, AntuonoDiffusionFlattensABump) {
   // rho = rho0 (1 + 0.01 exp(-|x|^2 / (2 (2 dp)^2))): a maximum at the origin loses density, its
   // flanks gain it.
-  LatticeBlock<2> L(kCase2D, 8, [](const Vec<2>& x) { return 1000.0f * (1.0f + 0.01f * std::exp(-dot(x, x) / (2 * 0.02f * 0.02f))); });
+  LatticeBlock<2> L(8, [](const Vec<2>& x) { return 1000.0f * (1.0f + 0.01f * std::exp(-dot(x, x) / (2 * 0.02f * 0.02f))); });
   EXPECT_LT(L.antuono(L.at(Vec<2>{0.0f, 0.0f})), 0.0f);
   EXPECT_GT(L.antuono(L.at(Vec<2>{0.05f, 0.0f})), 0.0f);
 }

@@ -10,25 +10,13 @@
 #include <cstring>
 #include <random>
 
-#include "case/case.hpp"
+#include "lattice_params.hpp"
 #include "physics/dispatch.hpp"
 #include "physics/fluid_interactions.hpp"
 #include "physics/multiphase_interactions.hpp"
 
 namespace spate {
 namespace {
-
-const char* kCase = R"(name: pairs
-dimensions: 2
-dp: 0.01
-time:
-  end: 0.1
-tank:
-  size: [0.4, 0.4]
-fluid_blocks:
-  - min: [0, 0]
-    max: [0.1, 0.1]
-)";
 
 bool same_bits(const FluidRates<2>& a, const FluidRates<2>& b) {
   return std::memcmp(a.acc.c, b.acc.c, sizeof(a.acc.c)) == 0 && std::memcmp(&a.density_rate, &b.density_rate, sizeof(float)) == 0;
@@ -55,7 +43,7 @@ void for_random_pairs(const PhysicsParams& P, F&& f) {
 }
 
 TEST(PairTerms, LeavingOutTheRiemannTermsChangesNoBitWhenTheOptionsAreOff) {
-  const PhysicsParams P = physics_params(parse_case(kCase, "pairs.yaml"));
+  const PhysicsParams P = lattice_params(2);
   ASSERT_FALSE(pair_loop_flags(P).riemann);
   int pairs = 0;
   for_random_pairs(P, [&](const FluidMaterial& M, const ParticleState<2>& i, const ParticleState<2>& j) {
@@ -71,7 +59,7 @@ TEST(PairTerms, LeavingOutTheRiemannTermsChangesNoBitWhenTheOptionsAreOff) {
 }
 
 TEST(PairTerms, WithTheRiemannFluxTheTermsMatter) {
-  PhysicsParams P = physics_params(parse_case(kCase, "pairs.yaml"));
+  PhysicsParams P = lattice_params(2);
   P.flux = MomentumFlux::Riemann;
   EXPECT_TRUE(pair_loop_flags(P).riemann);
   int differ = 0;

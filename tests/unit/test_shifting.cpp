@@ -6,28 +6,14 @@
 #include <cmath>
 #include <vector>
 
-#include "case/case.hpp"
+#include "lattice_params.hpp"
 #include "physics/shifting.hpp"
 
 namespace spate {
 namespace {
 
-const char* kCase = R"(name: lattice
-dimensions: 2
-dp: 0.01
-time:
-  end: 0.1
-tank:
-  size: [0.4, 0.4]
-fluid_blocks:
-  - min: [0, 0]
-    max: [0.1, 0.1]
-shifting:
-  enabled: true
-)";
-
 struct Lattice2D {
-  PhysicsParams P = physics_params(parse_case(kCase, "lattice.yaml"));
+  PhysicsParams P = lattice_params(2, "shifting:\n  enabled: true\n");
   const FluidMaterial& M = P.materials.fluid[0];
   float dt = 1e-4f;
   // Fluid sites (i dp, j dp) for |i| <= 6 and -12 <= j <= top.
