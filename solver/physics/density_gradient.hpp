@@ -44,7 +44,7 @@ SPATE_HD void accumulate_density_gradient(const PhysicsParams& P, const FluidMat
   const Vec<Dim> r = i.x - j.x;
   const float r2 = dot(r, r);
   if (r2 >= P.support2) return;
-  const float F = Kernel::gradient_factor(sqrtf(r2) * P.inv_h, P.gradient_norm, P.inv_h2);
+  const float F = kernel_gradient_factor<Kernel>(P, r2);
   const float vF = M.mass / j.rho * F;
   SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
     s.raw[a] += (j.rho - i.rho) * vF * r[a];
@@ -87,7 +87,7 @@ SPATE_HD float antuono_diffusion_term(const PhysicsParams& P, const FluidMateria
   const Vec<Dim> r = i.x - j.x;  // x_i - x_j = -(x_j - x_i)
   const float r2 = dot(r, r);
   if (r2 >= P.support2) return 0.0f;
-  const float F = Kernel::gradient_factor(sqrtf(r2) * P.inv_h, P.gradient_norm, P.inv_h2);
+  const float F = kernel_gradient_factor<Kernel>(P, r2);
   // psi_ij / 2 = (rho_j - rho_i) - (grad_i + grad_j) . (x_j - x_i) / 2
   const float drho_ji = (j.rho - i.rho) + 0.5f * dot(grad_i + grad_j, r);
   return diffusion_flux(P, M, 1.0f, drho_ji, r2, F, 1.0f / (r2 + P.eta2), M.mass / j.rho);

@@ -34,7 +34,7 @@ SPATE_HD Vec<Dim> wall_pressure_force(const PhysicsParams& P, const ParticleStat
   const Vec<Dim> r = w.x - f.x;
   const float r2 = dot(r, r);
   if (r2 >= P.support2 || r2 == 0.0f) return zero_vec<Dim>();
-  const float F = Kernel::gradient_factor(sqrtf(r2) * P.inv_h, P.gradient_norm, P.inv_h2);
+  const float F = kernel_gradient_factor<Kernel>(P, r2);
   const float m = P.materials.of(f.material).mass;
   return (-m * m * (w.p + f.p) / (w.rho * f.rho) * F) * r;
 }

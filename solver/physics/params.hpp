@@ -85,6 +85,13 @@ struct PhysicsParams {
   }
 };
 
+// F of grad_i W_ij = F r_ij for a pair at squared distance r2 (exactly 0 beyond the support), as
+// every pair term but the fused fluid pass (PairKinematics, which keeps |r_ij|) takes it.
+template <class Kernel>
+SPATE_HD float kernel_gradient_factor(const PhysicsParams& P, float r2) {
+  return Kernel::gradient_factor(sqrtf(r2) * P.inv_h, P.gradient_norm, P.inv_h2);
+}
+
 // The velocity of wall particle x of material m (zero for static walls).
 template <int Dim>
 SPATE_HD Vec<Dim> wall_velocity(const PhysicsParams& P, std::uint8_t m, const Vec<Dim>& x) {

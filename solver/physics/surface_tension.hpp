@@ -78,7 +78,7 @@ SPATE_HD void accumulate_divergence(const PhysicsParams& P, const ParticleState<
   if (!P.is_fluid(j.material) || !has_normal<Dim>(P, grad_c_j)) return;
   const Vec<Dim> r = i.x - j.x;
   const float r2 = dot(r, r);
-  const float F = Kernel::gradient_factor(sqrtf(r2) * P.inv_h, P.gradient_norm, P.inv_h2);
+  const float F = kernel_gradient_factor<Kernel>(P, r2);
   const float volume_j = P.materials.of(j.material).mass / j.rho;
   const float sign = j.material == i.material ? 1.0f : -1.0f;
   const float inv_len = sign / sqrtf(dot(grad_c_j, grad_c_j));
