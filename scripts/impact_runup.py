@@ -1,0 +1,92 @@
+"""What the flow does at the end wall of the Lobovsky tank while the pressure above the floor builds
+(docs/validation.md, "Why the pressure above the floor builds late"): the surge's depth against
+Ritter's ideal dam-break solution, printed, and the fluid's pressure and velocity near the wall at a
+few times, drawn. From a run with snapshots:
+    spate run cases/dam_break_lobovsky.yaml --set dp=0.0025 --set time.end=0.7 --set output.interval=0.01 --out RUN
+    impact_runup.py RUN OUT.png"""
+import re
+import sys
+
+import matplotlib
+import numpy as np
+import vtk
+from vtk.util.numpy_support import vtk_to_numpy
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+G, H, RHO = 9.81, 0.3, 1000.0
+DAM = 0.6  # the column's length: the dam's position [m]
+SENSORS = [(0.003, "p1"), (0.03, "p3"), (0.08, "p4")]
+
+
+def snapshots(run):
+    pvd = open(f"{run}/particles.pvd").read()
+    return [(float(t), f) for t, f in re.findall(r'timestep="([0-9.eE+-]+)"[^>]*file="([^"]+)"', pvd)]
+
+
+def fluid_at(run, entries, want):
+    """(time, positions, pressures, velocities) of the fluid in the snapshot nearest `want`, the end
+    wall's x (the outermost wall particle) and the particle spacing dp."""
+    t, f = min(entries, key=lambda e: abs(e[0] - want))
+    reader = vtk.vtkXMLMultiBlockDataReader()
+    reader.SetFileName(f"{run}/{f}")
+    reader.Update()
+    it = reader.GetOutput().NewIterator()
+    it.InitTraversal()
+    dp = float(reader.GetOutput().GetFieldData().GetArray("dp").GetValue(0))
+    x, p, v, kind = [], [], [], []
+    while not it.IsDoneWithTraversal():
+        d = it.GetCurrentDataObject()
+        pd = d.GetPointData()
+        x.append(vtk_to_numpy(d.GetPoints().GetData()))
+        p.append(vtk_to_numpy(pd.GetArray("pressure")))
+        v.append(vtk_to_numpy(pd.GetArray("velocity")))
+        kind.append(vtk_to_numpy(pd.GetArray("kind")))
+        it.GoToNextItem()
+    x, p, v, kind = (np.concatenate(a) for a in (x, p, v, kind))
+    fluid = kind == 0
+    return t, x[fluid], p[fluid], v[fluid], x[~fluid, 0].max(), dp
+
+
+def ritter_depth(x, t):
+    """Ritter's (1892) depth of an ideal dam break over a dry bed, column height H at x < DAM."""
+    c = (G * H) ** 0.5
+    xi = (x - DAM) / t
+    return (2 * c - xi) ** 2 / (9 * G) if -c <= xi <= 2 * c else 0.0
+
+
+def main(run, out):
+    entries = snapshots(run)
+    for want in (0.3, 0.4, 0.45):
+        t, x, _, _, _, dp = fluid_at(run, entries, want)
+        cells = []
+        for at in (0.8, 1.0, 1.2, 1.4):
+            column = x[np.abs(x[:, 0] - at) < dp]
+            depth = column[:, 1].max() + dp / 2 if len(column) else 0.0  # the surface half a dp above the top particle
+            cells.append(f"x = {at} m: {100 * depth:.1f} cm (Ritter {100 * ritter_depth(at, t):.1f})")
+        print(f"t = {t:.3f} s, front at x = {x[:, 0].max():.3f} m | " + " | ".join(cells))
+    times = (0.47, 0.50, 0.53, 0.62)
+    fig, axes = plt.subplots(1, len(times), figsize=(3.0 * len(times) + 1, 4.4), sharey=True)
+    tau = (G / H) ** 0.5
+    for ax, want in zip(axes, times):
+        t, x, p, v, wall, _ = fluid_at(run, entries, want)
+        near = (x[:, 0] > wall - 0.2) & (x[:, 1] < 0.3)
+        sc = ax.scatter(x[near, 0], x[near, 1], c=p[near] / (RHO * G * H), s=1.2, cmap="viridis", vmin=0, vmax=1.2)
+        arrows = near & (np.arange(len(x)) % 9 == 0)
+        ax.quiver(x[arrows, 0], x[arrows, 1], v[arrows, 0], v[arrows, 1], scale=40, width=0.004, color="k", alpha=0.5)
+        for z, name in SENSORS:
+            ax.plot([wall - 0.008, wall], [z, z], "r-", lw=2)
+            ax.text(wall - 0.012, z, name, color="r", fontsize=7, va="center", ha="right")
+        ax.set_title(f"t = {t:.2f} s, tau = {t * tau:.2f}", fontsize=9)
+        ax.set_aspect("equal")
+        ax.set_xlim(wall - 0.2, wall + 0.004)
+        ax.set_ylim(0, 0.3)
+        ax.set_xlabel("x [m]")
+    axes[0].set_ylabel("z [m]")
+    fig.colorbar(sc, ax=list(axes), label="p / (rho g H)", shrink=0.85)
+    fig.savefig(out, dpi=110)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], sys.argv[2])
