@@ -11,7 +11,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from run_output import probe_table, snapshot_arrays  # noqa: E402
+from run_output import probe_table, saved_step_near, snapshot_arrays  # noqa: E402
 
 air_run, single_run, out = Path(sys.argv[1]), Path(sys.argv[2]), Path(sys.argv[3])
 A, H, G = 0.0572, 0.1144, 9.81  # column width and height, gravity (the cases')
@@ -28,16 +28,9 @@ def snapshot(step_dir):
 
 
 def snapshot_at(run, T):
-    """The saved step nearest to T (the snapshot times are in particles.pvd)."""
-    best = None
-    for line in (run / "particles.pvd").read_text().splitlines():
-        if "timestep=" not in line:
-            continue
-        t = float(line.split('timestep="')[1].split('"')[0])
-        name = line.split('file="')[1].split('"')[0]
-        if best is None or abs(t * T_OF_T - T) < abs(best[0] * T_OF_T - T):
-            best = (t, name)
-    return best[0], snapshot(run / best[1].replace(".vtm", ""))
+    """The saved step nearest to T."""
+    t, step_dir = saved_step_near(run, T / T_OF_T)
+    return t, snapshot(step_dir)
 
 
 fig, axes = plt.subplots(3, 2, figsize=(12, 10), gridspec_kw={"height_ratios": [1, 1, 1.1]})

@@ -10,7 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from run_output import probe_table, snapshot_arrays  # noqa: E402
+from run_output import probe_table, saved_steps, snapshot_arrays  # noqa: E402
 
 run, out = Path(sys.argv[1]), Path(sys.argv[2])
 DP, H = 0.025, 1.3 * 0.025  # the case's dp and smoothing length
@@ -53,11 +53,10 @@ p = probe_table(run / "probes" / "bubble.csv")  # time, step, x, y, vx, vy
 t, y, vy = p[:, 0], p[:, 3], p[:, 5]
 k = int(np.argmax(vy))
 y3 = float(np.interp(3.0, t, y))
-# The saved steps and their times, from the run's ParaView collection.
-import re  # noqa: E402
-entries = re.findall(r'timestep="([^"]+)".*?file="([^"]+)\.vtm"', (run / "particles.pvd").read_text())
-times = np.array([float(ts) for ts, _ in entries])
-steps = [run / f for _, f in entries]
+# The saved steps and their times.
+entries = saved_steps(run)
+times = np.array([t for t, _ in entries])
+steps = [d for _, d in entries]
 circ = [circularity(snapshot(d)) for d in steps]
 
 fig, axs = plt.subplots(1, 4, figsize=(15, 4), gridspec_kw={"width_ratios": [1.2, 1.2, 1.2, 0.8]})

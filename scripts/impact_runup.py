@@ -4,49 +4,29 @@ Ritter's ideal dam-break solution, printed, and the fluid's pressure and velocit
 few times, drawn. From a run with snapshots:
     spate run cases/dam_break_lobovsky.yaml --set dp=0.0025 --set time.end=0.7 --set output.interval=0.01 --out RUN
     impact_runup.py RUN OUT.png"""
-import re
 import sys
+from pathlib import Path
 
 import matplotlib
 import numpy as np
-import vtk
-from vtk.util.numpy_support import vtk_to_numpy
+import yaml
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from run_output import saved_step_near, snapshot_arrays  # noqa: E402
 
 G, H, RHO = 9.81, 0.3, 1000.0
 DAM = 0.6  # the column's length: the dam's position [m]
 SENSORS = [(0.003, "p1"), (0.03, "p3"), (0.08, "p4")]
 
 
-def snapshots(run):
-    pvd = open(f"{run}/particles.pvd").read()
-    return [(float(t), f) for t, f in re.findall(r'timestep="([0-9.eE+-]+)"[^>]*file="([^"]+)"', pvd)]
-
-
-def fluid_at(run, entries, want):
-    """(time, positions, pressures, velocities) of the fluid in the snapshot nearest `want`, the end
-    wall's x (the outermost wall particle) and the particle spacing dp."""
-    t, f = min(entries, key=lambda e: abs(e[0] - want))
-    reader = vtk.vtkXMLMultiBlockDataReader()
-    reader.SetFileName(f"{run}/{f}")
-    reader.Update()
-    it = reader.GetOutput().NewIterator()
-    it.InitTraversal()
-    dp = float(reader.GetOutput().GetFieldData().GetArray("dp").GetValue(0))
-    x, p, v, kind = [], [], [], []
-    while not it.IsDoneWithTraversal():
-        d = it.GetCurrentDataObject()
-        pd = d.GetPointData()
-        x.append(vtk_to_numpy(d.GetPoints().GetData()))
-        p.append(vtk_to_numpy(pd.GetArray("pressure")))
-        v.append(vtk_to_numpy(pd.GetArray("velocity")))
-        kind.append(vtk_to_numpy(pd.GetArray("kind")))
-        it.GoToNextItem()
-    x, p, v, kind = (np.concatenate(a) for a in (x, p, v, kind))
-    fluid = kind == 0
-    return t, x[fluid], p[fluid], v[fluid], x[~fluid, 0].max(), dp
+def fluid_at(run, want):
+    """(time, positions, pressures, velocities) of the fluid in the saved step nearest `want`, and
+    the end wall's x (the outermost wall particle)."""
+    t, step_dir = saved_step_near(run, want)
+    x, a = snapshot_arrays(step_dir, ["pressure", "velocity", "kind"])
+    fluid = a["kind"] == 0
+    return t, x[fluid], a["pressure"][fluid], a["velocity"][fluid], x[~fluid, 0].max()
 
 
 def ritter_depth(x, t):
@@ -57,9 +37,9 @@ def ritter_depth(x, t):
 
 
 def main(run, out):
-    entries = snapshots(run)
+    dp = float(yaml.safe_load((run / "case.yaml").read_text())["dp"])  # the run's effective case
     for want in (0.3, 0.4, 0.45):
-        t, x, _, _, _, dp = fluid_at(run, entries, want)
+        t, x, _, _, _ = fluid_at(run, want)
         cells = []
         for at in (0.8, 1.0, 1.2, 1.4):
             column = x[np.abs(x[:, 0] - at) < dp]
@@ -70,7 +50,7 @@ def main(run, out):
     fig, axes = plt.subplots(1, len(times), figsize=(3.0 * len(times) + 1, 4.4), sharey=True)
     tau = (G / H) ** 0.5
     for ax, want in zip(axes, times):
-        t, x, p, v, wall, _ = fluid_at(run, entries, want)
+        t, x, p, v, wall = fluid_at(run, want)
         near = (x[:, 0] > wall - 0.2) & (x[:, 1] < 0.3)
         sc = ax.scatter(x[near, 0], x[near, 1], c=p[near] / (RHO * G * H), s=1.2, cmap="viridis", vmin=0, vmax=1.2)
         arrows = near & (np.arange(len(x)) % 9 == 0)
@@ -89,4 +69,4 @@ def main(run, out):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2])
+    main(Path(sys.argv[1]), sys.argv[2])

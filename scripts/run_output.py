@@ -1,6 +1,7 @@
-"""Readers for a spate run folder, shared by the plot scripts: a probe CSV as a numeric table, and
-the particle arrays of one saved step (every slab's piece)."""
+"""Readers for a spate run folder, shared by the plot scripts: a probe CSV as a numeric table, the
+saved steps and their times, and the particle arrays of one saved step (every slab's piece)."""
 import csv
+import re
 
 import numpy as np
 from vtk.util.numpy_support import vtk_to_numpy
@@ -12,6 +13,18 @@ def probe_table(path):
     with open(path) as f:
         rows = list(csv.reader(f))[1:]
     return np.array([[float(v) for v in r] for r in rows])
+
+
+def saved_steps(run):
+    """(time, step folder) of every saved step, in the order of the run's ParaView collection
+    (particles.pvd)."""
+    entries = re.findall(r'timestep="([^"]+)"[^>]*file="([^"]+)\.vtm"', (run / "particles.pvd").read_text())
+    return [(float(t), run / f) for t, f in entries]
+
+
+def saved_step_near(run, t):
+    """(time, step folder) of the saved step nearest to time t [s]."""
+    return min(saved_steps(run), key=lambda e: abs(e[0] - t))
 
 
 def snapshot_arrays(step_dir, names):

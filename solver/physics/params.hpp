@@ -85,8 +85,9 @@ struct PhysicsParams {
   }
 };
 
-// F of grad_i W_ij = F r_ij for a pair at squared distance r2 (exactly 0 beyond the support), as
-// every pair term but the fused fluid pass (PairKinematics, which keeps |r_ij|) takes it.
+// F of grad_i W_ij = F r_ij for a pair at squared distance r2 (exactly 0 beyond the support), for
+// the pair terms that need nothing else of |r_ij| (PairKinematics, the colour gradient and shifting
+// keep |r_ij| or q for other uses and call Kernel::gradient_factor themselves).
 template <class Kernel>
 SPATE_HD float kernel_gradient_factor(const PhysicsParams& P, float r2) {
   return Kernel::gradient_factor(sqrtf(r2) * P.inv_h, P.gradient_norm, P.inv_h2);

@@ -65,7 +65,7 @@ struct LatticeBlock {
       const Vec<Dim> r = i.x - j.x;
       const float r2 = dot(r, r);
       if (r2 >= P.support2) continue;
-      const float F = WendlandC2::gradient_factor(std::sqrt(r2) * P.inv_h, P.gradient_norm, P.inv_h2);
+      const float F = kernel_gradient_factor<WendlandC2>(P, r2);
       d += diffusion_flux(P, *M, 1.0f, j.rho - i.rho, r2, F, 1.0f / (r2 + P.eta2), M->mass / j.rho);
     }
     return d;
