@@ -29,8 +29,10 @@ def impact_figure(case, runs, data_dir, out, window_s=None):
     runs = [(Path(r), label) for r, label in runs if Path(r).exists()]
     n = len(spec["sensors"])
     fig, axs = plt.subplots(n, 1, figsize=(7.5, 2.7 * n + 0.4), squeeze=False)
+    shift = im.experiment_shift(case, data_dir)
+    clock = f", experiment {shift:+.3f} tau (level clock)" if shift else ""
     for ax, (probe, name) in zip(axs[:, 0], spec["sensors"]):
-        raw = im.read_experiment(Path(data_dir) / name)
+        raw = im.read_experiment(Path(data_dir) / name, shift)
         avg = im.moving_average(raw, w)
         ax.plot([t for t, _ in raw], [p for _, p in raw], ".", color="0.6", ms=2, label="experiment")
         ax.plot([t for t, _ in avg], [p for _, p in avg], "k-", lw=1.2, label=f"experiment, {1e3 * window_s:.0f} ms mean")
@@ -40,7 +42,7 @@ def impact_figure(case, runs, data_dir, out, window_s=None):
         ax.axhline(0, color="k", lw=0.5)
         ax.set_xlim(2, 6.5)
         ax.set_ylim(-1, 4.5)
-        ax.set_title(f"{case}: sensor {probe}, {1e3 * window_s:.0f} ms mean", fontsize=9)
+        ax.set_title(f"{case}: sensor {probe}, {1e3 * window_s:.0f} ms mean{clock}", fontsize=9)
         ax.set_ylabel("p / (rho g H)")
         ax.grid(alpha=0.3)
     axs[-1, 0].set_xlabel("tau = t sqrt(g/H)")

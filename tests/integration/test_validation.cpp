@@ -143,9 +143,11 @@ Impact impact_of(const Record& r) {
   return m;
 }
 
-// The digitised experiment, sorted by time (the digitisation lists a few points out of order).
-Record experiment_record(const std::string& file) {
+// The digitised experiment, sorted by time (the digitisation lists a few points out of order), its
+// clock moved by `shift` (tau; lobovsky_clock_offset below).
+Record experiment_record(const std::string& file, double shift = 0.0) {
   Record r = read_experiment(file);
+  for (auto& [t, v] : r) t += shift;
   std::stable_sort(r.begin(), r.end(), [](auto& a, auto& b) { return a.first < b.first; });
   return r;
 }
@@ -155,7 +157,7 @@ Record experiment_record(const std::string& file) {
 struct Tolerance {
   double arrival_s = 0.02;  // |arrival - experiment| [s]
   double peak = 0.25;       // |peak / experiment - 1|, both through the sensor's window
-  double plateau = 0.10;    // |plateau / experiment - 1|
+  double plateau = 0.10;    // |plateau / experiment - 1| (NAN: not checked, the run ends before)
   double lowest = -0.1;     // the sensor's reading after the arrival, at least this [rho g H]
 };
 
@@ -166,20 +168,25 @@ struct Sensor {
 
 // Runs a dam-break case and checks each of its sensors against the experiment, both through the
 // sensor's window (the sensor averages itself; the experiment is averaged here the same way).
-void check_impacts(const std::string& case_file, double H, const std::vector<Sensor>& sensors, double end_time) {
+// `shift` [tau] moves the experiment's clock (the level records' clock of lobovsky_clock_offset).
+// Returns the finished run's folder.
+std::filesystem::path check_impacts(const std::string& case_file, double H, const std::vector<Sensor>& sensors, double end_time,
+                                    double shift = 0.0) {
   const Case c = load_case(test::case_path(case_file), {"output.interval=0", "time.end=" + std::to_string(end_time)});
   const auto out = test::scratch("validation-" + c.name);
   const RunResult r = test::run_case(c, out);
-  ASSERT_EQ(r.exit_code, 0) << r.message;
+  EXPECT_EQ(r.exit_code, 0) << r.message;
+  if (r.exit_code != 0) return out;
   const double g = std::fabs(c.gravity[c.dim - 1]);
   const double tau = std::sqrt(g / H), rho_g_h = c.fluids[0].density * g * H;
   for (const Sensor& s : sensors) {
     const auto spec = std::find_if(c.probes.begin(), c.probes.end(), [&](auto& p) { return p.name == s.probe; });
-    ASSERT_NE(spec, c.probes.end()) << s.probe;
-    ASSERT_GT(spec->window, 0.0) << s.probe << ": the comparison is through the sensor's window";
+    EXPECT_NE(spec, c.probes.end()) << s.probe;
+    if (spec == c.probes.end()) continue;
+    EXPECT_GT(spec->window, 0.0) << s.probe << ": the comparison is through the sensor's window";
     Record sim;
     for (auto [t, p] : test::read_probe(out / "probes" / (s.probe + ".csv"), 2)) sim.emplace_back(t * tau, p / rho_g_h);
-    const Impact e = impact_of(averaged(experiment_record(s.data), spec->window * tau));
+    const Impact e = impact_of(averaged(experiment_record(s.data, shift), spec->window * tau));
     const Impact m = impact_of(sim);
     std::printf("%s %s: arrival tau %.3f (experiment %.3f, %+.1f ms), peak %.3f (%.3f, %+.0f%%), plateau %.3f (%.3f, %+.1f%%), "
                 "lowest after arrival %+.3f rho g H\n",
@@ -187,18 +194,22 @@ void check_impacts(const std::string& case_file, double H, const std::vector<Sen
                 100 * (m.peak / e.peak - 1), m.plateau, e.plateau, 100 * (m.plateau / e.plateau - 1), m.lowest);
     EXPECT_LE(std::fabs(m.arrival - e.arrival) / tau, s.tol.arrival_s) << s.probe << ": arrival";
     EXPECT_LE(std::fabs(m.peak / e.peak - 1), s.tol.peak) << s.probe << ": first peak";
-    EXPECT_LE(std::fabs(m.plateau / e.plateau - 1), s.tol.plateau) << s.probe << ": plateau";
+    if (!std::isnan(s.tol.plateau)) {
+      EXPECT_LE(std::fabs(m.plateau / e.plateau - 1), s.tol.plateau) << s.probe << ": plateau";
+    }
     EXPECT_GE(m.lowest, s.tol.lowest) << s.probe << ": tension after the impact";
   }
+  return out;
 }
 
-// The default scheme (delta-SPH after Fourtakas, central pressure term) meets the issue's levels
-// except where a Tolerance below says otherwise: the first peak at p1 (+72%; +43% at dp = H/120 and
-// +68% in the 3D narrow tank, so neither resolution nor the third dimension alone removes it), a dip
-// to -0.21 rho g H at p3 just after the arrival (gone at H/120), and the late rise at p4 (arrival
-// +56 ms, plateau -12%): the pressure above the floor builds more slowly than in the experiment, in
-// 2D and 3D and with every scheme measured (docs/validation.md, "Impact pressures"). Measured values
-// in the comments.
+// The default scheme (delta-SPH after Fourtakas, central pressure term) with the instant release,
+// against the records as published, meets the issue's levels except where a Tolerance below says
+// otherwise: the first peak at p1 (+72%; +41% converged), a dip to -0.21 rho g H at p3 just after
+// the arrival, and the late rise at p4 (arrival +56 ms, plateau -12%). The experiment's level
+// records show why (docs/validation.md, "The release: a lifted gate, and the experiment's two
+// clocks"): the instant release's thin tip reaches the wall 37 ms before the experiment's surge,
+// and the pressure records' clock starts 45 ms after the experiment's release, so p1 and p3 look on
+// time and p4 late. LobovskyGateRelease below compares the released-by-a-gate case on one clock.
 TEST(Validation, LobovskyImpactPressures) {
   Tolerance p1, p3, p4;
   p1.peak = 0.85;      // +72%
@@ -209,12 +220,61 @@ TEST(Validation, LobovskyImpactPressures) {
                 {{"p1", "lobovsky_2014_p1.csv", p1}, {"p3", "lobovsky_2014_p3.csv", p3}, {"p4", "lobovsky_2014_p4.csv", p4}}, 1.0);
 }
 
-// Buchner's sensor at 0.2 H: peak -4%, plateau -8%, but the arrival +69 ms late (as at Lobovsky's
-// p4: the pressure above the floor builds late).
+// Buchner's sensor at 0.2 H: peak -4%, plateau -8%, but the arrival +69 ms late, as at Lobovsky's
+// p4; Buchner's records come with no level gauges to check their clock by.
 TEST(Validation, BuchnerImpactPressure) {
   Tolerance p1;
   p1.arrival_s = 0.085;  // +69 ms
   check_impacts("dam_break_buchner_2d.yaml", 0.6, {{"p1", "buchner_2002_pressure.csv", p1}}, 1.25);
+}
+
+// Lobovsky et al. (2014, Fig. 16, H = 300 mm): the water-level gauges H2-H4, where they stand [m]
+// and when the surge first reads 0.02 H there, the mean of the paper's two records [tau]; the same
+// numbers as scripts/impact_metrics.py LOBOVSKY_GAUGES.
+struct LevelGauge {
+  const char* probe;
+  double x, first_reading;
+};
+constexpr LevelGauge kLobovskyGauges[] = {{"h2", 0.865, (1.029 + 1.048) / 2}, {"h3", 1.114, (1.658 + 1.696) / 2},
+                                          {"h4", 1.3625, (2.173 + 2.192) / 2}};
+
+// How much later [tau] the experiment's pressure records start their clock than its level records:
+// the surge, continued from H4 to the end wall (1.61 m) at the speed it had from H3 to H4, reaches
+// the wall at 2.686 on the level clock, and p1 rises at 2.427 on the pressure clock. Nothing of
+// spate's goes into it (docs/validation.md, "The experiment's two clocks").
+double lobovsky_clock_offset() {
+  const LevelGauge &h3 = kLobovskyGauges[1], &h4 = kLobovskyGauges[2];
+  const double at_wall = h4.first_reading + (h4.first_reading - h3.first_reading) * (1.61 - h4.x) / (h4.x - h3.x);
+  return at_wall - impact_of(experiment_record("lobovsky_2014_p1.csv")).arrival;
+}
+
+// The column released as the experiment released it, by a gate lifted from the floor
+// (cases/dam_break_lobovsky_gate.yaml). The surge passes the level gauges H2-H4 as the records do
+// (+0.006 / -0.023 / +0.020 tau; the instant release -0.05 / -0.15 / -0.16), and on the level
+// records' clock the pressures arrive within 0.02 s at every sensor (+4.4 / +2.6 / +2.7 ms), the
+// first peaks are within 25% (+14 / +2 / -1%), and nothing reads below -0.1 rho g H after the
+// arrival (+0.32 / +0.32 / +0.30). The run stops at t = 0.75 s, before the plateaus (the full run:
+// -5 / -12 / -15%; docs/validation.md).
+TEST(Validation, LobovskyGateRelease) {
+  Tolerance p1, p3, p4;
+  p1.plateau = p3.plateau = p4.plateau = NAN;
+  const double shift = lobovsky_clock_offset();
+  EXPECT_NEAR(shift, 0.259, 0.001) << "the gauges' numbers or the p1 record changed";
+  const auto out = check_impacts("dam_break_lobovsky_gate.yaml", 0.3,
+                                 {{"p1", "lobovsky_2014_p1.csv", p1}, {"p3", "lobovsky_2014_p3.csv", p3}, {"p4", "lobovsky_2014_p4.csv", p4}},
+                                 0.75, shift);
+  const double tau = std::sqrt(9.81 / 0.3);
+  for (const LevelGauge& g : kLobovskyGauges) {
+    double first = NAN;
+    for (auto [t, h] : test::read_probe(out / "probes" / (std::string(g.probe) + ".csv"), 2))
+      if (h > 0.02 * 0.3) {
+        first = t * tau;
+        break;
+      }
+    std::printf("dam_break_lobovsky_gate %s: the surge first reads 0.02 H at tau %.3f (experiment %.3f, %+.3f)\n", g.probe,
+                first, g.first_reading, first - g.first_reading);
+    EXPECT_NEAR(first, g.first_reading, 0.06) << g.probe;
+  }
 }
 
 // The circularity of a 2D blob of particles (Hysing et al. 2009): the perimeter of the circle of
