@@ -16,17 +16,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).parent))
 import impact_metrics as im  # noqa: E402
+from impact_runup import ritter_depth  # noqa: E402
 from run_output import probe_table  # noqa: E402
 
 H, G, DAM = 0.3, 9.81, 0.6
 GAUGES = [("h1", 0.3)] + [(name, x) for name, (x, _) in im.LOBOVSKY_GAUGES.items()]
-
-
-def ritter(x, tau):
-    """Ritter's (1892) depth over H of the ideal dam break over a dry bed, tau after the release, at
-    x [m] downstream of the dam."""
-    xi = (x - DAM) / H
-    return (2 - xi / tau) ** 2 / 9 if xi < 2 * tau else 0.0
 
 
 def first_reading(run, gauge, level=0.02):
@@ -48,7 +42,7 @@ def main(out, levels_dir, runs):
                         label="experiment" if "experiment" not in ax.get_legend_handles_labels()[1] else None)
         if x > DAM:  # in the reservoir Ritter's solution holds only until the wave returns from its end
             taus = [0.02 * k for k in range(1, 301)]
-            ax.plot(taus, [ritter(x, t) for t in taus], "k:", lw=0.9, label="Ritter (ideal)")
+            ax.plot(taus, [ritter_depth(x, t / scale) / H for t in taus], "k:", lw=0.9, label="Ritter (ideal)")
         for run, label in runs:
             table = probe_table(run / "probes" / f"{gauge}.csv")
             ax.plot(table[:, 0] * scale, table[:, 2] / H, lw=1.0, label=label)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 def read_experiment(path, shift=0.0):
     """(tau, P) pairs of a shared/data/validation pressure file, sorted by time; `shift` [tau] is
-    added to every time (the clock of LOBOVSKY_CLOCK_OFFSET)."""
+    added to every time (the level clock of lobovsky_clock_offset)."""
     pts = []
     for line in open(path):
         if line.startswith("#") or line.startswith("T"):
@@ -82,9 +82,10 @@ LOBOVSKY_WALL = 1.61
 
 def lobovsky_clock_offset(data_dir):
     """How much later [tau] the experiment's pressure records start their clock than its level
-    records (docs/validation.md, "The experiment's two clocks"): the surge, continued from H4 to the
-    end wall at the speed it had from H3 to H4, reaches the wall at 2.686 on the level clock; p1
-    rises at 2.427 on the pressure clock (the raw record's arrival)."""
+    records (docs/validation.md, "The release: a lifted gate, and the experiment's two clocks"):
+    the surge, continued from H4 to the end wall at the speed it had from H3 to H4, reaches the
+    wall at 2.686 on the level clock; p1 rises at 2.427 on the pressure clock (the raw record's
+    arrival)."""
     (x3, t3), (x4, t4) = [(x, sum(ts) / len(ts)) for x, ts in (LOBOVSKY_GAUGES["h3"], LOBOVSKY_GAUGES["h4"])]
     at_wall = t4 + (t4 - t3) * (LOBOVSKY_WALL - x4) / (x4 - x3)
     return at_wall - impact(read_experiment(Path(data_dir) / "lobovsky_2014_p1.csv"))["arrival"]

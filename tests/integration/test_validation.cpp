@@ -241,7 +241,8 @@ constexpr LevelGauge kLobovskyGauges[] = {{"h2", 0.865, (1.029 + 1.048) / 2}, {"
 // How much later [tau] the experiment's pressure records start their clock than its level records:
 // the surge, continued from H4 to the end wall (1.61 m) at the speed it had from H3 to H4, reaches
 // the wall at 2.686 on the level clock, and p1 rises at 2.427 on the pressure clock. Nothing of
-// spate's goes into it (docs/validation.md, "The experiment's two clocks").
+// spate's goes into it (docs/validation.md, "The release: a lifted gate, and the experiment's
+// two clocks").
 double lobovsky_clock_offset() {
   const LevelGauge &h3 = kLobovskyGauges[1], &h4 = kLobovskyGauges[2];
   const double at_wall = h4.first_reading + (h4.first_reading - h3.first_reading) * (1.61 - h4.x) / (h4.x - h3.x);
