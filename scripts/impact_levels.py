@@ -16,10 +16,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).parent))
 import impact_metrics as im  # noqa: E402
-from impact_runup import ritter_depth  # noqa: E402
+from impact_runup import DAM, G, H, ritter_depth  # noqa: E402
 from run_output import probe_table  # noqa: E402
 
-H, G, DAM = 0.3, 9.81, 0.6
 GAUGES = [("h1", 0.3)] + [(name, x) for name, (x, _) in im.LOBOVSKY_GAUGES.items()]
 
 
@@ -58,9 +57,9 @@ def main(out, levels_dir, runs):
     plt.close(fig)
     for run, label in runs:
         cells = []
-        for gauge, (x, recorded) in im.LOBOVSKY_GAUGES.items():
-            mean = sum(recorded) / len(recorded)
-            cells.append(f"{gauge.upper()} {first_reading(run, gauge):.3f} ({first_reading(run, gauge) - mean:+.3f})")
+        for gauge in im.LOBOVSKY_GAUGES:
+            first = first_reading(run, gauge)
+            cells.append(f"{gauge.upper()} {first:.3f} ({first - im.lobovsky_gauge(gauge)[1]:+.3f})")
         print(f"{label}: the surge first reads 0.02 H at " + ", ".join(cells) + " tau (experiment's records' mean)")
 
 

@@ -80,13 +80,19 @@ LOBOVSKY_GAUGES = {"h2": (0.865, (1.029, 1.048)), "h3": (1.114, (1.658, 1.696)),
 LOBOVSKY_WALL = 1.61
 
 
+def lobovsky_gauge(name):
+    """(x [m], the mean of the records' first readings [tau]) of level gauge `name`."""
+    x, recorded = LOBOVSKY_GAUGES[name]
+    return x, sum(recorded) / len(recorded)
+
+
 def lobovsky_clock_offset(data_dir):
     """How much later [tau] the experiment's pressure records start their clock than its level
     records (docs/validation.md, "The release: a lifted gate, and the experiment's two clocks"):
     the surge, continued from H4 to the end wall at the speed it had from H3 to H4, reaches the
     wall at 2.686 on the level clock; p1 rises at 2.427 on the pressure clock (the raw record's
     arrival)."""
-    (x3, t3), (x4, t4) = [(x, sum(ts) / len(ts)) for x, ts in (LOBOVSKY_GAUGES["h3"], LOBOVSKY_GAUGES["h4"])]
+    (x3, t3), (x4, t4) = lobovsky_gauge("h3"), lobovsky_gauge("h4")
     at_wall = t4 + (t4 - t3) * (LOBOVSKY_WALL - x4) / (x4 - x3)
     return at_wall - impact(read_experiment(Path(data_dir) / "lobovsky_2014_p1.csv"))["arrival"]
 

@@ -21,13 +21,18 @@ DAM = 0.6  # the column's length: the dam's position [m]
 SENSORS = [(0.003, "p1"), (0.03, "p3"), (0.08, "p4")]
 
 
-def fluid_at(run, want):
-    """(time, positions, pressures, velocities) of the fluid in the saved step nearest `want`, and
-    the end wall's x (the outermost wall particle)."""
-    t, step_dir = saved_step_near(run, want)
+def fluid_of(step_dir):
+    """(positions, pressures, velocities) of the fluid in a saved step, and the end wall's x (the
+    outermost wall particle)."""
     x, a = snapshot_arrays(step_dir, ["pressure", "velocity", "kind"])
     fluid = a["kind"] == 0
-    return t, x[fluid], a["pressure"][fluid], a["velocity"][fluid], x[~fluid, 0].max()
+    return x[fluid], a["pressure"][fluid], a["velocity"][fluid], x[~fluid, 0].max()
+
+
+def fluid_at(run, want):
+    """The time of the saved step nearest `want`, and fluid_of that step."""
+    t, step_dir = saved_step_near(run, want)
+    return (t, *fluid_of(step_dir))
 
 
 def ritter_depth(x, t):
@@ -46,10 +51,10 @@ def corner_profile(run, t0=0.60, t1=0.70, strip=0.02):
     face = float(tank["origin"][0]) + float(tank["size"][0])  # the end wall's inner face
     bands = np.arange(0.0, 0.09, 0.01)
     p_sum, v_sum, u_sum, n = np.zeros(len(bands)), np.zeros(len(bands)), np.zeros(len(bands)), 0
-    for t, _ in saved_steps(run):
+    for t, step_dir in saved_steps(run):
         if not t0 - 1e-6 <= t <= t1 + 1e-6:
             continue
-        _, x, p, v, _ = fluid_at(run, t)
+        x, p, v, _ = fluid_of(step_dir)
         for k, z in enumerate(bands):
             band = (x[:, 1] >= z) & (x[:, 1] < z + 0.01)
             at_wall, before = band & (x[:, 0] >= face - strip), band & (np.abs(x[:, 0] - (face - 0.05)) < 0.01)
