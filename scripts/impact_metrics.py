@@ -73,10 +73,22 @@ def impact(record):
     return dict(arrival=arrival, peak=peak, plateau=plateau, lowest=lowest)
 
 
+def read_level_gauges(path=Path(__file__).parent.parent / "tests" / "validation_data" / "lobovsky_2014_levels.csv"):
+    """{gauge: (x [m], (first reading of each record [tau], ...))} from lobovsky_2014_levels.csv,
+    the file tests/integration/test_validation.cpp reads too."""
+    gauges = {}
+    for line in open(path):
+        if line.startswith("#") or line.startswith("gauge"):
+            continue
+        name, x, *readings = line.strip().split(",")
+        gauges[name] = (float(x), tuple(float(t) for t in readings))
+    return gauges
+
+
 # Lobovsky et al. (2014, Fig. 16, H = 300 mm): the water-level gauges H2-H4, where they stand [m]
 # and when the surge first reads 0.02 H there in each of the paper's two records [tau], and the
-# end wall's position. The same numbers are in tests/integration/test_validation.cpp.
-LOBOVSKY_GAUGES = {"h2": (0.865, (1.029, 1.048)), "h3": (1.114, (1.658, 1.696)), "h4": (1.3625, (2.173, 2.192))}
+# end wall's position.
+LOBOVSKY_GAUGES = read_level_gauges()
 LOBOVSKY_WALL = 1.61
 
 

@@ -229,14 +229,27 @@ TEST(Validation, BuchnerImpactPressure) {
 }
 
 // Lobovsky et al. (2014, Fig. 16, H = 300 mm): the water-level gauges H2-H4, where they stand [m]
-// and when the surge first reads 0.02 H there, the mean of the paper's two records [tau]; the same
-// numbers as scripts/impact_metrics.py LOBOVSKY_GAUGES.
+// and when the surge first reads 0.02 H there, the mean of the paper's two records [tau]
+// (lobovsky_2014_levels.csv, which scripts/impact_metrics.py reads too).
 struct LevelGauge {
-  const char* probe;
+  std::string probe;
   double x, first_reading;
 };
-constexpr LevelGauge kLobovskyGauges[] = {{"h2", 0.865, (1.029 + 1.048) / 2}, {"h3", 1.114, (1.658 + 1.696) / 2},
-                                          {"h4", 1.3625, (2.173 + 2.192) / 2}};
+std::vector<LevelGauge> lobovsky_gauges() {
+  std::ifstream in(std::string(SPATE_VALIDATION_DIR) + "/lobovsky_2014_levels.csv");
+  std::vector<LevelGauge> out;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#' || line.rfind("gauge", 0) == 0) continue;
+    std::stringstream s(line);
+    std::string name, x, a, b;
+    std::getline(s, name, ',');
+    std::getline(s, x, ',');
+    std::getline(s, a, ',');
+    std::getline(s, b, ',');
+    out.push_back({name, std::stod(x), (std::stod(a) + std::stod(b)) / 2});
+  }
+  return out;
+}
 
 // How much later [tau] the experiment's pressure records start their clock than its level records:
 // the surge, continued from H4 to the end wall (1.61 m) at the speed it had from H3 to H4, reaches
@@ -244,7 +257,10 @@ constexpr LevelGauge kLobovskyGauges[] = {{"h2", 0.865, (1.029 + 1.048) / 2}, {"
 // spate's goes into it (docs/validation.md, "The release: a lifted gate, and the experiment's
 // two clocks").
 double lobovsky_clock_offset() {
-  const LevelGauge &h3 = kLobovskyGauges[1], &h4 = kLobovskyGauges[2];
+  const std::vector<LevelGauge> gauges = lobovsky_gauges();
+  EXPECT_EQ(gauges.size(), 3u) << "lobovsky_2014_levels.csv: h2, h3, h4";
+  if (gauges.size() != 3) return NAN;
+  const LevelGauge &h3 = gauges[1], &h4 = gauges[2];
   const double at_wall = h4.first_reading + (h4.first_reading - h3.first_reading) * (1.61 - h4.x) / (h4.x - h3.x);
   return at_wall - impact_of(experiment_record("lobovsky_2014_p1.csv")).arrival;
 }
@@ -265,14 +281,14 @@ TEST(Validation, LobovskyGateRelease) {
                                  {{"p1", "lobovsky_2014_p1.csv", p1}, {"p3", "lobovsky_2014_p3.csv", p3}, {"p4", "lobovsky_2014_p4.csv", p4}},
                                  0.75, shift);
   const double tau = std::sqrt(9.81 / 0.3);
-  for (const LevelGauge& g : kLobovskyGauges) {
+  for (const LevelGauge& g : lobovsky_gauges()) {
     double first = NAN;
-    for (auto [t, h] : test::read_probe(out / "probes" / (std::string(g.probe) + ".csv"), 2))
+    for (auto [t, h] : test::read_probe(out / "probes" / (g.probe + ".csv"), 2))
       if (h > 0.02 * 0.3) {
         first = t * tau;
         break;
       }
-    std::printf("dam_break_lobovsky_gate %s: the surge first reads 0.02 H at tau %.3f (experiment %.3f, %+.3f)\n", g.probe,
+    std::printf("dam_break_lobovsky_gate %s: the surge first reads 0.02 H at tau %.3f (experiment %.3f, %+.3f)\n", g.probe.c_str(),
                 first, g.first_reading, first - g.first_reading);
     EXPECT_NEAR(first, g.first_reading, 0.06) << g.probe;
   }
