@@ -386,6 +386,11 @@ MotionSpec read_motion(Section& m, const Case& c, const std::string& body, const
     } catch (const std::exception& e) {
       m.fail(m.raw("file"), "file", e.what());
     }
+    // The effective case (Case::source_yaml, which checkpoints keep) names the series by its
+    // absolute path: relative to a checkpoint, where a restart reads that case, it is not found.
+    std::error_code ec;
+    const std::filesystem::path absolute = std::filesystem::absolute(path, ec);
+    if (!ec) m.raw("file") = absolute.lexically_normal().string();
     if (d == 2)
       for (const auto& v : spec.values)
         if (v[2] != 0.0) m.fail(m.raw("file"), "file", "a 2D case has no z displacement");

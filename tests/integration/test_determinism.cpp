@@ -104,6 +104,27 @@ TEST(Restart, SteeredMovingWallsContinueBitIdentically) {
   EXPECT_FALSE(test::identical_checkpoints(straight.last_checkpoint, plain.last_checkpoint));
 }
 
+// A wall moved by a time series named relative to its case file (the lifted gate of
+// cases/dam_break_lobovsky_gate.yaml, `file: lobovsky_gate.csv`): the checkpoint, in another
+// folder, keeps the series' absolute path in its case, and the restart continues bit for bit.
+TEST(Restart, TimeSeriesMotionFromAnotherFolderContinuesBitIdentically) {
+  const Case c = load_case(test::case_path("dam_break_lobovsky_gate.yaml"), {"dp=0.02", "output.interval=0", "probes=[]"});
+  ASSERT_EQ(c.motions.size(), 1u);
+  EXPECT_NE(c.source_yaml.find(std::filesystem::absolute(test::case_path("lobovsky_gate.csv")).lexically_normal().string()),
+            std::string::npos)
+      << "the effective case names the series by its absolute path";
+  RunOptions o;
+  o.steps = 80;
+  const RunResult straight = test::run_case(c, test::scratch("series-straight"), o);
+  o.steps = 40;
+  const RunResult first = test::run_case(c, test::scratch("series-first"), o);
+  o.restart = first.last_checkpoint;
+  const RunResult second = test::run_case(c, test::scratch("series-second"), o);
+  ASSERT_EQ(second.final_step, 80) << second.message;
+  std::string why;
+  EXPECT_TRUE(test::identical_checkpoints(straight.last_checkpoint, second.last_checkpoint, &why)) << why;
+}
+
 TEST(Threads, OneAndTwoThreadsBitIdentical) {
   // Above the OpenMP grain size (backend/cpu/parallel.hpp) so that two threads really share loops.
   const Case c = load_case(test::case_path("dam_break_column_3d.yaml"),
