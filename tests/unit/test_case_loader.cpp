@@ -275,25 +275,49 @@ TEST(CaseLoader, LoadCaseReadsShippedCases) {
   EXPECT_GE(n, 15);
 }
 
-// The 3D narrow tank puts the 2D section's sensors at the tank's mid-width, at the same heights.
-TEST(CaseLoader, LobovskyThreeDimensionalSensorsMatchTheSection) {
-  const Case flat = load_case(test::source_dir() + "/cases/dam_break_lobovsky.yaml");
-  const Case tank = load_case(test::source_dir() + "/cases/dam_break_lobovsky_3d.yaml");
-  ASSERT_EQ(tank.dim, 3);
-  for (const char* name : {"p1", "p3", "p4"}) {
+// The 3D narrow tank puts the 2D section's sensors at the tank's mid-width, at the same heights, and
+// the gated 3D tank its water-level gauges at the 2D gated case's positions, and lifts its gate by
+// the same schedule.
+void expect_3d_sensors_match_section(const std::string& section, const std::string& narrow_tank, std::vector<std::string> names) {
+  const Case flat = load_case(test::source_dir() + "/cases/" + section);
+  const Case tank = load_case(test::source_dir() + "/cases/" + narrow_tank);
+  ASSERT_EQ(tank.dim, 3) << narrow_tank;
+  for (const std::string& name : names) {
     const auto find = [&](const Case& c) {
       return std::find_if(c.probes.begin(), c.probes.end(), [&](const auto& p) { return p.name == name; });
     };
     const auto a = find(flat), b = find(tank);
-    ASSERT_NE(a, flat.probes.end()) << name;
-    ASSERT_NE(b, tank.probes.end()) << name;
-    // On the end wall of each: 1.61 m, which the 3D lattice (dp = 7.5 mm) rounds up to 1.6125 m.
-    EXPECT_NEAR(b->position[0], a->position[0], 0.5 * tank.dp) << name;
-    EXPECT_DOUBLE_EQ(b->position[1], 0.5 * tank.tank_size[1]) << name;
-    EXPECT_DOUBLE_EQ(b->position[2], a->position[1]) << name;
-    EXPECT_DOUBLE_EQ(b->diameter, a->diameter) << name;
-    EXPECT_DOUBLE_EQ(b->window, a->window) << name;
+    ASSERT_NE(a, flat.probes.end()) << section << " " << name;
+    ASSERT_NE(b, tank.probes.end()) << narrow_tank << " " << name;
+    EXPECT_EQ(b->type, a->type) << name;
+    // Along the tank as in the section (the end wall at 1.61 m, which the lattice at dp = 7.5 mm
+    // rounds up to 1.6125 m), at mid-width, and a sensor at the section's height.
+    EXPECT_NEAR(b->position[0], a->position[0], 0.5 * tank.dp) << narrow_tank << " " << name;
+    EXPECT_DOUBLE_EQ(b->position[1], 0.5 * tank.tank_size[1]) << narrow_tank << " " << name;
+    if (a->type != ProbeType::Height) EXPECT_DOUBLE_EQ(b->position[2], a->position[1]) << narrow_tank << " " << name;
+    EXPECT_DOUBLE_EQ(b->diameter, a->diameter) << narrow_tank << " " << name;
+    EXPECT_DOUBLE_EQ(b->window, a->window) << narrow_tank << " " << name;
   }
+}
+
+TEST(CaseLoader, LobovskyThreeDimensionalSensorsMatchTheSection) {
+  expect_3d_sensors_match_section("dam_break_lobovsky.yaml", "dam_break_lobovsky_3d.yaml", {"p1", "p3", "p4"});
+  expect_3d_sensors_match_section("dam_break_lobovsky_gate.yaml", "dam_break_lobovsky_3d_gate.yaml",
+                                  {"p1", "p3", "p4", "h1", "h2", "h3", "h4"});
+  const Case flat = load_case(test::source_dir() + "/cases/dam_break_lobovsky_gate.yaml");
+  const Case tank = load_case(test::source_dir() + "/cases/dam_break_lobovsky_3d_gate.yaml");
+  ASSERT_EQ(flat.solids.size(), 1u);
+  ASSERT_EQ(tank.solids.size(), 1u);
+  const SolidSpec &a = flat.solids[0], &b = tank.solids[0];
+  EXPECT_DOUBLE_EQ(b.box.min[0], a.box.min[0]);
+  EXPECT_DOUBLE_EQ(b.box.max[0], a.box.max[0]);
+  EXPECT_DOUBLE_EQ(b.box.max[2], a.box.max[1]) << "the gate top";
+  ASSERT_GE(a.motion, 0);
+  ASSERT_GE(b.motion, 0);
+  const MotionSpec &lift2 = flat.motions[a.motion], &lift3 = tank.motions[b.motion];
+  EXPECT_EQ(lift3.times, lift2.times);
+  ASSERT_EQ(lift3.values.size(), lift2.values.size());
+  for (std::size_t k = 0; k < lift2.values.size(); ++k) EXPECT_DOUBLE_EQ(lift3.values[k][2], lift2.values[k][1]) << "the lift, sample " << k;
 }
 
 // Bad input: each message names the file, the key (with its position where there is one) and why.
