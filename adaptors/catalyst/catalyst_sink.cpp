@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <mutex>
 #include <set>
 #include <string_view>
@@ -57,6 +58,35 @@ void quiet_mpi_environment() {
   setenv("OMPI_MCA_ess_singleton_isolated", "1", 0);
 }
 
+// OpenMPI 4 singletons of one user on one node share a session directory, <tmp>/ompi.<host>.<uid>:
+// a process that finalises removes it once it looks empty, and one that is starting at that moment
+// cannot create its own entry in it, so its MPI_Init fails ("orte_session_dir failed";
+// open-mpi/ompi#8510). Runs started together on one node (a job array, a test suite) hit it now and
+// then, and the helper could not start. Each run's helpers get a session directory of their own,
+// removed after the last helper has ended. An explicit OMPI_MCA_orte_tmpdir_base, or mpirun's
+// environment, wins; where no directory can be made, OpenMPI's default stays.
+class PrivateMpiSessionDir {
+ public:
+  PrivateMpiSessionDir() {
+    static const bool chosen_outside = std::getenv("OMPI_MCA_orte_tmpdir_base") != nullptr;
+    if (chosen_outside || std::getenv("OMPI_COMM_WORLD_SIZE") || std::getenv("PMIX_RANK")) return;
+    const char* tmp = std::getenv("TMPDIR");
+    std::string pattern = std::string(tmp && *tmp ? tmp : "/tmp") + "/spate-mpi.XXXXXX";
+    if (!mkdtemp(pattern.data())) return;
+    dir_ = pattern;
+    setenv("OMPI_MCA_orte_tmpdir_base", dir_.c_str(), 1);
+  }
+  ~PrivateMpiSessionDir() {
+    std::error_code ec;
+    if (!dir_.empty()) std::filesystem::remove_all(dir_, ec);
+  }
+  PrivateMpiSessionDir(const PrivateMpiSessionDir&) = delete;
+  PrivateMpiSessionDir& operator=(const PrivateMpiSessionDir&) = delete;
+
+ private:
+  std::string dir_;
+};
+
 // This very program, even if its file was replaced or deleted since it started (a rebuild during
 // a run): the helper restarted in the middle of a run must be the same binary.
 std::filesystem::path this_program() { return "/proc/self/exe"; }
@@ -81,6 +111,7 @@ struct CatalystSink::Impl : ScriptObserver {
   std::unique_ptr<CatalystSteering> steering;
   // Isolated.
   const SharedParticleMemory* arena = nullptr;
+  std::unique_ptr<PrivateMpiSessionDir> mpi_session;  // outlives every helper
   std::unique_ptr<HelperProcess> helper;
   std::vector<SteeringChange> requested;  // from the helper, until polled
   int display_restarts = 0, stray_deaths = 0;
@@ -413,6 +444,7 @@ CatalystSink::CatalystSink(CatalystOptions options) : impl_(std::make_unique<Imp
     throw InSituLoadError(e.what());
   }
   m.display = std::make_unique<PrivateDisplay>(/*export_display=*/false);
+  m.mpi_session = std::make_unique<PrivateMpiSessionDir>();
   m.start_helper();
 }
 

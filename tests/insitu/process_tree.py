@@ -4,6 +4,7 @@ listening(pid) -> set of (pid, command, protocol, port) for every TCP socket in 
 every bound, unconnected UDP socket that the process tree of `pid` holds: spate and every child it
 starts (the in-situ helper, OpenMPI's daemons) must open no listening socket (docs/live.md,
 Security).
+environment(pid) -> the environment variables a process started with (a dict; {} once it is gone).
 kill_groups(processes) kills the process groups of the tests' children that still run (each is
 started with start_new_session=True, so that its own children go too).
 """
@@ -48,6 +49,15 @@ def command(pid):
             return f.read().strip()
     except OSError:
         return "?"
+
+
+def environment(pid):
+    try:
+        with open(f"/proc/{pid}/environ", "rb") as f:
+            pairs = f.read().split(b"\0")
+    except OSError:
+        return {}
+    return dict(p.decode(errors="replace").split("=", 1) for p in pairs if b"=" in p)
 
 
 def socket_inodes(pid):

@@ -17,7 +17,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from process_tree import kill_groups, listening  # noqa: E402
+from process_tree import descendants, environment, kill_groups, listening  # noqa: E402
 
 spate, src, work, scenario = sys.argv[1:5]
 case = os.path.join(src, "cases", "dam_break_2d.yaml")
@@ -249,19 +249,30 @@ def live_handshake_timeout():
 
 def no_listening_socket():
     """Neither spate nor any child (the in-situ helper, OpenMPI's daemons) listens, with a
-    pipeline and with --live (connecting out to a port where nobody listens)."""
+    pipeline and with --live (connecting out to a port where nobody listens). The helper's OpenMPI
+    session directory is the run's own (OMPI_MCA_orte_tmpdir_base: OpenMPI 4's shared one made a
+    helper starting together with others fail now and then), and it is gone after the run."""
     for name, args in (("pipeline", ["--pipeline", particles_py]), ("live", ["--live", "localhost:9"])):
-        seen = set()
+        seen, session_dirs = set(), set()
 
         def sample(pid):
             seen.update(listening(pid))
+            for p in descendants(pid)[1:]:
+                d = environment(p).get("OMPI_MCA_orte_tmpdir_base")
+                if d:
+                    session_dirs.add(d)
 
         code, out, err = spate_run("sockets_" + name, args + ["--steps", "60", "--insitu-every", "20"], sample=sample)
         if code != 0:
             fail(f"{name}: exit {code}:\n{err}")
         if seen:
             fail(f"{name}: listening sockets in spate's process tree: {sorted(seen)}")
-        print(f"{name}: no listening socket in spate's process tree (sampled every 50 ms)")
+        if len(session_dirs) != 1 or not os.path.basename(next(iter(session_dirs))).startswith("spate-mpi."):
+            fail(f"{name}: expected one private OpenMPI session directory for the helper, saw {sorted(session_dirs)}")
+        if os.path.exists(next(iter(session_dirs))):
+            fail(f"{name}: the helper's OpenMPI session directory {session_dirs} is still there after the run")
+        print(f"{name}: no listening socket in spate's process tree (sampled every 50 ms); the helper's OpenMPI "
+              f"session directory was its own and is gone")
 
 
 scenarios = {f.__name__: f for f in (pipeline_failures_later, pipeline_failures_at_load, display_lost,
