@@ -116,6 +116,9 @@ LOBOVSKY_SENSORS = [("p1", "lobovsky_2014_p1.csv"), ("p3", "lobovsky_2014_p3.csv
 CASES = {
     "dam_break_lobovsky": dict(H=0.3, sensors=LOBOVSKY_SENSORS),
     "dam_break_lobovsky_gate": dict(H=0.3, sensors=LOBOVSKY_SENSORS, clock="levels"),
+    # The experiment's narrow tank: the same sensors at mid-width, the same clocks as the sections.
+    "dam_break_lobovsky_3d": dict(H=0.3, sensors=LOBOVSKY_SENSORS),
+    "dam_break_lobovsky_3d_gate": dict(H=0.3, sensors=LOBOVSKY_SENSORS, clock="levels"),
     "dam_break_buchner_2d": dict(H=0.6, sensors=[("p1", "buchner_2002_pressure.csv")]),
 }
 
