@@ -47,13 +47,16 @@ int mpi_rank() {
 #endif
 }
 
+// mpirun (or another PMIx launcher) started this process: its MPI settings are the launcher's.
+bool started_by_mpi_launcher() { return std::getenv("OMPI_COMM_WORLD_SIZE") || std::getenv("PMIX_RANK"); }
+
 // ParaView initialises MPI wherever Catalyst runs. Outside mpirun, OpenMPI would then start a
 // singleton `orted` daemon that listens on every interface, and its TCP transport would listen too
 // (ports 1024 and up), for the whole run. One process needs neither: no daemon (it only serves
 // MPI_Comm_spawn) and shared memory only; with both, spate and its children open no listening
 // socket at all (docs/live.md, Security). Explicit settings in the environment win.
 void quiet_mpi_environment() {
-  if (std::getenv("OMPI_COMM_WORLD_SIZE") || std::getenv("PMIX_RANK")) return;
+  if (started_by_mpi_launcher()) return;
   setenv("OMPI_MCA_btl", "self,vader", 0);
   setenv("OMPI_MCA_ess_singleton_isolated", "1", 0);
 }
@@ -69,7 +72,7 @@ class PrivateMpiSessionDir {
  public:
   PrivateMpiSessionDir() {
     static const bool chosen_outside = std::getenv("OMPI_MCA_orte_tmpdir_base") != nullptr;
-    if (chosen_outside || std::getenv("OMPI_COMM_WORLD_SIZE") || std::getenv("PMIX_RANK")) return;
+    if (chosen_outside || started_by_mpi_launcher()) return;
     const char* tmp = std::getenv("TMPDIR");
     std::string pattern = std::string(tmp && *tmp ? tmp : "/tmp") + "/spate-mpi.XXXXXX";
     if (!mkdtemp(pattern.data())) return;

@@ -379,18 +379,17 @@ MotionSpec read_motion(Section& m, const Case& c, const std::string& body, const
     for (const char* key : {"period", "frequency", "translation", "rotation", "phase"})
       if (m.has(key)) m.fail(m.raw(key), key, "a time series (file) takes no '" + std::string(key) + "'");
     const std::filesystem::path given(m.text("file"));
-    const std::filesystem::path path = given.is_absolute() ? given : std::filesystem::path(c.file).parent_path() / given;
-    spec.file = path.lexically_normal().string();
+    std::filesystem::path path = given.is_absolute() ? given : std::filesystem::path(c.file).parent_path() / given;
+    // The series goes by its absolute path, in the spec and in the effective case (Case::source_yaml,
+    // which checkpoints keep): relative to a checkpoint, where a restart reads that case, it is not found.
+    std::error_code ec;
+    if (std::filesystem::path absolute = std::filesystem::absolute(path, ec); !ec) path = std::move(absolute);
     try {
-      read_motion_csv(spec.file, spec);
+      read_motion_csv(path.lexically_normal().string(), spec);
     } catch (const std::exception& e) {
       m.fail(m.raw("file"), "file", e.what());
     }
-    // The effective case (Case::source_yaml, which checkpoints keep) names the series by its
-    // absolute path: relative to a checkpoint, where a restart reads that case, it is not found.
-    std::error_code ec;
-    const std::filesystem::path absolute = std::filesystem::absolute(path, ec);
-    if (!ec) m.raw("file") = absolute.lexically_normal().string();
+    m.raw("file") = spec.file;
     if (d == 2)
       for (const auto& v : spec.values)
         if (v[2] != 0.0) m.fail(m.raw("file"), "file", "a 2D case has no z displacement");
