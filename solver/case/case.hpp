@@ -95,6 +95,7 @@ struct Case {
   std::vector<FluidSpec> fluids{FluidSpec{}};  // material k is fluids[k]
   std::vector<SurfaceTensionSpec> surface_tension;  // empty: no surface tension
   double artificial_viscosity = 0.0;
+  double wall_artificial_viscosity = 1.0;  // the factor on alpha in fluid-wall pairs
   bool tension = true;  // false: fluid pressures clipped at 0 (eos.hpp fluid_pressure)
   DensityMode density_mode = DensityMode::Continuity;
   DensityDiffusion diffusion = DensityDiffusion::Fourtakas;

@@ -585,10 +585,13 @@ Case read(Section& root, const std::string& file) {
       for (const char* key : {"name", "density", "viscosity", "sound_speed", "tait_exponent", "background_pressure"})
         if (f.has(key))
           f.fail(f.raw(key), key, "with a 'fluids' list each fluid's properties go in its entry; 'fluid' keeps only "
-                                  "artificial_viscosity, body_force and tension");
+                                  "artificial_viscosity, wall_artificial_viscosity, body_force and tension");
     }
     c.artificial_viscosity = f.number("artificial_viscosity", 0.0);
     if (c.artificial_viscosity < 0) f.fail(f.raw("artificial_viscosity"), "artificial_viscosity", "must be >= 0");
+    c.wall_artificial_viscosity = f.number("wall_artificial_viscosity", 1.0);
+    if (!(c.wall_artificial_viscosity >= 0 && c.wall_artificial_viscosity <= 1))
+      f.fail(f.raw("wall_artificial_viscosity"), "wall_artificial_viscosity", "must be between 0 and 1");
     c.body_force = f.vector("body_force", d, Vec3d{0, 0, 0});
     c.tension = f.boolean("tension", true);
     f.finish();
@@ -1013,6 +1016,7 @@ PhysicsParams physics_params(const Case& c) {
   // The walls' state at t = 0; the time loop sets it again before every step.
   MotionSet(c.motions, c.dim).set_step(P, 0.0, 0.0);
   P.artificial_viscosity = static_cast<float>(c.artificial_viscosity);
+  P.wall_artificial_viscosity = static_cast<float>(c.wall_artificial_viscosity);
   P.delta = static_cast<float>(c.delta);
   P.diffusion = c.diffusion;
   P.flux = c.flux;

@@ -100,7 +100,7 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
   const float p_pair = Riemann ? p_interface + riemann.p_dissipation : p_interface;
   // Monaghan (1992) artificial viscosity with the pair's mean sound speed and density.
   const float mu_ij = P.h * (vr < 0.0f ? vr : 0.0f) * inv_r2_eta;
-  const float pi_ij = -P.artificial_viscosity * (M.c0 + c_j) * mu_ij / (i.rho + rho_j);
+  const float pi_ij = -artificial_alpha(P, j_fluid) * (M.c0 + c_j) * mu_ij / (i.rho + rho_j);
   const float radial = -(p_pair * inv_rho_i * volume_j + m_j * pi_ij) * F;
   // Eq. 8 with the harmonic mean of the two viscosities (0 when both fluids are inviscid).
   const float mu_sum = M.viscosity + mu_j;

@@ -48,6 +48,10 @@ struct PhysicsParams {
   float gradient_norm = 0.0f;    // kernel_norm / lattice gradient moment (kernels.hpp)
   float eta2 = 0.01f * 0.013f * 0.013f;  // 0.01 h^2, keeps r_ij . gradW / (r^2 + eta^2) finite
   float artificial_viscosity = 0.0f;  // Monaghan alpha; 0 switches it off
+  // The factor on alpha in fluid-wall pairs (fluid.wall_artificial_viscosity; DualSPHysics calls it
+  // ViscoBoundFactor). Against a wall at rest the term damps approach and also acts as a friction
+  // along the wall, whatever the laminar term's slip (docs/physics.md, "Walls").
+  float wall_artificial_viscosity = 1.0f;
   float delta = 0.1f;            // density diffusion coefficient
   DensityDiffusion diffusion = DensityDiffusion::Fourtakas;
   MomentumFlux flux = MomentumFlux::Central;

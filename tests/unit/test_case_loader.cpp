@@ -39,6 +39,7 @@ fluid:
   viscosity: 0.002
   sound_speed: 30
   artificial_viscosity: 0.05
+  wall_artificial_viscosity: 0.25
   body_force: [0.1, 0, 0]
 density:
   mode: summation
@@ -179,6 +180,8 @@ TEST(CaseLoader, EveryKeyIsRead) {
   EXPECT_DOUBLE_EQ(c.fluids[0].viscosity, 0.002);
   EXPECT_DOUBLE_EQ(sound_speed(c), 30.0);
   EXPECT_DOUBLE_EQ(c.artificial_viscosity, 0.05);
+  EXPECT_DOUBLE_EQ(c.wall_artificial_viscosity, 0.25);
+  EXPECT_FLOAT_EQ(physics_params(c).wall_artificial_viscosity, 0.25f);
   EXPECT_DOUBLE_EQ(c.body_force[0], 0.1);
   EXPECT_EQ(c.density_mode, DensityMode::Summation);
   EXPECT_EQ(c.diffusion, DensityDiffusion::MolteniColagrossi);
@@ -376,6 +379,7 @@ TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
       {"wall sensor with a negative window", {"probes=[{name: s, type: wall_pressure, position: [0, 0.02], window: -1}]"},
        {"probes[0].window", ">= 0"}},
       {"unknown momentum flux", {"momentum.flux=upwind"}, {"'momentum.flux'", "central", "riemann"}},
+      {"wall factor above one", {"fluid.wall_artificial_viscosity=2"}, {"'fluid.wall_artificial_viscosity'", "between 0 and 1"}},
       {"free slip along a periodic axis", {"tank.periodic=[x]", "tank.free_slip=[x]"}, {"'tank.free_slip'", "periodic"}},
       {"free slip along a missing axis", {"tank.free_slip=[z]"}, {"'tank.free_slip'", "'z' is not an axis"}},
       {"surface tension of an unknown fluid", {"fluids=[{name: a}, {name: b}]", "surface_tension=[{between: [a, c], coefficient: 1}]"},

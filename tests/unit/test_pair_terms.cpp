@@ -84,5 +84,57 @@ TEST(PairTerms, OnlyThePlainLoopIsChosenWithoutTheRiemannTerms) {
   EXPECT_TRUE(chosen({true, false, true, false}));
 }
 
+// fluid.wall_artificial_viscosity: the artificial viscosity against a wall at rest is a friction on a
+// particle sliding along it (the wall particles diagonally ahead approach it along r_ij) and the
+// factor scales exactly that; between fluid particles the factor changes nothing. Laminar viscosity
+// and pressures are zero here, so what remains is the artificial term alone.
+FluidRates<2> sliding_over_a_wall_row(const PhysicsParams& P, bool multiphase) {
+  const FluidMaterial& M = P.materials.fluid[0];
+  // i 0.6 dp above the first row of wall particles (spacing dp), sliding along +x at 1 m/s.
+  const ParticleState<2> i{{0.2f, 0.006f}, {1.0f, 0.0f}, M.rho0, 0.0f, 0, {0, 0}};
+  FluidRates<2> sum;
+  for (int k = -4; k <= 4; ++k)
+    for (int layer = 0; layer < 3; ++layer) {
+      const ParticleState<2> j{{0.2f + 0.01f * k, -0.005f - 0.01f * layer}, {0.0f, 0.0f}, M.rho0, 0.0f, P.materials.tank(), {0, 0}};
+      add_pair_rates(sum, multiphase ? multiphase_pair_terms<WendlandC2, 2>(P, M, i, j, neighbour_fluid(P, j.material))
+                                     : fluid_pair_terms<WendlandC2, 2>(P, M, i, j));
+    }
+  return sum;
+}
+
+TEST(PairTerms, TheWallFactorScalesTheArtificialFrictionAlongAWall) {
+  for (bool multiphase : {false, true}) {
+    PhysicsParams P = lattice_params(2, "fluid:\n  viscosity: 0\n  artificial_viscosity: 0.02\n");
+    ASSERT_EQ(P.wall_artificial_viscosity, 1.0f) << "the default keeps the friction";
+    const FluidRates<2> full = sliding_over_a_wall_row(P, multiphase);
+    EXPECT_LT(full.acc[0], -0.1f) << "slowed along the wall";
+    P.wall_artificial_viscosity = 0.5f;
+    const FluidRates<2> half = sliding_over_a_wall_row(P, multiphase);
+    EXPECT_NEAR(half.acc[0], 0.5f * full.acc[0], 1e-5f * std::fabs(full.acc[0]));
+    P.wall_artificial_viscosity = 0.0f;
+    const FluidRates<2> none = sliding_over_a_wall_row(P, multiphase);
+    EXPECT_EQ(none.acc[0], 0.0f);
+    EXPECT_EQ(none.acc[1], 0.0f);
+  }
+}
+
+TEST(PairTerms, TheWallFactorLeavesFluidPairsAlone) {
+  PhysicsParams P = lattice_params(2, "fluid:\n  artificial_viscosity: 0.02\n");
+  PhysicsParams Q = P;
+  Q.wall_artificial_viscosity = 0.0f;
+  int fluid_pairs = 0, wall_pairs_changed = 0;
+  for_random_pairs(P, [&](const FluidMaterial& M, const ParticleState<2>& i, const ParticleState<2>& j) {
+    const bool same = same_bits(fluid_pair_terms<WendlandC2, 2>(P, M, i, j), fluid_pair_terms<WendlandC2, 2>(Q, M, i, j));
+    if (P.is_fluid(j.material)) {
+      EXPECT_TRUE(same);
+      ++fluid_pairs;
+    } else {
+      wall_pairs_changed += !same;
+    }
+  });
+  EXPECT_GT(fluid_pairs, 1000);
+  EXPECT_GT(wall_pairs_changed, 100) << "approaching wall pairs lose their artificial viscosity";
+}
+
 }  // namespace
 }  // namespace spate
