@@ -77,7 +77,7 @@ SPATE_HD void update_wall_state(const PhysicsParams& P, const CellGridView& v, F
       if (P.is_fluid(f.material[j])) accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(f, j), sums);
   });
   WallState<Dim> s = finish_wall(P, sums, f.material[w], xw);
-  if (P.free_slip_axes) apply_free_slip<Dim>(P, xw, f.material[w], sums, s);
+  apply_wall_shear<Dim>(P, xw, f.material[w], sums, s);
   f.pressure[w] = s.p;
   f.density[w] = s.rho;
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.vel[k][w] = s.v[k];

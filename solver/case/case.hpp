@@ -121,6 +121,7 @@ struct Case {
   bool open_top = true;
   std::array<bool, 3> periodic{false, false, false};
   std::array<bool, 3> free_slip{false, false, false};  // tank walls normal to these axes are free-slip
+  WallShear wall_shear = WallShear::Laminar;           // tank.wall_shear (wall_boundary.hpp)
   double headroom = 0.5;  // domain extends this fraction of the tank height above an open top
   // Fluid that leaves through the open top (over the walls, above the headroom) is removed; more
   // than this fraction of the fluid removed stops the run (exit 3).

@@ -712,6 +712,7 @@ Case read(Section& root, const std::string& file) {
   axes("free_slip", c.free_slip);
   for (int k = 0; k < d; ++k)
     if (c.periodic[k] && c.free_slip[k]) tank->fail(tank->raw("free_slip"), "free_slip", "an axis cannot be periodic and have walls");
+  c.wall_shear = tank->choice<WallShear>("wall_shear", WallShear::Laminar, {{"laminar", WallShear::Laminar}, {"log_law", WallShear::LogLaw}});
   if (auto m = tank->child("motion")) {
     Vec3d lo = c.tank_origin, hi = c.tank_origin;
     for (int k = 0; k < d; ++k) {
@@ -722,6 +723,8 @@ Case read(Section& root, const std::string& file) {
     c.motions.push_back(read_motion(*m, c, "tank", lo, hi));
     for (int k = 0; k < d; ++k)
       if (c.free_slip[k]) tank->fail(tank->raw("free_slip"), "free_slip", "free-slip walls are for a tank at rest (not with tank.motion)");
+    if (c.wall_shear == WallShear::LogLaw)
+      tank->fail(tank->raw("wall_shear"), "wall_shear", "the log law is for a tank at rest (not with tank.motion)");
   }
   tank->finish();
   {
@@ -1009,6 +1012,7 @@ PhysicsParams physics_params(const Case& c) {
     P.tank_lo[k] = static_cast<float>(c.tank_origin[k]);
     P.tank_hi[k] = static_cast<float>(c.tank_origin[k] + c.tank_size[k]);
     if (c.free_slip[k]) P.free_slip_axes = static_cast<std::uint8_t>(P.free_slip_axes | (1u << k));
+  P.wall_shear = c.wall_shear;
   }
   if (c.tank_motion >= 0) P.materials.motion[P.materials.tank()] = static_cast<std::uint8_t>(c.tank_motion + 1);
   for (std::size_t k = 0; k < c.solids.size(); ++k)

@@ -17,6 +17,9 @@ enum class DensityDiffusion : std::uint8_t { None, MolteniColagrossi, Fourtakas,
 // The pressure term of the momentum equation: central (p_i + p_j, eq. 7) or the interface pressure
 // of a linearised Riemann solver with a low-dissipation limiter (Zhang, Hu & Adams 2017).
 enum class MomentumFlux : std::uint8_t { Central, Riemann };
+// The shear of the tank walls (tank.wall_shear, wall_boundary.hpp): the laminar term's no-slip
+// shear, or the smooth-wall log law's turbulent shear (a wall function).
+enum class WallShear : std::uint8_t { Laminar, LogLaw };
 
 // Surface-tension coefficients between fluids (physics/surface_tension.hpp), from the case's
 // `surface_tension:` list: sigma[a][b] = sigma[b][a] [N/m] (0 on the diagonal and for pairs not
@@ -71,6 +74,7 @@ struct PhysicsParams {
   // Free-slip tank walls (tank.free_slip, wall_boundary.hpp): bit k set for the walls normal to
   // axis k; the tank's fluid region [tank_lo, tank_hi] tells a tank wall particle's side.
   std::uint8_t free_slip_axes = 0;
+  WallShear wall_shear = WallShear::Laminar;
   float tank_lo[3] = {0.0f, 0.0f, 0.0f};
   float tank_hi[3] = {0.0f, 0.0f, 0.0f};
   // Prescribed wall motions (wall_motion.hpp; MaterialTable::motion says which walls follow

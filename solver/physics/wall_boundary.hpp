@@ -95,4 +95,76 @@ SPATE_HD void apply_free_slip(const PhysicsParams& P, const Vec<Dim>& x_wall, st
     if (k != normal) st.v[k] = s.v_w[k] / s.w;
 }
 
+// The friction velocity u* of the smooth-wall law of the wall for a tangential speed `u` at distance
+// `y` from the wall, kinematic viscosity `nu`: u+ = y+ in the viscous sublayer (y+ < 11.2, where the
+// two meet), u+ = ln(y+) / kappa + B above it (kappa = 0.41, B = 5.2; u+ = u / u*, y+ = y u* / nu).
+// Returns u*^2 (the wall shear stress over rho). Newton's method on u* from the log law's value at
+// u* = u / 20, a fixed number of steps (deterministic, the same on every device): from y+ = 11 to
+// 1e6 the sixth step is converged to float precision.
+SPATE_HD float log_law_u_star2(float u, float y, float nu) {
+  constexpr float kappa = 0.41f, B = 5.2f, y_plus_sublayer = 11.2f;
+  if (u <= 0.0f) return 0.0f;
+  if (u * y / nu < y_plus_sublayer * y_plus_sublayer) return nu * u / y;  // sublayer: y+ = u+ => y+^2 = u y / nu
+  float us = u / 20.0f;
+  for (int it = 0; it < 6; ++it) {
+    const float l = logf(y * us / nu) / kappa + B;  // u+ at this u*
+    us -= (us * l - u) / (l + 1.0f / kappa);
+    us = us > 1e-6f * u ? us : 1e-6f * u;
+  }
+  return us * us;
+}
+
+// Turbulent wall shear on the tank walls (tank.wall_shear: log_law), a wall function in Adami's
+// scheme: the laminar term (eq. 8) sees the wall particle's extrapolated velocity, and across the
+// distance d from the wall particle to the fluid around it (its kernel-weighted position) exerts
+// mu (u_t - v_w) / d. The wall particle takes the tangential velocity that makes that shear
+// rho u*^2 of the log law (log_law_u_star2) at the fluid's distance y = d - depth from the wall's
+// face (depth: the wall particle's own distance behind it):
+//   v_w,t = u_t (1 - u*^2 d / (nu |u_t|)).
+// In the viscous sublayer (u*^2 = nu |u_t| / y) that is v_w,t = -u_t depth / y, the linear
+// extrapolation of a linear profile through the face, i.e. no slip; at y+ ~ 100-1000, where the
+// particles next to a dam-break floor are, the shear is tens of times the laminar term's. The
+// normal component keeps Adami's mirror (no penetration). Tank walls at rest only (the loader
+// rejects tank.motion); corners and free-slip walls keep theirs. Only runs with the key execute it.
+template <int Dim>
+SPATE_HD void apply_log_law(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material, const WallSums<Dim>& s,
+                            WallState<Dim>& st) {
+  if (material != P.materials.tank() || s.w <= 0.0f) return;
+  int normal = -1;
+  float depth = 0.0f, into_fluid = 0.0f;
+  for (int k = 0; k < Dim; ++k) {
+    const float below = P.tank_lo[k] - x_wall[k], above = x_wall[k] - P.tank_hi[k];
+    if (below <= 0.0f && above <= 0.0f) continue;
+    if (normal >= 0 || (P.free_slip_axes & (1u << k))) return;  // a corner, or a free-slip wall
+    normal = k;
+    depth = below > 0.0f ? below : above;
+    into_fluid = below > 0.0f ? 1.0f : -1.0f;
+  }
+  if (normal < 0) return;
+  const FluidMaterial& M = P.materials.wall_fluid();
+  // s.rho_r_w = sum rho_f (x_w - x_f) W: the fluid's mean offset from the wall particle, with rho0
+  // for rho_f (within the weak compressibility's 1%).
+  const float d = -into_fluid * s.rho_r_w[normal] / (M.rho0 * s.w);
+  const float y = d - depth;
+  if (y <= 0.0f) return;
+  float u2 = 0.0f;
+  for (int k = 0; k < Dim; ++k)
+    if (k != normal) u2 += (s.v_w[k] / s.w) * (s.v_w[k] / s.w);
+  const float u = sqrtf(u2);
+  if (u <= 0.0f) return;
+  const float nu = M.viscosity / M.rho0;
+  const float factor = 1.0f - log_law_u_star2(u, y, nu) * d / (nu * u);
+  for (int k = 0; k < Dim; ++k)
+    if (k != normal) st.v[k] = factor * s.v_w[k] / s.w;
+}
+
+// The wall particle's velocity for the laminar term beyond Adami's no slip: free-slip walls, then
+// the log law (tank.free_slip, tank.wall_shear). The one call of the wall pass after finish_wall.
+template <int Dim>
+SPATE_HD void apply_wall_shear(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material, const WallSums<Dim>& s,
+                               WallState<Dim>& st) {
+  if (P.free_slip_axes) apply_free_slip<Dim>(P, x_wall, material, s, st);
+  if (P.wall_shear == WallShear::LogLaw) apply_log_law<Dim>(P, x_wall, material, s, st);
+}
+
 }  // namespace spate

@@ -380,6 +380,7 @@ TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
        {"probes[0].window", ">= 0"}},
       {"unknown momentum flux", {"momentum.flux=upwind"}, {"'momentum.flux'", "central", "riemann"}},
       {"wall factor above one", {"fluid.wall_artificial_viscosity=2"}, {"'fluid.wall_artificial_viscosity'", "between 0 and 1"}},
+      {"unknown wall shear", {"tank.wall_shear=rough"}, {"'tank.wall_shear'", "laminar", "log_law"}},
       {"free slip along a periodic axis", {"tank.periodic=[x]", "tank.free_slip=[x]"}, {"'tank.free_slip'", "periodic"}},
       {"free slip along a missing axis", {"tank.free_slip=[z]"}, {"'tank.free_slip'", "'z' is not an axis"}},
       {"surface tension of an unknown fluid", {"fluids=[{name: a}, {name: b}]", "surface_tension=[{between: [a, c], coefficient: 1}]"},
@@ -429,8 +430,9 @@ TEST(CaseLoader, SurfaceTensionAndFreeSlipReachThePhysics) {
   const Case c = parse_case(kMinimal2D, "tiny.yaml",
                             {"fluids=[{name: a}, {name: b, density: 100}, {name: c}]",
                              "surface_tension=[{between: [b, a], coefficient: 2.5}, {between: [c, a], coefficient: 1}]",
-                             "tank.free_slip=[x]"});
+                             "tank.free_slip=[x]", "tank.wall_shear=log_law"});
   const PhysicsParams P = physics_params(c);
+  EXPECT_EQ(P.wall_shear, WallShear::LogLaw);
   EXPECT_TRUE(P.surface_tension.on);
   EXPECT_EQ(P.surface_tension.sigma[0][1], 2.5f);
   EXPECT_EQ(P.surface_tension.sigma[1][0], 2.5f);
@@ -443,6 +445,7 @@ TEST(CaseLoader, SurfaceTensionAndFreeSlipReachThePhysics) {
   const PhysicsParams plain = physics_params(parse_case(kMinimal2D, "tiny.yaml", {}));
   EXPECT_FALSE(plain.surface_tension.on);
   EXPECT_EQ(plain.free_slip_axes, 0u);
+  EXPECT_EQ(plain.wall_shear, WallShear::Laminar);
 }
 
 TEST(CaseLoader, MissingRequiredKeys) {

@@ -363,7 +363,7 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
           accumulate_wall_pair<Kernel, Dim>(P, xw, sj, sums);
         }
         WallState<Dim> st = finish_wall(P, sums, ps.material[w], xw);
-        if (P.free_slip_axes) apply_free_slip<Dim>(P, xw, ps.material[w], sums, st);
+        apply_wall_shear<Dim>(P, xw, ps.material[w], sums, st);
         ps.pressure[w] = st.p;
         ps.density[w] = st.rho;
         SPATE_UNROLL for (int k = 0; k < Dim; ++k) ps.vel[k][w] = st.v[k];
