@@ -1012,8 +1012,8 @@ PhysicsParams physics_params(const Case& c) {
     P.tank_lo[k] = static_cast<float>(c.tank_origin[k]);
     P.tank_hi[k] = static_cast<float>(c.tank_origin[k] + c.tank_size[k]);
     if (c.free_slip[k]) P.free_slip_axes = static_cast<std::uint8_t>(P.free_slip_axes | (1u << k));
-  P.wall_shear = c.wall_shear;
   }
+  P.wall_shear = c.wall_shear;
   if (c.tank_motion >= 0) P.materials.motion[P.materials.tank()] = static_cast<std::uint8_t>(c.tank_motion + 1);
   for (std::size_t k = 0; k < c.solids.size(); ++k)
     if (c.solids[k].motion >= 0) P.materials.motion[P.materials.solid(static_cast<int>(k))] = static_cast<std::uint8_t>(c.solids[k].motion + 1);

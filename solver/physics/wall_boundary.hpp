@@ -125,7 +125,8 @@ SPATE_HD float log_law_u_star2(float u, float y, float nu) {
 // extrapolation of a linear profile through the face, i.e. no slip; at y+ ~ 100-1000, where the
 // particles next to a dam-break floor are, the shear is tens of times the laminar term's. The
 // normal component keeps Adami's mirror (no penetration). Tank walls at rest only (the loader
-// rejects tank.motion); corners and free-slip walls keep theirs. Only runs with the key execute it.
+// rejects tank.motion); corners and free-slip walls keep theirs. With several fluids nu is the
+// walls' reference fluid's (materials.hpp wall_fluid). Only runs with the key execute it.
 template <int Dim>
 SPATE_HD void apply_log_law(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material, const WallSums<Dim>& s,
                             WallState<Dim>& st) {
@@ -153,6 +154,7 @@ SPATE_HD void apply_log_law(const PhysicsParams& P, const Vec<Dim>& x_wall, std:
   const float u = sqrtf(u2);
   if (u <= 0.0f) return;
   const float nu = M.viscosity / M.rho0;
+  if (nu <= 0.0f) return;  // an inviscid fluid has no law of the wall: Adami's no slip stays
   const float factor = 1.0f - log_law_u_star2(u, y, nu) * d / (nu * u);
   for (int k = 0; k < Dim; ++k)
     if (k != normal) st.v[k] = factor * s.v_w[k] / s.w;
