@@ -14,12 +14,14 @@ from pathlib import Path
 
 import matplotlib
 import numpy as np
+import yaml
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).parent))
 import impact_metrics as im  # noqa: E402
+from run_output import probe_table, saved_step_near, snapshot_arrays  # noqa: E402
 
 H = 0.3
 G = 9.81
@@ -47,7 +49,7 @@ def run_profile(run):
     vy = []
     scale = math.sqrt(G / H)
     for z in heights:
-        rows = np.loadtxt(Path(run) / "probes" / f"v{z:03d}.csv", delimiter=",", skiprows=1)
+        rows = probe_table(Path(run) / "probes" / f"v{z:03d}.csv")
         vy.append(window_mean(list(zip(rows[:, 0] * scale, rows[:, 3])), lo, hi))
     return heights, P, vy, (lo, hi)
 
@@ -61,33 +63,13 @@ def experiment_profile():
     return out
 
 
-def nearest_snapshot(run, t):
-    pvd = (Path(run) / "particles.pvd").read_text()
-    sets = [(float(a), b) for a, b in re.findall(r'timestep="([^"]+)"[^>]*file="([^"]+)"', pvd)]
-    time, vtm = min(sets, key=lambda s: abs(s[0] - t))
-    return time, Path(run) / vtm.replace(".vtm", "")
-
-
 def fluid_snapshot(run, t):
     """(time, positions, velocities, pressures, densities) of the fluid particles (2D) at the
-    snapshot nearest t."""
-    import vtk
-    from vtk.util.numpy_support import vtk_to_numpy
-
-    time, folder = nearest_snapshot(run, t)
-    fields = {"x": [], "v": [], "p": [], "rho": []}
-    for piece in sorted(folder.glob("*.vtp")):
-        r = vtk.vtkXMLPolyDataReader()
-        r.SetFileName(str(piece))
-        r.Update()
-        d = r.GetOutput()
-        pd = d.GetPointData()
-        fluid = vtk_to_numpy(pd.GetArray("kind")) == 0
-        fields["x"].append(vtk_to_numpy(d.GetPoints().GetData())[fluid][:, :2])
-        fields["v"].append(vtk_to_numpy(pd.GetArray("velocity"))[fluid][:, :2])
-        fields["p"].append(vtk_to_numpy(pd.GetArray("pressure"))[fluid])
-        fields["rho"].append(vtk_to_numpy(pd.GetArray("density"))[fluid])
-    return (time, *(np.concatenate(fields[k]) for k in ("x", "v", "p", "rho")))
+    saved step nearest t."""
+    time, step_dir = saved_step_near(Path(run), t)
+    x, a = snapshot_arrays(step_dir, ["velocity", "pressure", "density", "kind"])
+    fluid = a["kind"] == 0
+    return time, x[fluid, :2], a["velocity"][fluid, :2], a["pressure"][fluid], a["density"][fluid]
 
 
 def corner_circulation(run, t, dp, ratio=1.3):
@@ -160,7 +142,7 @@ def main(argv):
         print(f"{label}: window tau {lo:.3f}-{hi:.3f}")
         for zz, pp, vv in zip(z, P, vy):
             print(f"  z = {zz:3d} mm  P = {pp:.3f}  vy(1 cm off the wall) = {vv:+.3f} m/s")
-        dp = float(re.search(r"^dp: *([0-9.e-]+)", (Path(run) / "case.yaml").read_text(), re.M).group(1))
+        dp = float(yaml.safe_load((Path(run) / "case.yaml").read_text())["dp"])
         t, low, mid = bottom_layer(run, 0.45)
         print(f"  t = {t:.2f} s, x = 1.3 m: u = {low:.3f} m/s in the bottom 5 mm, {mid:.3f} m/s at 20-35 mm")
         for t in (0.6, 0.7, 0.8):

@@ -75,6 +75,30 @@ SPATE_HD WallState<Dim> finish_wall(const PhysicsParams& P, const WallSums<Dim>&
   return out;
 }
 
+// The face of the tank a tank wall particle lies behind: the one axis along which it is outside the
+// fluid region [tank_lo, tank_hi] (axis -1 inside it, in a corner, or not a tank particle), how far
+// behind the face (depth) and which way the fluid is along that axis (+1 or -1).
+struct TankFace {
+  int axis = -1;
+  float depth = 0.0f;
+  float into_fluid = 0.0f;
+};
+
+template <int Dim>
+SPATE_HD TankFace tank_face(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material) {
+  TankFace f;
+  if (material != P.materials.tank()) return f;
+  for (int k = 0; k < Dim; ++k) {
+    const float below = P.tank_lo[k] - x_wall[k], above = x_wall[k] - P.tank_hi[k];
+    if (below <= 0.0f && above <= 0.0f) continue;
+    if (f.axis >= 0) return TankFace{};  // a corner
+    f.axis = k;
+    f.depth = below > 0.0f ? below : above;
+    f.into_fluid = below > 0.0f ? 1.0f : -1.0f;
+  }
+  return f;
+}
+
 // Free-slip tank walls (tank.free_slip; Hysing et al.'s rising bubble has free-slip sides): a tank
 // wall particle beyond the fluid region along a free-slip axis a, and inside it along every other
 // axis (corners stay no-slip), keeps Adami's mirrored normal component -v~_a (no penetration) but
@@ -83,16 +107,10 @@ SPATE_HD WallState<Dim> finish_wall(const PhysicsParams& P, const WallSums<Dim>&
 template <int Dim>
 SPATE_HD void apply_free_slip(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material, const WallSums<Dim>& s,
                               WallState<Dim>& st) {
-  if (material != P.materials.tank() || s.w <= 0.0f) return;
-  int normal = -1;
-  for (int k = 0; k < Dim; ++k) {
-    if (x_wall[k] >= P.tank_lo[k] && x_wall[k] <= P.tank_hi[k]) continue;
-    if (normal >= 0 || !(P.free_slip_axes & (1u << k))) return;  // a corner, or a no-slip wall
-    normal = k;
-  }
-  if (normal < 0) return;
+  const TankFace face = tank_face<Dim>(P, x_wall, material);
+  if (face.axis < 0 || !(P.free_slip_axes & (1u << face.axis)) || s.w <= 0.0f) return;
   for (int k = 0; k < Dim; ++k)
-    if (k != normal) st.v[k] = s.v_w[k] / s.w;
+    if (k != face.axis) st.v[k] = s.v_w[k] / s.w;
 }
 
 // The friction velocity u* of the smooth-wall law of the wall for a tangential speed `u` at distance
@@ -130,23 +148,14 @@ SPATE_HD float log_law_u_star2(float u, float y, float nu) {
 template <int Dim>
 SPATE_HD void apply_log_law(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material, const WallSums<Dim>& s,
                             WallState<Dim>& st) {
-  if (material != P.materials.tank() || s.w <= 0.0f) return;
-  int normal = -1;
-  float depth = 0.0f, into_fluid = 0.0f;
-  for (int k = 0; k < Dim; ++k) {
-    const float below = P.tank_lo[k] - x_wall[k], above = x_wall[k] - P.tank_hi[k];
-    if (below <= 0.0f && above <= 0.0f) continue;
-    if (normal >= 0 || (P.free_slip_axes & (1u << k))) return;  // a corner, or a free-slip wall
-    normal = k;
-    depth = below > 0.0f ? below : above;
-    into_fluid = below > 0.0f ? 1.0f : -1.0f;
-  }
-  if (normal < 0) return;
+  const TankFace face = tank_face<Dim>(P, x_wall, material);
+  if (face.axis < 0 || (P.free_slip_axes & (1u << face.axis)) || s.w <= 0.0f) return;  // free slip: no shear
+  const int normal = face.axis;
   const FluidMaterial& M = P.materials.wall_fluid();
   // s.rho_r_w = sum rho_f (x_w - x_f) W: the fluid's mean offset from the wall particle, with rho0
   // for rho_f (within the weak compressibility's 1%).
-  const float d = -into_fluid * s.rho_r_w[normal] / (M.rho0 * s.w);
-  const float y = d - depth;
+  const float d = -face.into_fluid * s.rho_r_w[normal] / (M.rho0 * s.w);
+  const float y = d - face.depth;
   if (y <= 0.0f) return;
   float u2 = 0.0f;
   for (int k = 0; k < Dim; ++k)
