@@ -302,8 +302,9 @@ TEST(Validation, LobovskyGateRelease) {
 // H/60 on the level records' clock: arrivals -9.7 / -14.1 / -22.8 ms, first peaks +37 / +5 / -8%,
 // plateaus +24.5 / +23.4 / -13.3%, nothing below +0.2 rho g H after the arrivals. Less friction than
 // the artificial one at this dp, more than none (plateaus +51 / +38 / -19% without any): the
-// tolerances hold it between. As dp halves its plateaus converge on the experiment (+12.7 / +0.1 /
-// -0.5% at H/240; docs/validation.md, "What keeps p3 low").
+// tolerances hold it between. As dp halves its plateaus move towards the experiment (+12.7 / +0.1 /
+// -0.5% at H/240) without settling there: the corner eddy returns at H/240 (docs/validation.md,
+// "Why the log law's plateaus still move with dp").
 TEST(Validation, LobovskyGateLogLawFloor) {
   Tolerance p1, p3, p4;
   p1.arrival_s = p3.arrival_s = p4.arrival_s = 0.03;  // -23 ms at p4
