@@ -103,7 +103,6 @@ TEST(WallBoundary, LogLawWallParticleMakesTheLaminarShearTheLawOfTheWall) {
     EXPECT_FLOAT_EQ(no_slip[0], -2.4f);
 }
 
-
 // What the floor exerts through the real pair terms (wall pass, then the fluid pair loop's laminar
 // term) on water that flows with the law of the wall's own profile, u(y) = u* (ln(y u*/nu)/0.41 + 5.2)
 // with u* = 0.1 m/s (1.9 m/s at 2.5 mm, 2.5 m/s at 3 cm: a dam-break surge): the friction per unit
