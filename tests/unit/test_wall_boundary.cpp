@@ -6,9 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <string>
 
-#include "case/case.hpp"
+#include "lattice_params.hpp"
 #include "physics/wall_boundary.hpp"
 
 namespace spate {
@@ -112,13 +111,10 @@ TEST(WallBoundary, LogLawWallParticleMakesTheLaminarShearTheLawOfTheWall) {
 // distance d); the artificial viscosity and pressures are off here, so the laminar term is all that
 // acts. Laminar no slip (Adami's mirror, nu = 1e-6 m^2/s) exerts 0.069 rho u*^2 on the same profile.
 float floor_traction(float dp, bool log_law) {
-  const std::string yaml = "name: floor\ndimensions: 2\ndp: " + std::to_string(dp) +
-                           "\nsmoothing_ratio: 1.3\nkernel: wendland_c2\ntime:\n  end: 0.1\nfluid:\n  viscosity: 0.001\n"
-                           "  artificial_viscosity: 0\ntank:\n  size: [1.0, 0.2]\n" +
-                           (log_law ? "  wall_shear: log_law\n" : "") + "fluid_blocks:\n  - min: [0, 0]\n    max: [1.0, 0.1]\n";
-  const PhysicsParams P = physics_params(parse_case(yaml, "floor.yaml"));
+  PhysicsParams P = lattice_params(2, "fluid:\n  viscosity: 0.001\n  artificial_viscosity: 0\n", dp);
+  P.wall_shear = log_law ? WallShear::LogLaw : WallShear::Laminar;
   const FluidMaterial& M = P.materials.fluid[0];
-  const float nu = 1e-6f, u_star = 0.1f, x0 = 0.5f + 0.5f * dp;
+  const float nu = 1e-6f, u_star = 0.1f, x0 = 0.2f + 0.5f * dp;  // mid-floor of the 0.4 m tank
   auto u_log = [&](float y) { return u_star * (std::log(y * u_star / nu) / 0.41f + 5.2f); };
   const int reach = static_cast<int>(std::ceil(2.0f * P.h / dp)) + 1;
   auto fluid_at = [&](int col, int row) {
