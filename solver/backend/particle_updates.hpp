@@ -34,8 +34,9 @@ SPATE_HD void predict_particle(const PhysicsParams& P, Fields& f, std::uint32_t 
 
 // Acceleration and density rate of fluid particle i (zero rates for walls). Multiphase: the pair
 // terms of multiphase_interactions.hpp with each neighbour's own fluid. MovingWalls: walls carry
-// their prescribed velocity into continuity (ParticleState::w). Riemann: the Riemann options'
-// terms (dispatch_pair_flags).
+// their prescribed velocity into continuity (ParticleState::w), and free-slip faces slide for the
+// artificial viscosity (PairKinematics::vr_av). Riemann: the Riemann options' terms
+// (dispatch_pair_flags).
 template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann, class Fields>
 SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
   if (!P.is_fluid(f.material[i])) {

@@ -39,20 +39,21 @@ void dispatch_flags(F&& f, bool first, Rest... rest) {
 
 // The fluid pair loop's compile-time choices: Gamma7 (every fluid has the Tait exponent 7: the
 // exact product instead of pow), Multiphase (several fluids: the interface-consistent pair terms
-// of multiphase_interactions.hpp), MovingWalls (some walls move: their prescribed velocity in
-// continuity), Riemann (the Riemann options' pair terms and wall sums, fluid_interactions.hpp:
+// of multiphase_interactions.hpp), MovingWalls (some walls move or slide: a moving wall's velocity
+// in continuity and the artificial viscosity, a free-slip face's slip in the artificial viscosity;
+// PhysicsParams::walls_have_velocity), Riemann (the Riemann options' pair terms and wall sums, fluid_interactions.hpp:
 // `density.diffusion: riemann` or `momentum.flux: riemann`). One static fluid keeps the
 // single-phase loop, unchanged.
 struct PairLoopFlags {
   bool gamma7, multiphase, moving_walls, riemann;
 };
 inline PairLoopFlags pair_loop_flags(const PhysicsParams& P) {
-  return PairLoopFlags{all_fluids_gamma7(P), P.materials.multiphase(), P.moving_walls(),
+  return PairLoopFlags{all_fluids_gamma7(P), P.materials.multiphase(), P.walls_have_velocity(),
                        P.flux == MomentumFlux::Riemann || P.diffusion == DensityDiffusion::Riemann};
 }
 
 // f.template operator()<Gamma7, Multiphase, MovingWalls, Riemann>() for `flags`. Only the plain
-// loop (one fluid, static walls) is compiled without the Riemann terms as well: it is the one the
+// loop (one fluid, static no-slip walls) is compiled without the Riemann terms as well: it is the one the
 // loads and the benchmarks run, and without them it is about 10% faster (docs/performance.md);
 // the other loops always carry them (multiplied by zero when the options are off), which keeps
 // the number of compiled loops at 10 per kernel and dimension instead of 16.

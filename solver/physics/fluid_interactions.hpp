@@ -19,8 +19,8 @@ struct ParticleState {
   float rho;     // density
   float p;       // pressure
   std::uint8_t material;  // index into PhysicsParams::materials (materials.hpp)
-  // With moving walls only (the MovingWalls pair terms): the velocity continuity and artificial
-  // viscosity see, a fluid's own, a wall's prescribed rigid motion (boundary_velocity()).
+  // With moving or free-slip walls only (the MovingWalls pair terms): the velocity continuity and
+  // artificial viscosity see, a fluid's own, a wall's prescribed rigid motion (boundary_velocity()).
   Vec<Dim> w;
 };
 
@@ -32,10 +32,11 @@ SPATE_HD Vec<Dim> boundary_velocity(const PhysicsParams& P, const ParticleState<
 }
 
 // Monaghan's alpha for a pair: alpha between fluid particles, alpha times the wall factor
-// (fluid.wall_artificial_viscosity) against a wall (j_fluid = 0). A wall at rest makes the term a
-// friction as well as a damping of approach: for i sliding along the wall the pair direction to a wall
-// particle diagonally ahead makes v_ij . r_ij < 0. At H/60-H/120 that friction slows the bottom
-// centimetres of a dam-break surge by a third (docs/validation.md, "What keeps p3 low").
+// (fluid.wall_artificial_viscosity) against a wall (j_fluid = 0). A no-slip wall at rest makes the
+// term a friction as well as a damping of approach: for i sliding along the wall the pair direction
+// to a wall particle diagonally ahead makes v_ij . r_ij < 0. At H/60-H/120 that friction slows the
+// bottom centimetres of a dam-break surge by a third (docs/validation.md, "What keeps p3 low"). A
+// free-slip wall does not rub: the term sees it slide with the fluid (PairKinematics::vr_av).
 SPATE_HD float artificial_alpha(const PhysicsParams& P, float j_fluid) {
   return P.artificial_viscosity * (j_fluid + (1.0f - j_fluid) * P.wall_artificial_viscosity);
 }
@@ -82,13 +83,18 @@ SPATE_HD float density_diffusion(const PhysicsParams& P, const FluidMaterial& M,
 // direction, for density diffusion and the Riemann solver), and the relative velocity, once as the
 // laminar term sees a wall (its extrapolated no-slip velocity) and once as continuity and artificial
 // viscosity see it (a wall's real velocity: zero for static walls, the prescribed motion j.w for
-// moving ones; Adami et al. 2012), with vr its projection on r_ij.
+// moving ones; Adami et al. 2012), with vr its projection on r_ij. vr_av: the projection the
+// artificial viscosity takes, vr but against a free-slip tank face, which slides with the fluid:
+// there the wall's tangential components are the fluid's (j.v, apply_free_slip), so the term damps
+// the approach and is no friction. Continuity keeps the wall's real velocity (with the sliding
+// wall in continuity too the thin tip of a dam-break surge lost its support and fell through a
+// free-slip floor).
 template <int Dim>
 struct PairKinematics {
   Vec<Dim> r;
   float r2, r_len, F, inv_r2_eta, g_dot_rji;
   Vec<Dim> v_ij_wall, v_ij_visc;
-  float vr;
+  float vr, vr_av;
 };
 
 template <class Kernel, int Dim, bool MovingWalls = false>
@@ -108,6 +114,17 @@ SPATE_HD PairKinematics<Dim> pair_kinematics(const PhysicsParams& P, const Parti
     else k.v_ij_wall[a] = i.v[a] - j_fluid * j.v[a];
   }
   k.vr = dot(k.v_ij_wall, k.r);
+  k.vr_av = k.vr;
+  // Free-slip faces: only runs with moving or free-slip walls take this loop (walls_have_velocity).
+  if constexpr (MovingWalls) {
+    if (P.free_slip_axes && j_fluid == 0.0f) {
+      const TankFace face = tank_face<Dim>(P, j.x, j.material);
+      if (is_free_slip(P, face)) {
+        k.vr_av = 0.0f;
+        SPATE_UNROLL for (int a = 0; a < Dim; ++a) k.vr_av += (a == face.axis ? k.v_ij_wall[a] : i.v[a] - j.v[a]) * k.r[a];
+      }
+    }
+  }
   return k;
 }
 
@@ -166,7 +183,8 @@ SPATE_HD FluidRates<Dim> pair_rates(const PairKinematics<Dim>& pk, float radial,
 // driver's inner loop vectorises: beyond the support the kernel gradient is exactly 0, and for
 // j = i the offset r is 0, so every term vanishes by itself and adds +0 to the sums (which leaves
 // them unchanged). Gamma7: M.gamma == 7 (the exact product instead of pow, chosen per run).
-// MovingWalls: some walls move (j.w holds what continuity sees of j); without it walls are at rest.
+// MovingWalls: some walls move (j.w holds what continuity sees of j) or slide (free-slip faces,
+// vr_av); without it walls are at rest.
 // Riemann: the Riemann options' terms (riemann_pair_terms and the wall sums); without it they are
 // left out, which gives the same result when neither option is on (they would add exactly zero).
 template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false, bool Riemann = true>
@@ -174,7 +192,7 @@ SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const FluidMat
                                           const ParticleState<Dim>& j) {
   const float j_fluid = P.is_fluid(j.material) ? 1.0f : 0.0f;
   const PairKinematics<Dim> pk = pair_kinematics<Kernel, Dim, MovingWalls>(P, i, j, j_fluid);
-  const float r2 = pk.r2, F = pk.F, inv_r2_eta = pk.inv_r2_eta, vr = pk.vr;
+  const float r2 = pk.r2, F = pk.F, inv_r2_eta = pk.inv_r2_eta, vr = pk.vr, vr_av = pk.vr_av;
   const float inv_rho_i = 1.0f / i.rho;
   const float inv_rho_j = 1.0f / j.rho;
   const float volume_i = M.mass * inv_rho_i;
@@ -192,7 +210,7 @@ SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const FluidMat
 
   // Eq. 7, pressure force, and Monaghan (1992) artificial viscosity for approaching pairs (vr < 0;
   // alpha = 0 switches it off; against a wall alpha times the wall factor, artificial_alpha).
-  const float mu_ij = P.h * (vr < 0.0f ? vr : 0.0f) * inv_r2_eta;
+  const float mu_ij = P.h * (vr_av < 0.0f ? vr_av : 0.0f) * inv_r2_eta;
   const float pi_ij = -artificial_alpha(P, j_fluid) * M.c0 * mu_ij / (0.5f * (i.rho + j.rho));
   const float p_sum = Riemann ? i.p + j.p + riemann.p_dissipation : i.p + j.p;
   const float radial = -M.mass * (p_sum * inv_rho_i * inv_rho_j + pi_ij) * F;

@@ -59,7 +59,8 @@ SPATE_HD NeighbourFluid neighbour_fluid(const PhysicsParams& P, std::uint8_t mat
 // The contribution of neighbour j (of fluid properties Nj, see neighbour_fluid) to fluid particle
 // i of material M. Branch-free like fluid_pair_terms (selects, no jumps), so the CPU driver's loop
 // over neighbours vectorises; zero beyond the support and for j = i. MovingWalls: as
-// fluid_pair_terms (j.w is what continuity sees of j). Riemann: as fluid_pair_terms.
+// fluid_pair_terms (j.w is what continuity sees of j; free-slip faces slide for the artificial
+// viscosity, vr_av). Riemann: as fluid_pair_terms.
 template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false, bool Riemann = true>
 SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
                                                const ParticleState<Dim>& j, const NeighbourFluid& Nj) {
@@ -99,7 +100,7 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
   const float p_interface = 2.0f * (z_j * i.p + z_i * j.p) * inv_z_sum;
   const float p_pair = Riemann ? p_interface + riemann.p_dissipation : p_interface;
   // Monaghan (1992) artificial viscosity with the pair's mean sound speed and density.
-  const float mu_ij = P.h * (vr < 0.0f ? vr : 0.0f) * inv_r2_eta;
+  const float mu_ij = P.h * (pk.vr_av < 0.0f ? pk.vr_av : 0.0f) * inv_r2_eta;
   const float pi_ij = -artificial_alpha(P, j_fluid) * (M.c0 + c_j) * mu_ij / (i.rho + rho_j);
   const float radial = -(p_pair * inv_rho_i * volume_j + m_j * pi_ij) * F;
   // Eq. 8 with the harmonic mean of the two viscosities (0 when both fluids are inviscid).

@@ -86,6 +86,11 @@ struct PhysicsParams {
 
   SPATE_HD bool is_fluid(std::uint8_t material) const { return materials.is_fluid(material); }
   SPATE_HD bool moving_walls() const { return motions > 0; }
+  // Whether the pair terms see a velocity of some wall particles: moving walls (continuity and the
+  // artificial viscosity, fluid_interactions.hpp boundary_velocity), or free-slip tank faces, which
+  // slide with the fluid for the artificial viscosity (PairKinematics::vr_av). The pair loop's
+  // MovingWalls (dispatch.hpp).
+  SPATE_HD bool walls_have_velocity() const { return motions > 0 || free_slip_axes != 0; }
   // The motion wall material m follows, or null when it is static (and for fluids).
   SPATE_HD const MotionState* motion_of(std::uint8_t m) const {
     const int k = materials.motion[m];
@@ -106,6 +111,35 @@ template <int Dim>
 SPATE_HD Vec<Dim> wall_velocity(const PhysicsParams& P, std::uint8_t m, const Vec<Dim>& x) {
   const MotionState* s = P.motion_of(m);
   return s ? rigid_velocity<Dim>(*s, x) : zero_vec<Dim>();
+}
+
+// The face of the tank a tank wall particle lies behind: the one axis along which it is outside the
+// fluid region [tank_lo, tank_hi] (axis -1 inside it, in a corner, or not a tank particle), how far
+// behind the face (depth) and which way the fluid is along that axis (+1 or -1).
+struct TankFace {
+  int axis = -1;
+  float depth = 0.0f;
+  float into_fluid = 0.0f;
+};
+
+template <int Dim>
+SPATE_HD TankFace tank_face(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material) {
+  TankFace f;
+  if (material != P.materials.tank()) return f;
+  for (int k = 0; k < Dim; ++k) {
+    const float below = P.tank_lo[k] - x_wall[k], above = x_wall[k] - P.tank_hi[k];
+    if (below <= 0.0f && above <= 0.0f) continue;
+    if (f.axis >= 0) return TankFace{};  // a corner
+    f.axis = k;
+    f.depth = below > 0.0f ? below : above;
+    f.into_fluid = below > 0.0f ? 1.0f : -1.0f;
+  }
+  return f;
+}
+
+// Whether `face` is a free-slip face (tank.free_slip).
+SPATE_HD bool is_free_slip(const PhysicsParams& P, const TankFace& face) {
+  return face.axis >= 0 && (P.free_slip_axes & (1u << face.axis));
 }
 
 // Antuono's diffusion runs (its two passes, physics/density_gradient.hpp) only with continuity:

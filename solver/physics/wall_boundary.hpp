@@ -75,40 +75,17 @@ SPATE_HD WallState<Dim> finish_wall(const PhysicsParams& P, const WallSums<Dim>&
   return out;
 }
 
-// The face of the tank a tank wall particle lies behind: the one axis along which it is outside the
-// fluid region [tank_lo, tank_hi] (axis -1 inside it, in a corner, or not a tank particle), how far
-// behind the face (depth) and which way the fluid is along that axis (+1 or -1).
-struct TankFace {
-  int axis = -1;
-  float depth = 0.0f;
-  float into_fluid = 0.0f;
-};
-
-template <int Dim>
-SPATE_HD TankFace tank_face(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material) {
-  TankFace f;
-  if (material != P.materials.tank()) return f;
-  for (int k = 0; k < Dim; ++k) {
-    const float below = P.tank_lo[k] - x_wall[k], above = x_wall[k] - P.tank_hi[k];
-    if (below <= 0.0f && above <= 0.0f) continue;
-    if (f.axis >= 0) return TankFace{};  // a corner
-    f.axis = k;
-    f.depth = below > 0.0f ? below : above;
-    f.into_fluid = below > 0.0f ? 1.0f : -1.0f;
-  }
-  return f;
-}
-
 // Free-slip tank walls (tank.free_slip; Hysing et al.'s rising bubble has free-slip sides): a tank
 // wall particle beyond the fluid region along a free-slip axis a, and inside it along every other
 // axis (corners stay no-slip), keeps Adami's mirrored normal component -v~_a (no penetration) but
 // takes the fluid's own tangential velocity v~_k, k != a, so the viscous term (eq. 8) exerts no
-// shear along the wall. Only called when some axis is free-slip.
+// shear along the wall; the artificial viscosity sees that tangential velocity too
+// (PairKinematics::vr_av), so it exerts no friction there. Only called when some axis is free-slip.
 template <int Dim>
 SPATE_HD void apply_free_slip(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material, const WallSums<Dim>& s,
                               WallState<Dim>& st) {
   const TankFace face = tank_face<Dim>(P, x_wall, material);
-  if (face.axis < 0 || !(P.free_slip_axes & (1u << face.axis)) || s.w <= 0.0f) return;
+  if (!is_free_slip(P, face) || s.w <= 0.0f) return;
   for (int k = 0; k < Dim; ++k)
     if (k != face.axis) st.v[k] = s.v_w[k] / s.w;
 }
@@ -149,7 +126,7 @@ template <int Dim>
 SPATE_HD void apply_log_law(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material, const WallSums<Dim>& s,
                             WallState<Dim>& st) {
   const TankFace face = tank_face<Dim>(P, x_wall, material);
-  if (face.axis < 0 || (P.free_slip_axes & (1u << face.axis)) || s.w <= 0.0f) return;  // free slip: no shear
+  if (face.axis < 0 || is_free_slip(P, face) || s.w <= 0.0f) return;  // free slip: no shear
   const int normal = face.axis;
   const FluidMaterial& M = P.materials.wall_fluid();
   // s.rho_r_w = sum rho_f (x_w - x_f) W: the fluid's mean offset from the wall particle, with rho0
