@@ -41,9 +41,9 @@ void dispatch_flags(F&& f, bool first, Rest... rest) {
 // exact product instead of pow), Multiphase (several fluids: the interface-consistent pair terms
 // of multiphase_interactions.hpp), MovingWalls (some walls move or slide: a moving wall's velocity
 // in continuity and the artificial viscosity, a free-slip face's slip in the artificial viscosity;
-// PhysicsParams::walls_have_velocity), Riemann (the Riemann options' pair terms and wall sums, fluid_interactions.hpp:
-// `density.diffusion: riemann` or `momentum.flux: riemann`). One static fluid keeps the
-// single-phase loop, unchanged.
+// PhysicsParams::walls_have_velocity), Riemann (the Riemann options' pair terms and wall sums,
+// fluid_interactions.hpp: `density.diffusion: riemann` or `momentum.flux: riemann`). One static
+// fluid keeps the single-phase loop, unchanged.
 struct PairLoopFlags {
   bool gamma7, multiphase, moving_walls, riemann;
 };
@@ -53,8 +53,8 @@ inline PairLoopFlags pair_loop_flags(const PhysicsParams& P) {
 }
 
 // f.template operator()<Gamma7, Multiphase, MovingWalls, Riemann>() for `flags`. Only the plain
-// loop (one fluid, static no-slip walls) is compiled without the Riemann terms as well: it is the one the
-// loads and the benchmarks run, and without them it is about 10% faster (docs/performance.md);
+// loop (one fluid, static no-slip walls) is compiled without the Riemann terms as well: it is the
+// one the loads and the benchmarks run, and without them it is about 10% faster (docs/performance.md);
 // the other loops always carry them (multiplied by zero when the options are off), which keeps
 // the number of compiled loops at 10 per kernel and dimension instead of 16.
 template <class F>

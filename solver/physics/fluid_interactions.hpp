@@ -87,8 +87,7 @@ SPATE_HD float density_diffusion(const PhysicsParams& P, const FluidMaterial& M,
 // artificial viscosity takes, vr but against a free-slip tank face, which slides with the fluid:
 // there the wall's tangential components are the fluid's (j.v, apply_free_slip), so the term damps
 // the approach and is no friction. Continuity keeps the wall's real velocity (with the sliding
-// wall in continuity too the thin tip of a dam-break surge lost its support and fell through a
-// free-slip floor).
+// wall in continuity too, a particle of the Lobovsky surge fell through a free-slip floor).
 template <int Dim>
 struct PairKinematics {
   Vec<Dim> r;
