@@ -53,7 +53,10 @@ SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, 
     for (std::uint32_t j = jb; j < je; ++j) {
       if (distance_squared<Dim>(si.x, f.pos, j) < P.support2) {
         ParticleState<Dim> sj = load_state<Dim>(f, j);
-        if constexpr (MovingWalls) sj.w = boundary_velocity<Dim>(P, sj);
+        if constexpr (MovingWalls) {
+          sj.w = boundary_velocity<Dim>(P, sj);
+          sj.w_av = sliding_velocity<Dim>(P, sj);
+        }
         if constexpr (Multiphase) {
           accumulate_multiphase_pair<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj, rates);
         } else {
@@ -149,7 +152,7 @@ SPATE_HD void update_shift(const PhysicsParams& P, const CellGridView& v, Fields
   ShiftingSums<Dim> sums;
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
     for (std::uint32_t j = jb; j < je; ++j)
-      accumulate_shifting_pair<Kernel, Dim>(P, M, w_dp, xi, ParticleState<Dim>{load_vec<Dim>(f.pos, j), zero_vec<Dim>(), f.density[j], 0.0f, f.material[j], zero_vec<Dim>()}, sums);
+      accumulate_shifting_pair<Kernel, Dim>(P, M, w_dp, xi, ParticleState<Dim>{load_vec<Dim>(f.pos, j), zero_vec<Dim>(), f.density[j], 0.0f, f.material[j], zero_vec<Dim>(), zero_vec<Dim>()}, sums);
   });
   const Vec<Dim> dr = shifting_displacement<Dim>(P, M, sums, dt);
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.shift[k][i] = dr[k];

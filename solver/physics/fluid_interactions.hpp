@@ -19,9 +19,11 @@ struct ParticleState {
   float rho;     // density
   float p;       // pressure
   std::uint8_t material;  // index into PhysicsParams::materials (materials.hpp)
-  // With moving or free-slip walls only (the MovingWalls pair terms): the velocity continuity and
-  // artificial viscosity see, a fluid's own, a wall's prescribed rigid motion (boundary_velocity()).
+  // With moving or free-slip walls only (the MovingWalls pair terms): the velocity continuity sees,
+  // a fluid's own, a wall's prescribed rigid motion (boundary_velocity()); and the one the
+  // artificial viscosity sees, the same except along a free-slip face (sliding_velocity()).
   Vec<Dim> w;
+  Vec<Dim> w_av;
 };
 
 // What continuity and artificial viscosity see of neighbour j: a fluid's velocity, a wall's
@@ -29,6 +31,19 @@ struct ParticleState {
 template <int Dim>
 SPATE_HD Vec<Dim> boundary_velocity(const PhysicsParams& P, const ParticleState<Dim>& j) {
   return P.is_fluid(j.material) ? j.v : wall_velocity<Dim>(P, j.material, j.x);
+}
+
+// What the artificial viscosity sees of neighbour j (PairKinematics::vr_av), given j.w: j.w, but
+// a free-slip tank face slides with the fluid: along it the wall's tangential components are those
+// of j.v (the fluid's, apply_free_slip), so the term damps the approach and is no friction. Once
+// per neighbour, not per pair, so that the pair terms stay free of the face test.
+template <int Dim>
+SPATE_HD Vec<Dim> sliding_velocity(const PhysicsParams& P, const ParticleState<Dim>& j) {
+  const TankFace face = tank_face<Dim>(P, j.x, j.material);  // no face for a fluid j
+  const bool slides = is_free_slip(P, face);
+  Vec<Dim> u;
+  SPATE_UNROLL for (int a = 0; a < Dim; ++a) u[a] = slides && a != face.axis ? j.v[a] : j.w[a];
+  return u;
 }
 
 // Monaghan's alpha for a pair: alpha between fluid particles, alpha times the wall factor
@@ -75,7 +90,7 @@ SPATE_HD float density_diffusion(const PhysicsParams& P, const FluidMaterial& M,
   const float hydrostatic = (P.diffusion == DensityDiffusion::Fourtakas ? 1.0f : 0.0f) * (M.rho0 / (M.c0 * M.c0));
   const float s = 0.5f * (rho_i + rho_j) / M.rho0;
   const float drho_ji = (rho_j - rho_i) - hydrostatic * g_dot_rji / tait_sound_speed_ratio2<Gamma7>(s, M.gamma);
-  return diffusion_flux(P, M, factor * (delta_sph ? 1.0f : 0.0f), drho_ji, r2, F, inv_r2_eta, volume_j);
+  return diffusion_flux(P, M, factor * option_factor(delta_sph), drho_ji, r2, F, inv_r2_eta, volume_j);
 }
 
 // What every pair term needs of the pair's geometry and motion: r_ij, its square, the kernel
@@ -114,16 +129,9 @@ SPATE_HD PairKinematics<Dim> pair_kinematics(const PhysicsParams& P, const Parti
   }
   k.vr = dot(k.v_ij_wall, k.r);
   k.vr_av = k.vr;
-  // Free-slip faces: only runs with moving or free-slip walls take this loop (walls_have_velocity).
-  if constexpr (MovingWalls) {
-    if (P.free_slip_axes && j_fluid == 0.0f) {
-      const TankFace face = tank_face<Dim>(P, j.x, j.material);
-      if (is_free_slip(P, face)) {
-        k.vr_av = 0.0f;
-        SPATE_UNROLL for (int a = 0; a < Dim; ++a) k.vr_av += (a == face.axis ? k.v_ij_wall[a] : i.v[a] - j.v[a]) * k.r[a];
-      }
-    }
-  }
+  // Free-slip faces: only runs with moving or free-slip walls take this loop (walls_have_velocity);
+  // j.w_av is sliding_velocity(), which is j.w off a free-slip face (then vr_av = vr exactly).
+  if constexpr (MovingWalls) k.vr_av = dot(i.v - j.w_av, k.r);
   return k;
 }
 
@@ -149,11 +157,11 @@ struct RiemannPairTerms {
 template <int Dim>
 SPATE_HD RiemannPairTerms riemann_pair_terms(const PhysicsParams& P, const FluidMaterial& M, float factor, const ParticleState<Dim>& i,
                                              const ParticleState<Dim>& j, const PairKinematics<Dim>& pk, float volume_j) {
-  const float riemann_diffusion = P.diffusion == DensityDiffusion::Riemann ? 1.0f : 0.0f;
+  const float riemann_diffusion = option_factor(P.diffusion == DensityDiffusion::Riemann);
   const float dp_dynamic = (i.p - j.p) + M.rho0 * pk.g_dot_rji;
   RiemannPairTerms out;
   out.density_rate = factor * riemann_diffusion * i.rho * volume_j * dp_dynamic / (M.rho0 * M.c0) * pk.F * pk.r_len;
-  const float riemann_flux = P.flux == MomentumFlux::Riemann ? 1.0f : 0.0f;
+  const float riemann_flux = option_factor(P.flux == MomentumFlux::Riemann);
   const float jump = -pk.vr * factor / (pk.r_len + 1e-6f * P.h);
   const float compression = jump > 0.0f ? jump : 0.0f;
   const float beta = P.riemann_limiter * compression < M.c0 ? P.riemann_limiter * compression : M.c0;

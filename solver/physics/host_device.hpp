@@ -22,3 +22,9 @@
 #else
 #define SPATE_UNROLL
 #endif
+
+// A run option (the same for every pair of a loop) as a factor 1 or 0 of a branch-free pair term.
+// Not `on ? 1.0f : 0.0f`: GCC 12 turns x * (on ? 1 : 0) into on ? x : x * 0, a select between
+// per-pair values on a loop-invariant condition, which its vectoriser rejects ("relevant stmt not
+// supported"), so the whole pair loop stayed scalar (scripts/check-vectorisation guards it).
+SPATE_HD float option_factor(bool on) { return static_cast<float>(on); }

@@ -84,7 +84,9 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
   // Eq. 6, normalised continuity with the neighbour's volume; across an interface with the
   // velocity of the pair's acoustic interface instead of j's (see above): v_i - v* = Z_j/(Z_i+Z_j) v_ij.
   const float inv_z_sum = 1.0f / (z_i + z_j);
-  const float interface = j_is_fluid && same_fluid == 0.0f ? 2.0f * z_j * inv_z_sum : 1.0f;
+  // (Selected on a float: a select on `j_is_fluid && !same` is one the vectoriser rejects.)
+  const float across = j_fluid * (1.0f - same_fluid);
+  const float interface = across > 0.0f ? 2.0f * z_j * inv_z_sum : 1.0f;
   float drho = i.rho * volume_j * vr * F * interface;
   // Density diffusion and the Riemann options within i's fluid only (the terms of
   // fluid_pair_terms, times same_fluid).

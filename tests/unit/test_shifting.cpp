@@ -20,7 +20,7 @@ struct Lattice2D {
   std::vector<ParticleState<2>> sites(int top) const {
     std::vector<ParticleState<2>> out;
     for (int i = -6; i <= 6; ++i)
-      for (int j = -12; j <= top; ++j) out.push_back(ParticleState<2>{{i * P.dp, j * P.dp}, {0, 0}, M.rho0, 0.0f, 0, {0, 0}});
+      for (int j = -12; j <= top; ++j) out.push_back(ParticleState<2>{{i * P.dp, j * P.dp}, {0, 0}, M.rho0, 0.0f, 0, {0, 0}, {0, 0}});
     return out;
   }
   Vec<2> shift_of(const Vec<2>& xi, const std::vector<ParticleState<2>>& all) const {
@@ -64,7 +64,7 @@ TEST(Shifting, AFreeSurfaceParticleIsNotPushedOutOfTheFluid) {
 
 TEST(Shifting, ASplashedParticleIsLeftAlone) {
   Lattice2D L;
-  std::vector<ParticleState<2>> pair{{{0, 0}, {0, 0}, L.M.rho0, 0.0f, 0, {0, 0}}, {{0.9f * L.P.dp, 0}, {0, 0}, L.M.rho0, 0.0f, 0, {0, 0}}};
+  std::vector<ParticleState<2>> pair{{{0, 0}, {0, 0}, L.M.rho0, 0.0f, 0, {0, 0}, {0, 0}}, {{0.9f * L.P.dp, 0}, {0, 0}, L.M.rho0, 0.0f, 0, {0, 0}, {0, 0}}};
   const Vec<2> dr = L.shift_of(Vec<2>{0, 0}, pair);
   EXPECT_EQ(dr[0], 0.0f);
   EXPECT_EQ(dr[1], 0.0f);

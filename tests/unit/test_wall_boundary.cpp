@@ -115,7 +115,7 @@ Vec<2> floor_force(const PhysicsParams& P, float dp, Velocity velocity_at) {
   const int reach = static_cast<int>(std::ceil(2.0f * P.h / dp)) + 1;
   auto fluid_at = [&](int col, int row) {
     const float y = (row + 0.5f) * dp;
-    return ParticleState<2>{{x0 + col * dp, y}, velocity_at(y), M.rho0, 0.0f, 0, {0, 0}};
+    return ParticleState<2>{{x0 + col * dp, y}, velocity_at(y), M.rho0, 0.0f, 0, {0, 0}, {0, 0}};
   };
   ParticleState<2> wall[3];
   for (int layer = 0; layer < 3; ++layer) {
@@ -125,7 +125,7 @@ Vec<2> floor_force(const PhysicsParams& P, float dp, Velocity velocity_at) {
       for (int row = 0; row <= reach; ++row) accumulate_wall_pair<WendlandC2, 2>(P, x_wall, fluid_at(col, row), s);
     WallState<2> st = finish_wall(P, s, P.materials.tank(), x_wall);
     apply_wall_shear<2>(P, x_wall, P.materials.tank(), s, st);
-    wall[layer] = ParticleState<2>{x_wall, st.v, st.rho, 0.0f, P.materials.tank(), {0, 0}};
+    wall[layer] = ParticleState<2>{x_wall, st.v, st.rho, 0.0f, P.materials.tank(), {0, 0}, {0, 0}};
   }
   Vec<2> force{{0.0f, 0.0f}};
   for (int row = 0; row <= reach; ++row) {
@@ -135,6 +135,7 @@ Vec<2> floor_force(const PhysicsParams& P, float dp, Velocity velocity_at) {
         ParticleState<2> j = w;
         j.x[0] = x0 + col * dp;
         j.w = boundary_velocity<2>(P, j);  // 0: the tank is at rest
+        j.w_av = sliding_velocity<2>(P, j);
         const Vec<2> a = fluid_pair_terms<WendlandC2, 2, true, true>(P, M, i, j).acc;
         for (int k = 0; k < 2; ++k) force[k] += M.mass * a[k];
       }

@@ -130,7 +130,7 @@ constexpr int kChunk = 8 * kLanes;
 template <int Dim>
 struct NeighbourBatch {
   // Candidates of the current cell.
-  std::vector<float> x[Dim], v[Dim], rho, p, r2;
+  std::vector<float> x[Dim], v[Dim], v_av[Dim], rho, p, r2;
   std::vector<std::uint8_t> material;
   // Several fluids: each candidate's fluid mass, sound speed and viscosity (NeighbourFluid).
   std::vector<float> mass, c0, viscosity;
@@ -138,10 +138,11 @@ struct NeighbourBatch {
   std::vector<std::uint32_t> index;
   std::vector<NeighbourRecord> record;
   int capacity = 0;
-  void reserve(int n, bool multiphase = false) {
+  void reserve(int n, bool multiphase = false, bool moving_walls = false) {
     capacity = n;
     record.resize(n);
     for (int k = 0; k < Dim; ++k) x[k].resize(n), v[k].resize(n);
+    if (moving_walls) for (int k = 0; k < Dim; ++k) v_av[k].resize(n);
     rho.resize(n), p.resize(n), r2.resize(n), index.resize(n);
     material.resize(n);
     if (multiphase) mass.resize(n), c0.resize(n), viscosity.resize(n);
@@ -153,7 +154,7 @@ template <int Dim>
 inline void add_lanes(float (&vec)[Dim][kLanes], float (&scalar)[kLanes], const float (&tvec)[Dim][kChunk],
                       const float (&tscalar)[kChunk], int len) {
   int s = 0;
-  for (; s + kLanes <= len; s += kLanes) {
+  for (; s + kLanes <= len; s += kLanes) {  // must vectorise: lane-sums
     for (int l = 0; l < kLanes; ++l) {
       SPATE_UNROLL for (int k = 0; k < Dim; ++k) vec[k][l] += tvec[k][s + l];
       scalar[l] += tscalar[s + l];
@@ -200,17 +201,18 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
       grid.global_coords(static_cast<std::uint32_t>(c), g);
       int candidates = 0;
       v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) { candidates += static_cast<int>(je - jb); });
-      if (candidates + kSelectSlack > batch.capacity) batch.reserve(candidates + kSelectSlack, Multiphase);
+      if (candidates + kSelectSlack > batch.capacity) batch.reserve(candidates + kSelectSlack, Multiphase, MovingWalls);
       float* cx[Dim];
       SPATE_UNROLL for (int k = 0; k < Dim; ++k) cx[k] = batch.x[k].data();
       float* cr2 = batch.r2.data();
       std::uint8_t* ckind = batch.material.data();
       std::uint32_t* index = batch.index.data();
       NeighbourRecord* record = batch.record.data();
-      // Moving walls: what continuity sees of each candidate (a wall's prescribed velocity), once
-      // per candidate rather than once per pair.
+      // Moving walls: what continuity and the artificial viscosity see of each candidate (a wall's
+      // prescribed velocity, a free-slip face sliding), once per candidate rather than once per pair.
       float* cw[Dim];
-      SPATE_UNROLL for (int k = 0; k < Dim; ++k) cw[k] = batch.v[k].data();
+      float* cw_av[Dim];
+      SPATE_UNROLL for (int k = 0; k < Dim; ++k) cw[k] = batch.v[k].data(), cw_av[k] = batch.v_av[k].data();
       int m = 0;
       v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
         const int len = static_cast<int>(je - jb);
@@ -219,8 +221,10 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
         for (int q = 0; q < len; ++q) fill_record<Dim>(ps, jb + q, record[m + q]);
         if constexpr (MovingWalls)
           for (int q = 0; q < len; ++q) {
-            const Vec<Dim> w = boundary_velocity<Dim>(P, load_state<Dim>(ps, jb + q));
-            SPATE_UNROLL for (int k = 0; k < Dim; ++k) cw[k][m + q] = w[k];
+            ParticleState<Dim> sj = load_state<Dim>(ps, jb + q);
+            sj.w = boundary_velocity<Dim>(P, sj);
+            const Vec<Dim> w_av = sliding_velocity<Dim>(P, sj);
+            SPATE_UNROLL for (int k = 0; k < Dim; ++k) cw[k][m + q] = sj.w[k], cw_av[k][m + q] = w_av[k];
           }
         if constexpr (Multiphase) {
           for (int q = 0; q < len; ++q) {
@@ -255,22 +259,28 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
           gather_records(record, chunk, len, fields);
           std::uint8_t jkind[kChunk];
           gather(ckind, chunk, len, jkind);
-          [[maybe_unused]] float jw[Dim][MovingWalls ? kChunk : 1];
-          if constexpr (MovingWalls) SPATE_UNROLL for (int k = 0; k < Dim; ++k) gather(cw[k], chunk, len, jw[k]);
+          [[maybe_unused]] float jw[Dim][MovingWalls ? kChunk : 1], jw_av[Dim][MovingWalls ? kChunk : 1];
+          if constexpr (MovingWalls)
+            SPATE_UNROLL for (int k = 0; k < Dim; ++k) gather(cw[k], chunk, len, jw[k]), gather(cw_av[k], chunk, len, jw_av[k]);
           [[maybe_unused]] float jmass[Multiphase ? kChunk : 1], jc0[Multiphase ? kChunk : 1], jmu[Multiphase ? kChunk : 1];
           if constexpr (Multiphase) {
             gather(batch.mass.data(), chunk, len, jmass);
             gather(batch.c0.data(), chunk, len, jc0);
             gather(batch.viscosity.data(), chunk, len, jmu);
           }
+          // The pair terms, one neighbour per vector lane. This loop is most of a step's flops and
+          // must stay vectorised (GCC's report, checked by scripts/check-vectorisation): nothing
+          // in the pair terms may branch, call a function without a vector variant (powf: the
+          // gamma != 7 loops stay scalar), or select between per-pair values on a run option
+          // (option_factor). A refactor that did the last left it scalar, 1.7x slower (issue 36).
           float tacc[Dim][kChunk], tdrho[kChunk], twall[Dim][kChunk], tweight[kChunk];
-          for (int n = 0; n < len; ++n) {
+          for (int n = 0; n < len; ++n) {  // must vectorise: pair-terms
             ParticleState<Dim> sj;
             SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.x[k] = jf[kRecX + k][n], sj.v[k] = jf[kRecV + k][n];
             sj.rho = jf[kRecRho][n];
             sj.p = jf[kRecP][n];
             sj.material = jkind[n];
-            if constexpr (MovingWalls) SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.w[k] = jw[k][n];
+            if constexpr (MovingWalls) SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.w[k] = jw[k][n], sj.w_av[k] = jw_av[k][n];
             FluidRates<Dim> t;
             if constexpr (Multiphase)
               t = multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj, NeighbourFluid{jmass[n], jc0[n], jmu[n]});
@@ -353,14 +363,34 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
         candidate_distances<Dim>(xw, cx, m, cr2);
         const int count = select_inside(cr2, m, P.support2, index);
         WallSums<Dim> sums;
-        for (int n = 0; n < count; ++n) {
-          const std::uint32_t q = index[n];
-          ParticleState<Dim> sj;
-          SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.x[k] = cx[k][q], sj.v[k] = cv[k][q];
-          sj.rho = crho[q];
-          sj.p = cp[q];
-          sj.material = 0;  // a fluid (the wall sums do not look at it)
-          accumulate_wall_pair<Kernel, Dim>(P, xw, sj, sums);
+        for (int s0 = 0; s0 < count; s0 += kChunk) {
+          const int len = std::min(kChunk, count - s0);
+          const std::uint32_t* chunk = index + s0;
+          float jx[Dim][kChunk], jv[Dim][kChunk], jrho[kChunk], jp[kChunk];
+          SPATE_UNROLL for (int k = 0; k < Dim; ++k) gather(cx[k], chunk, len, jx[k]), gather(cv[k], chunk, len, jv[k]);
+          gather(crho, chunk, len, jrho);
+          gather(cp, chunk, len, jp);
+          // Each neighbour's terms, one per vector lane (they must stay vectorised, like the fluid
+          // pair terms: scripts/check-vectorisation), then added up in the visiting order.
+          float tw[kChunk], tpw[kChunk], trr[Dim][kChunk], tvw[Dim][kChunk];
+          for (int n = 0; n < len; ++n) {  // must vectorise: wall-pair-terms
+            ParticleState<Dim> sj;
+            SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.x[k] = jx[k][n], sj.v[k] = jv[k][n];
+            sj.rho = jrho[n];
+            sj.p = jp[n];
+            sj.material = 0;  // a fluid (the wall sums do not look at it)
+            const WallSums<Dim> t = wall_pair_terms<Kernel, Dim>(P, xw, sj);
+            tw[n] = t.w;
+            tpw[n] = t.pw;
+            SPATE_UNROLL for (int k = 0; k < Dim; ++k) trr[k][n] = t.rho_r_w[k], tvw[k][n] = t.v_w[k];
+          }
+          for (int n = 0; n < len; ++n) {
+            WallSums<Dim> t;
+            t.w = tw[n];
+            t.pw = tpw[n];
+            SPATE_UNROLL for (int k = 0; k < Dim; ++k) t.rho_r_w[k] = trr[k][n], t.v_w[k] = tvw[k][n];
+            add_wall_pair(sums, t);
+          }
         }
         WallState<Dim> st = finish_wall(P, sums, ps.material[w], xw);
         apply_wall_shear<Dim>(P, xw, ps.material[w], sums, st);

@@ -34,7 +34,7 @@ inline int select_inside_portable(const float* r2, int n, float limit, std::uint
 // support test here exactly when the per-particle body would keep it. Vectorised over candidates.
 template <int Dim, class Point>
 inline void candidate_distances(const Point& x, float* const (&cx)[Dim], int n, float* __restrict r2) {
-  for (int q = 0; q < n; ++q) {
+  for (int q = 0; q < n; ++q) {  // must vectorise: candidate-distances
     float d2 = 0.0f;
     SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
       const float d = x[k] - cx[k][q];
@@ -75,7 +75,7 @@ inline int select_inside(const float* r2, int n, float limit, std::uint32_t* ind
 // makes of this loop.
 template <class T>
 void gather(const T* __restrict from, const std::uint32_t* __restrict index, int count, T* __restrict to) {
-  for (int n = 0; n < count; ++n) to[n] = from[index[n]];
+  for (int n = 0; n < count; ++n) to[n] = from[index[n]];  // must vectorise: neighbour-gather
 }
 
 // A candidate's fields for the fluid pair terms as one 32-byte record: the registry's kNeighbour
