@@ -576,6 +576,20 @@ int compare_command(const CompareArgs& a) {
   return ok ? 0 : 1;
 }
 
+namespace {
+// The processor's model name (Linux: /proc/cpuinfo), "unknown" elsewhere.
+std::string cpu_model() {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("model name", 0) == 0) {
+      const auto colon = line.find(':');
+      if (colon != std::string::npos) return line.substr(line.find_first_not_of(" \t", colon + 1));
+    }
+  return "unknown";
+}
+}  // namespace
+
 int bench_command(const BenchArgs& a) {
   std::vector<std::string> overrides = a.overrides;
   overrides.push_back("output.interval=0");
@@ -644,6 +658,13 @@ int bench_command(const BenchArgs& a) {
     j["summation_interactions_per_step"] = interactions.summation;
     j["bytes_per_particle"] = r.bytes_per_particle;
     j["ghost_particles"] = r.ghosts;
+    // What the CPU code was built for and runs on (docs/performance.md's tables name both).
+    const cpu::BuildTarget target = cpu::build_target();
+    j["cpu"] = {{"model", cpu_model()},
+                {"isa", target.isa},
+                {"vector_bits", target.vector_bits},
+                {"arch_flags", target.flags},
+                {"pair_loop", cpu::pair_loop_vectorised(physics_params(c)) ? "vector" : "scalar"}};
     // Decomposition diagnostics (as in summary.json): per-slab loop seconds and the balancer's work.
     j["device_particles"] = r.slab_particles;
     j["device_busy_seconds"] = r.slab_busy_seconds;
@@ -652,9 +673,10 @@ int bench_command(const BenchArgs& a) {
     std::printf("%s\n", j.dump(2).c_str());
   } else {
     std::printf("%s: %lld particles, %d threads, %d devices: %.4f s/step, %.3g particle-steps/s, %.3g interactions/s "
-                "(fluid %.3g), %.1f B/particle\n",
+                "(fluid %.3g), %.1f B/particle; CPU code %s, %s pair loop\n",
                 c.name.c_str(), static_cast<long long>(r.particles.total()), threads, a.devices, seconds / r.steps, psps,
-                ips, fluid_ips, r.bytes_per_particle);
+                ips, fluid_ips, r.bytes_per_particle, cpu::build_target().isa,
+                cpu::pair_loop_vectorised(physics_params(c)) ? "vector" : "scalar");
   }
   return 0;
 }

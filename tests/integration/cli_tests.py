@@ -11,6 +11,7 @@ must still not exist afterwards.
 import argparse
 import json
 import os
+import platform
 import re
 import shutil
 import subprocess
@@ -305,6 +306,25 @@ def info_json(env):
     check(p.returncode == 0 and "60 fluid" in p.stdout and "138 wall" in p.stdout, "text info")
     check(re.search(r"0\s+water\s+fluid: rho0 = 1000 kg/m3", p.stdout) and re.search(r"1\s+tank\s+tank walls", p.stdout),
           f"text info lists the materials:\n{p.stdout}")
+
+
+@test
+def bench_json_reports_the_build(env):
+    """spate bench --json says what the CPU code was built for and whether the run's pair loop is
+    a vectorised one (issue 36): gamma = 7 takes the vector loop, another exponent the scalar one."""
+    levels = {"x86-64-v4 (AVX-512)": 512, "x86-64-v3 (AVX2)": 256, "x86-64-v2 (SSE4.2)": 128, "x86-64 (SSE2)": 128}
+    for gamma, loop in ((7, "vector"), (1.4, "scalar")):
+        p = env.run("bench", env.tiny, "--steps", "2", "--threads", "1", "--json", "--set", f"fluid.tait_exponent={gamma}")
+        check(p.returncode == 0, f"exit {p.returncode}")
+        cpu = json.loads(p.stdout).get("cpu", {})
+        check(set(cpu) == {"model", "isa", "vector_bits", "arch_flags", "pair_loop"}, f"cpu block {cpu}")
+        check(cpu["pair_loop"] == loop, f"tait_exponent {gamma}: pair loop {cpu['pair_loop']}, expected {loop}")
+        check(levels.get(cpu["isa"]) == cpu["vector_bits"], f"isa {cpu['isa']} with {cpu['vector_bits']} bits")
+        check(cpu["model"] != "" and isinstance(cpu["arch_flags"], str), f"model and flags {cpu}")
+        if platform.machine() == "x86_64" and "avx512bw" in open("/proc/cpuinfo").read() and "-march=native" in cpu["arch_flags"]:
+            check(cpu["isa"] == "x86-64-v4 (AVX-512)", f"a native build on an AVX-512 machine reports {cpu['isa']}")
+    p = env.run("bench", env.tiny, "--steps", "2", "--threads", "1")
+    check(p.returncode == 0 and re.search(r"CPU code x86-64[^,]*, (vector|scalar) pair loop", p.stdout), "text bench names the build")
 
 
 @test

@@ -1,6 +1,7 @@
-// The support selection of the CPU pair loops: the SIMD version (AVX-512 where the build targets
-// it) must give exactly the list of the portable one, in the same order, for any candidate count
-// (full 16-wide groups and a remainder) and for values on, just inside and just outside the bound.
+// The support selection of the CPU pair loops: the SIMD versions (AVX-512 where the build targets
+// it, AVX2's permutation on any CPU with AVX2) must give exactly the list of the portable one, in
+// the same order, for any candidate count (full 16- and 8-wide groups and a remainder) and for
+// values on, just inside and just outside the bound.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -28,6 +29,14 @@ TEST(NeighbourSelect, SimdAndPortableSelectTheSameCandidatesInOrder) {
     std::vector<std::uint32_t> a(n + cpu::kSelectSlack), b(n + cpu::kSelectSlack);
     const int na = cpu::select_inside(d.data(), n, limit, a.data());
     const int nb = cpu::select_inside_portable(d.data(), n, limit, b.data());
+#if defined(__x86_64__)
+    // The AVX2 permutation, whatever the build targets, where this CPU has AVX2.
+    if (__builtin_cpu_supports("avx2")) {
+      std::vector<std::uint32_t> c(n + cpu::kSelectSlack);
+      ASSERT_EQ(cpu::select_inside_avx2(d.data(), n, limit, c.data()), nb) << "n = " << n;
+      for (int k = 0; k < nb; ++k) EXPECT_EQ(c[k], b[k]) << "AVX2, n = " << n << ", entry " << k;
+    }
+#endif
     int expected = 0;
     for (int q = 0; q < n; ++q) expected += d[q] < limit;
     ASSERT_EQ(na, expected) << "n = " << n;

@@ -29,7 +29,7 @@ void for_random_pairs(const PhysicsParams& P, F&& f) {
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   const FluidMaterial& M = P.materials.fluid[0];
   for (int n = 0; n < 2000; ++n) {
-    ParticleState<2> i{{0.2f, 0.2f}, {u(rng), u(rng)}, M.rho0 * (1.0f + 0.01f * u(rng)), 0.0f, 0, {0, 0}};
+    ParticleState<2> i{{0.2f, 0.2f}, {u(rng), u(rng)}, M.rho0 * (1.0f + 0.01f * u(rng)), 0.0f, 0, {0, 0}, {0, 0}};
     ParticleState<2> j = i;
     const float r = 2.0f * P.h * (0.5f + 0.5f * u(rng)), a = 3.14159f * u(rng);
     j.x = Vec<2>{{i.x[0] + r * std::cos(a), i.x[1] + r * std::sin(a)}};
@@ -91,11 +91,11 @@ TEST(PairTerms, OnlyThePlainLoopIsChosenWithoutTheRiemannTerms) {
 FluidRates<2> sliding_over_a_wall_row(const PhysicsParams& P, bool multiphase) {
   const FluidMaterial& M = P.materials.fluid[0];
   // i 0.6 dp above the first row of wall particles (spacing dp), sliding along +x at 1 m/s.
-  const ParticleState<2> i{{0.2f, 0.006f}, {1.0f, 0.0f}, M.rho0, 0.0f, 0, {0, 0}};
+  const ParticleState<2> i{{0.2f, 0.006f}, {1.0f, 0.0f}, M.rho0, 0.0f, 0, {0, 0}, {0, 0}};
   FluidRates<2> sum;
   for (int k = -4; k <= 4; ++k)
     for (int layer = 0; layer < 3; ++layer) {
-      const ParticleState<2> j{{0.2f + 0.01f * k, -0.005f - 0.01f * layer}, {0.0f, 0.0f}, M.rho0, 0.0f, P.materials.tank(), {0, 0}};
+      const ParticleState<2> j{{0.2f + 0.01f * k, -0.005f - 0.01f * layer}, {0.0f, 0.0f}, M.rho0, 0.0f, P.materials.tank(), {0, 0}, {0, 0}};
       add_pair_rates(sum, multiphase ? multiphase_pair_terms<WendlandC2, 2>(P, M, i, j, neighbour_fluid(P, j.material))
                                      : fluid_pair_terms<WendlandC2, 2>(P, M, i, j));
     }

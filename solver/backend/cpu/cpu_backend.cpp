@@ -437,4 +437,23 @@ float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeSt
   return std::min(dt, state_free_time_step(P, c));
 }
 
+BuildTarget build_target() {
+#if !defined(SPATE_ARCH_FLAGS)
+#define SPATE_ARCH_FLAGS ""
+#endif
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512DQ__) && defined(__AVX512VL__)
+  return {"x86-64-v4 (AVX-512)", 512, SPATE_ARCH_FLAGS};
+#elif defined(__AVX2__) && defined(__FMA__)
+  return {"x86-64-v3 (AVX2)", 256, SPATE_ARCH_FLAGS};
+#elif defined(__SSE4_2__)
+  return {"x86-64-v2 (SSE4.2)", 128, SPATE_ARCH_FLAGS};
+#elif defined(__x86_64__)
+  return {"x86-64 (SSE2)", 128, SPATE_ARCH_FLAGS};
+#else
+  return {"not x86-64", 0, SPATE_ARCH_FLAGS};
+#endif
+}
+
+bool pair_loop_vectorised(const PhysicsParams& P) { return all_fluids_gamma7(P); }
+
 }  // namespace spate::cpu

@@ -42,6 +42,21 @@ void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float
 // Smallest stable time step over owned fluid particles (infinity when there are none).
 float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c);
 
+// What the CPU code was built for (`spate bench --json`, "cpu"): the widest x86-64 level its
+// compile enabled (the compiler's own macros), the widest vectors that level has, and the build's
+// instruction-set flags (cmake/SpateWarnings.cmake).
+struct BuildTarget {
+  const char* isa;
+  int vector_bits;
+  const char* flags;
+};
+BuildTarget build_target();
+
+// Whether a run's fluid pair loop is one of the vectorised instantiations (every fluid at
+// gamma = 7; scripts/check-vectorisation holds them to it) or a scalar one (another Tait exponent:
+// powf per pair).
+bool pair_loop_vectorised(const PhysicsParams& P);
+
 }  // namespace spate::cpu
 
 #include "../step_kernels.hpp"
