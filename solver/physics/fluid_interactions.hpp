@@ -50,8 +50,9 @@ SPATE_HD Vec<Dim> sliding_velocity(const PhysicsParams& P, const ParticleState<D
 // (fluid.wall_artificial_viscosity) against a wall (j_fluid = 0). A no-slip wall at rest makes the
 // term a friction as well as a damping of approach: for i sliding along the wall the pair direction
 // to a wall particle diagonally ahead makes v_ij . r_ij < 0. At H/60-H/120 that friction slows the
-// bottom centimetres of a dam-break surge by a third (docs/validation.md, "What keeps p3 low"). A
-// free-slip wall does not rub: the term sees it slide with the fluid (PairKinematics::vr_av).
+// bottom centimetres of a dam-break surge by a third (docs/studies/impact-pressures.md, "What
+// keeps p3 low"). A free-slip wall does not rub: the term sees it slide with the fluid
+// (PairKinematics::vr_av).
 SPATE_HD float artificial_alpha(const PhysicsParams& P, float j_fluid) {
   return P.artificial_viscosity * (j_fluid + (1.0f - j_fluid) * P.wall_artificial_viscosity);
 }

@@ -23,7 +23,8 @@
 // As in the 2017 model the shift is not an ALE transport: velocity and density are not corrected
 // for it. The consistent terms of Sun et al. (2019) (the shifting velocity's divergence in the
 // continuity equation) need the neighbours' shifts, i.e. a halo refresh of `shift`, and are not
-// implemented; without them the shifting perturbs the pressure (docs/validation.md measures it).
+// implemented; without them the shifting perturbs the pressure (docs/studies/impact-pressures.md
+// measures it).
 #include "fluid_interactions.hpp"
 #include "kernels.hpp"
 #include "params.hpp"
@@ -47,7 +48,8 @@ struct ShiftingSums {
 // j = i and beyond the support. Every neighbour takes the volume m / rho0 (the wall lattice's, and
 // the fluid's at rest): with V_j = m / rho_j (the paper's) a compressed fluid next to a wall, whose
 // Adami density is a pressure boundary condition and not a packing, is drawn into the wall; in the
-// hydrostatic tank that variant lost 7% of the bottom pressure instead of 3% (docs/validation.md).
+// hydrostatic tank that variant lost 7% of the bottom pressure instead of 3%
+// (docs/studies/impact-pressures.md).
 template <class Kernel, int Dim>
 SPATE_HD void accumulate_shifting_pair(const PhysicsParams& P, const FluidMaterial& M, float w_dp, const Vec<Dim>& xi,
                                        const ParticleState<Dim>& j, ShiftingSums<Dim>& s) {

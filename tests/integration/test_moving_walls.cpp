@@ -1,7 +1,7 @@
 // Walls that move, against linear water-wave theory (label `validation`): a piston wave maker
 // against Biesel's transfer function, and a sloshing tank's free decay and forced response below
 // resonance against Faltinsen's linear solution. The resolutions are the shipped cases' (2D,
-// coarse where the physics allows: docs/validation.md says why and shows the curves).
+// coarse where the physics allows: docs/studies/moving-walls.md says why and shows the curves).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -165,7 +165,7 @@ TEST(Multiphase, SteeringAPhaseViscosity) {
 // stays within 10% of the single-phase run's (measured: within 2%; the air slows it slightly), and
 // the interface carries no pressure noise: at T = 2 every water particle within 2h of an air
 // particle has a pressure in [-0.3, 0.5] rho_w g H and every air particle one within
-// 0.05 rho_w g H of its background pressure (measured values in docs/validation.md). Before the interface velocity of the acoustic Riemann problem
+// 0.05 rho_w g H of its background pressure (measured values in docs/studies/dam-break-air.md). Before the interface velocity of the acoustic Riemann problem
 // entered the cross-phase continuity (physics/multiphase_interactions.hpp), water particles at the
 // front read +-15 rho_w g H.
 TEST(Multiphase, DamBreakWithAirFollowsTheSinglePhaseFront) {

@@ -52,10 +52,10 @@ double slope(const std::vector<std::pair<double, double>>& pts, double from, dou
 // The surge front of the ideal (instant) release runs ahead of Martin & Moyce by 11-18% for T <= 3
 // at every resolution from a/28.6 on, with the experiment's front speed: the lead is a constant
 // delay, the time the experiment took to release its column (about 0.25 in T, 13 ms), not too
-// little dissipation or too much wall friction, which would change the speed (docs/validation.md,
-// "Why the front is early"). The test asserts exactly that: the speed over 1.5 <= T <= 3 within
-// 4%; after the best delay in [0, 0.6] the front within 2.5% (rms); that delay between 0.15 and
-// 0.35; and, as before, the raw lead below 19% (17.5% measured).
+// little dissipation or too much wall friction, which would change the speed
+// (docs/studies/dam-break-front.md, "Why the front is early"). The test asserts exactly that: the
+// speed over 1.5 <= T <= 3 within 4%; after the best delay in [0, 0.6] the front within 2.5%
+// (rms); that delay between 0.15 and 0.35; and, as before, the raw lead below 19% (17.5% measured).
 TEST(Validation, DamBreak2DSurgeFrontAgainstMartinMoyce) {
   const Case c = load_case(test::case_path("dam_break_2d.yaml"), {"output.interval=0", "time.end=0.24"});
   const auto out = test::scratch("validation-front");
@@ -107,7 +107,7 @@ Record averaged(const Record& r, double window) {
   return out;
 }
 
-// What the tests compare (docs/validation.md, "Impact pressures"):
+// What the tests compare (docs/studies/impact-pressures.md):
 //   arrival   the first of three consecutive samples above 0.3 rho g H (the data are noisy before);
 //   peak      the largest value within one tau after the arrival (the first impact);
 //   plateau   the mean over 1 <= tau - tau_arrival <= 2 (the record linear between samples);
@@ -153,7 +153,7 @@ Record experiment_record(const std::string& file, double shift = 0.0) {
 }
 
 // The issue's acceptance levels (issue 11), and where spate does not reach one the level it does
-// reach, so that a regression shows (docs/validation.md, "Impact pressures", says which and why).
+// reach, so that a regression shows (docs/studies/impact-pressures.md says which and why).
 struct Tolerance {
   double arrival_s = 0.02;  // |arrival - experiment| [s]
   double peak = 0.25;       // |peak / experiment - 1|, both through the sensor's window
@@ -209,7 +209,7 @@ std::filesystem::path check_impacts(const std::string& case_file, double H, cons
 // against the records as published, meets the issue's levels except where a Tolerance below says
 // otherwise: the first peak at p1 (+72%; +41% converged), a dip to -0.21 rho g H at p3 just after
 // the arrival, and the late rise at p4 (arrival +56 ms, plateau -12%). The experiment's level
-// records show why (docs/validation.md, "The release: a lifted gate, and the experiment's two
+// records show why (docs/studies/impact-pressures.md, "The release: a lifted gate, and the experiment's two
 // clocks"): the instant release's thin tip reaches the wall 37 ms before the experiment's surge,
 // and the pressure records' clock starts 45 ms after the experiment's release, so p1 and p3 look on
 // time and p4 late. LobovskyGateRelease below compares the released-by-a-gate case on one clock.
@@ -233,7 +233,7 @@ TEST(Validation, BuchnerImpactPressure) {
 
 // Lobovsky et al. (2014, Fig. 16, H = 300 mm): the water-level gauges H2-H4, where they stand [m]
 // and when the surge first reads 0.02 H there, the mean of the paper's two records [tau]
-// (lobovsky_2014_levels.csv, which scripts/impact_metrics.py reads too).
+// (lobovsky_2014_levels.csv, which scripts/studies/impact_metrics.py reads too).
 struct LevelGauge {
   std::string probe;
   double x, first_reading;
@@ -257,7 +257,7 @@ std::vector<LevelGauge> lobovsky_gauges() {
 // How much later [tau] the experiment's pressure records start their clock than its level records:
 // the surge, continued from H4 to the end wall (1.61 m) at the speed it had from H3 to H4, reaches
 // the wall at 2.686 on the level clock, and p1 rises at 2.427 on the pressure clock. Nothing of
-// spate's goes into it (docs/validation.md, "The release: a lifted gate, and the experiment's
+// spate's goes into it (docs/studies/impact-pressures.md, "The release: a lifted gate, and the experiment's
 // two clocks").
 double lobovsky_clock_offset() {
   const std::vector<LevelGauge> gauges = lobovsky_gauges();
@@ -274,7 +274,7 @@ double lobovsky_clock_offset() {
 // records' clock the pressures arrive within 0.02 s at every sensor (+4.4 / +2.6 / +2.7 ms), the
 // first peaks are within 25% (+14 / +2 / -1%), and nothing reads below -0.1 rho g H after the
 // arrival (+0.32 / +0.32 / +0.30). The run stops at t = 0.75 s, before the plateaus (the full run:
-// -5 / -12 / -15%; docs/validation.md).
+// -5 / -12 / -15%; docs/studies/impact-pressures.md).
 TEST(Validation, LobovskyGateRelease) {
   Tolerance p1, p3, p4;
   p1.plateau = p3.plateau = p4.plateau = NAN;
@@ -303,7 +303,7 @@ TEST(Validation, LobovskyGateRelease) {
 // plateaus +24.5 / +23.4 / -13.3%, nothing below +0.2 rho g H after the arrivals. Less friction than
 // the artificial one at this dp, more than none (plateaus +51 / +38 / -19% without any): the
 // tolerances hold it between. As dp halves its plateaus move towards the experiment (+12.7 / +0.1 /
-// -0.5% at H/240) without settling there: the corner eddy returns at H/240 (docs/validation.md,
+// -0.5% at H/240) without settling there: the corner eddy returns at H/240 (docs/studies/impact-pressures.md,
 // "Why the log law's plateaus still move with dp").
 TEST(Validation, LobovskyGateLogLawFloor) {
   Tolerance p1, p3, p4;
@@ -385,7 +385,7 @@ TEST(Validation, CircularityOfALatticeDiscIsOne) {
 // free-slip sides): the rise velocity's maximum, 0.2417 at t = 0.9213, and the centroid height at
 // t = 3, 1.0813, within 5% (measured at dp = 1/40: 0.2392, -1.0%, and 1.0852, +0.4%). The maximum
 // comes late (measured t = 1.16) and the velocity then decays faster than the centroid alone would
-// tell (docs/validation.md, "Rising bubble"): its time is asserted within 0.4 only. The
+// tell (docs/studies/rising-bubble.md): its time is asserted within 0.4 only. The
 // circularity at t = 3 (measured 0.921; the reference's minimum 0.9013 at t = 1.9) is printed and
 // must stay above 0.85 (a bubble that broke up or flattened reads far less).
 TEST(Validation, BubbleRiseAgainstHysing) {

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Plots of the moving-wall validation (docs/validation.md, Moving walls) from the probe files the
+"""Plots of the moving-wall validation (docs/studies/moving-walls.md) from the probe files the
 tests write: WaveFlume.* (/tmp/spate-test-wave-flume), Sloshing.* (/tmp/spate-test-sloshing-decay,
 /tmp/spate-test-sloshing-forced). Usage: moving_walls_plots.py [scratch folder] [images folder]"""
 import csv

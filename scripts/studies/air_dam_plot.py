@@ -1,7 +1,7 @@
 """The dam break with air (cases/dam_break_air_2d.yaml) against the single-phase dam break
 (cases/dam_break_2d.yaml): the pressure field of the water and of the air at T = t sqrt(2g/a) = 1
 and 2, and the water's front. Usage: air_dam_plot.py AIR_RUN SINGLE_RUN OUT.png (called by
-scripts/validation-report; both runs with snapshots at T = 1 and 2)."""
+scripts/studies/validation-report; both runs with snapshots at T = 1 and 2)."""
 import math
 import sys
 from pathlib import Path

@@ -1,15 +1,15 @@
 #!/usr/bin/env python3
 """When the pressure builds at each height of the end wall, and what that says of the two
-experiments' clocks (docs/validation.md, "The release: a lifted gate, and the experiment's two
+experiments' clocks (docs/studies/impact-pressures.md, "The release: a lifted gate, and the experiment's two
 clocks"). Buchner's tank (H = 0.6 m) is Lobovsky's (H = 0.3 m) scaled by two: a column 2 H long at
 the end of a tank 5.366 H long. On one clock, and in tau = t sqrt(g/H), both experiments' sensors
 would cross 0.3 rho g H at the same time at the same z/H. Lobovsky has no sensor at Buchner's 0.2 H,
 only p3 (0.1 H) and p4 (0.267 H): their records are joined with the shape of spate's arrival along
 the wall between those heights, from the wall sensors `wZZZ` (ZZZ the height in mm) of the profile
-runs of scripts/impact-study.
+runs of scripts/studies/impact-study.
 
 Usage: impact_arrivals.py DATA_DIR BUCHNER_RUN LOBOVSKY_RUN=LABEL ...
-Arrival as the issue defines it, through the 10 / 14 ms mean (scripts/impact_metrics.py)."""
+Arrival as the issue defines it, through the 10 / 14 ms mean (scripts/studies/impact_metrics.py)."""
 import math
 import sys
 from pathlib import Path

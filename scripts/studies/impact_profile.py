@@ -1,6 +1,6 @@
 """The pressure along the end wall of the Lobovsky tank over the plateau window, and the flow that
-sets it (docs/validation.md, "What keeps p3 low: a vortex in the corner"). The runs are of a
-Lobovsky case with extra probes every 5 mm up the end wall (scripts/impact-study writes them):
+sets it (docs/studies/impact-pressures.md, "What keeps p3 low: a vortex in the corner"). The runs are of a
+Lobovsky case with extra probes every 5 mm up the end wall (scripts/studies/impact-study writes them):
 wall-pressure sensors `wZZZ` (4.2 mm across, as p1-p4) and velocity probes `vZZZ` 1 cm off the wall,
 ZZZ the height in mm. Each run's window is the issue's plateau window of its own p1: 1 <= tau -
 arrival <= 2; the experiment's sensors are averaged over the same window after its own p1 arrival,
@@ -26,7 +26,7 @@ from run_output import probe_table, saved_step_near, snapshot_arrays  # noqa: E4
 H = 0.3
 G = 9.81
 RHO = 1000.0
-DATA = Path(__file__).parent.parent / "tests" / "validation_data"
+DATA = Path(__file__).resolve().parents[2] / "tests" / "validation_data"
 EXPERIMENT = (("p1", 3), ("p3", 30), ("p4", 80))
 
 

@@ -1,4 +1,4 @@
-"""Impact-pressure metrics of docs/validation.md, the same as tests/integration/test_validation.cpp:
+"""Impact-pressure metrics of docs/studies/impact-pressures.md, the same as tests/integration/test_validation.cpp:
 records in the experiments' units (tau = t sqrt(g/H), P = p / (rho g H)), the sensor's trailing
 moving average (sim/probes.hpp MovingAverage), and arrival / first peak / plateau / lowest value."""
 import csv
@@ -73,7 +73,7 @@ def impact(record):
     return dict(arrival=arrival, peak=peak, plateau=plateau, lowest=lowest)
 
 
-def read_level_gauges(path=Path(__file__).parent.parent / "tests" / "validation_data" / "lobovsky_2014_levels.csv"):
+def read_level_gauges(path=Path(__file__).resolve().parents[2] / "tests" / "validation_data" / "lobovsky_2014_levels.csv"):
     """{gauge: (x [m], (first reading of each record [tau], ...))} from lobovsky_2014_levels.csv,
     the file tests/integration/test_validation.cpp reads too."""
     gauges = {}
@@ -100,7 +100,7 @@ def lobovsky_gauge(name):
 
 def lobovsky_clock_offset(data_dir):
     """How much later [tau] the experiment's pressure records start their clock than its level
-    records (docs/validation.md, "The release: a lifted gate, and the experiment's two clocks"):
+    records (docs/studies/impact-pressures.md, "The release: a lifted gate, and the experiment's two clocks"):
     the surge, continued from H4 to the end wall at the speed it had from H3 to H4, reaches the
     wall at 2.686 on the level clock; p1 rises at 2.427 on the pressure clock (the raw record's
     arrival)."""
@@ -110,7 +110,7 @@ def lobovsky_clock_offset(data_dir):
 
 
 # The validation cases: sensors, their experiments, H, and the averaging window in tau (0.057 tau:
-# 10 ms at H = 0.3 m, 14 ms at H = 0.6 m; docs/validation.md says why). `clock: levels` compares on
+# 10 ms at H = 0.3 m, 14 ms at H = 0.6 m; docs/studies/impact-pressures.md says why). `clock: levels` compares on
 # the level records' clock: the experiment's pressures moved by lobovsky_clock_offset.
 LOBOVSKY_SENSORS = [("p1", "lobovsky_2014_p1.csv"), ("p3", "lobovsky_2014_p3.csv"), ("p4", "lobovsky_2014_p4.csv")]
 CASES = {

@@ -1,4 +1,4 @@
-"""Plots spate's validation runs against experiment and theory (called by scripts/validation-report)."""
+"""Plots spate's validation runs against experiment and theory (called by scripts/studies/validation-report)."""
 import csv
 import math
 import sys
@@ -135,11 +135,11 @@ fig.savefig(images / "validation_two_layer.png", dpi=110)
 
 # Impact pressures against Lobovsky et al. (2014) and Buchner (2002): each scheme's sensor (through
 # its window, as the case's sensors average) and the experiment through the same window
-# (docs/validation.md, "Impact pressures"). Runs: <work>/<case>_<scheme> for each scheme present.
+# (docs/studies/impact-pressures.md, "Impact pressures"). Runs: <work>/<case>_<scheme> for each scheme present.
 SCHEMES = [("default", "default (delta-SPH Fourtakas, central)"),
            ("riemann", "Riemann flux + diffusion"),
            ("riemann_notension", "Riemann + no tension")]
 
 
-for case in ("dam_break_lobovsky", "dam_break_buchner_2d"):  # the cases scripts/validation-report runs
+for case in ("dam_break_lobovsky", "dam_break_buchner_2d"):  # the cases scripts/studies/validation-report runs
     impact_figure(case, [(work / f"{case}_{k}", label) for k, label in SCHEMES], data, images / f"validation_{case}.png")

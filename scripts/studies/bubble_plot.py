@@ -1,6 +1,6 @@
 """The rising bubble (cases/bubble_rise_2d.yaml) against Hysing et al. (2009), test case 1: rise
 velocity and centroid height from the `bubble` probe, the bubble's shape and circularity from the
-snapshots. Usage: bubble_plot.py RUN_DIR OUT.png (called by scripts/validation-report)."""
+snapshots. Usage: bubble_plot.py RUN_DIR OUT.png (called by scripts/studies/validation-report)."""
 import math
 import sys
 from pathlib import Path

@@ -1,6 +1,6 @@
-"""The impact-pressure figure of docs/validation.md: each run's sensors against the experiment, both
-through the same trailing moving average, and the metrics of each (scripts/impact_metrics.py).
-Used by scripts/validation_plots.py (the schemes) and scripts/impact-study (resolution, sound
+"""The impact-pressure figure of docs/studies/impact-pressures.md: each run's sensors against the experiment, both
+through the same trailing moving average, and the metrics of each (scripts/studies/impact_metrics.py).
+Used by scripts/studies/validation_plots.py (the schemes) and scripts/studies/impact-study (resolution, sound
 speed, shifting); as a program:
     impact_plot.py CASE OUT.png DATA_DIR RUN_DIR=LABEL [RUN_DIR=LABEL ...]"""
 import math

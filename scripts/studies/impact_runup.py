@@ -1,5 +1,5 @@
 """What the flow does at the end wall of the Lobovsky tank while the pressure above the floor builds
-(docs/validation.md, "Why the pressure above the floor builds late"): the surge's depth against
+(docs/studies/impact-pressures.md, "Why the pressure above the floor builds late"): the surge's depth against
 Ritter's ideal dam-break solution, printed, and the fluid's pressure and velocity near the wall at a
 few times, drawn; the corner below the stream while the plateau builds, averaged, printed. From a
 run with snapshots:
@@ -43,7 +43,7 @@ def ritter_depth(x, t):
 
 
 def corner_profile(run, t0=0.60, t1=0.70, strip=0.02):
-    """The end-wall corner while the plateau builds (docs/validation.md, the gate section's
+    """The end-wall corner while the plateau builds (docs/studies/impact-pressures.md, the gate section's
     plateaus): over the saved steps with t0 <= t <= t1, the mean pressure and vertical velocity of
     the fluid within `strip` of the end wall, and the mean horizontal velocity 4-6 cm before it,
     in 1 cm bands of height up to 8 cm; printed."""

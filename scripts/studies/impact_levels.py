@@ -1,8 +1,8 @@
-"""The water levels of the Lobovsky dam break against the experiment's gauges H1-H4 (docs/validation.md,
-"The release: a lifted gate, and the experiment's two clocks"): each run's height probes h1-h4
-(cases/dam_break_lobovsky*.yaml) over tau = t sqrt(g/H), with Ritter's ideal dam break, and the time
-the surge first reads 0.02 H at H2-H4 against the records' first readings
-(tests/validation_data/lobovsky_2014_levels.csv).
+"""The water levels of the Lobovsky dam break against the experiment's gauges H1-H4
+(docs/studies/impact-pressures.md, "The release: a lifted gate, and the experiment's two clocks"):
+each run's height probes h1-h4 (cases/dam_break_lobovsky*.yaml) over tau = t sqrt(g/H), with
+Ritter's ideal dam break, and the time the surge first reads 0.02 H at H2-H4 against the records'
+first readings (tests/validation_data/lobovsky_2014_levels.csv).
 The records themselves (the paper's Fig. 16, files Fig16_WaterLevels_H<k>_<n>.dat: tau and h/H)
 are not shipped with spate; with LEVELS_DIR '-' the figure leaves them out. Usage:
     impact_levels.py OUT.png LEVELS_DIR RUN_DIR=LABEL [RUN_DIR=LABEL ...]"""
