@@ -7,8 +7,8 @@ target_compile_options(spate_options INTERFACE
 # The instruction set and tuning of the CPU code (docs/performance.md, "Instruction set and
 # tuning": chosen by measurement). SPATE_NATIVE=ON builds for this machine's instruction set with
 # GCC's generic tuning: -march=native alone also takes the CPU's own tuning, and GCC's znver2
-# tuning made the pair loop 1.1-1.2x slower than generic tuning of the same instructions; on the
-# AVX-512 machines measured the two tunings are equally fast. A build for other machines sets
+# tuning made a step about 10% slower than generic tuning of the same instructions; on the
+# AVX-512 machine measured the two tunings are equally fast. A build for other machines sets
 # SPATE_NATIVE=OFF (GCC's x86-64 baseline) or names its target, e.g.
 # -DSPATE_ARCH_FLAGS="-march=x86-64-v3" for any CPU with AVX2. Results are bit-identical whatever
 # the choice (-ffp-contract=off); only the speed differs. `spate bench --json` reports the flags.
