@@ -39,6 +39,7 @@ SPATE_HD Vec<Dim> boundary_velocity(const PhysicsParams& P, const ParticleState<
 // per neighbour, not per pair, so that the pair terms stay free of the face test.
 template <int Dim>
 SPATE_HD Vec<Dim> sliding_velocity(const PhysicsParams& P, const ParticleState<Dim>& j) {
+  if (!P.free_slip_axes) return j.w;  // moving walls alone: nothing slides
   const TankFace face = tank_face<Dim>(P, j.x, j.material);  // no face for a fluid j
   const bool slides = is_free_slip(P, face);
   Vec<Dim> u;

@@ -122,32 +122,24 @@ struct TankFace {
   float into_fluid = 0.0f;
 };
 
-// Branch-free (selects over the unrolled axes), so that the pair loops that call it per pair
-// (PairKinematics with free-slip walls) vectorise.
 template <int Dim>
 SPATE_HD TankFace tank_face(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material) {
   TankFace f;
-  int outside = 0;
-  SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
+  if (material != P.materials.tank()) return f;
+  for (int k = 0; k < Dim; ++k) {
     const float below = P.tank_lo[k] - x_wall[k], above = x_wall[k] - P.tank_hi[k];
-    const bool out = !(below <= 0.0f && above <= 0.0f);
-    outside += out ? 1 : 0;
-    f.axis = out ? k : f.axis;
-    f.depth = out ? (below > 0.0f ? below : above) : f.depth;
-    f.into_fluid = out ? (below > 0.0f ? 1.0f : -1.0f) : f.into_fluid;
+    if (below <= 0.0f && above <= 0.0f) continue;
+    if (f.axis >= 0) return TankFace{};  // a corner
+    f.axis = k;
+    f.depth = below > 0.0f ? below : above;
+    f.into_fluid = below > 0.0f ? 1.0f : -1.0f;
   }
-  // Not a tank particle, inside the region, or in a corner (outside along two axes): no face.
-  const bool face = material == P.materials.tank() && outside == 1;
-  f.axis = face ? f.axis : -1;
-  f.depth = face ? f.depth : 0.0f;
-  f.into_fluid = face ? f.into_fluid : 0.0f;
   return f;
 }
 
-// Whether `face` is a free-slip face (tank.free_slip). Branch-free like tank_face.
+// Whether `face` is a free-slip face (tank.free_slip).
 SPATE_HD bool is_free_slip(const PhysicsParams& P, const TankFace& face) {
-  const int bit = (static_cast<int>(P.free_slip_axes) >> (face.axis < 0 ? 0 : face.axis)) & 1;
-  return (face.axis >= 0 ? bit : 0) != 0;
+  return face.axis >= 0 && (P.free_slip_axes & (1u << face.axis));
 }
 
 // Antuono's diffusion runs (its two passes, physics/density_gradient.hpp) only with continuity:

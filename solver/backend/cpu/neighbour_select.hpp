@@ -22,13 +22,16 @@ constexpr int kSelectSlack = 16;
 
 // Writes the numbers q in [0, n) with r2[q] < limit to index, in increasing order, and returns how
 // many there are. Branch-free (a branch on "inside" mispredicts about every seventh candidate).
-inline int select_inside_portable(const float* r2, int n, float limit, std::uint32_t* index) {
-  int count = 0;
-  for (int q = 0; q < n; ++q) {
+// From candidate q on, with `count` already selected (also the SIMD versions' tails).
+inline int select_inside_from(const float* r2, int q, int n, float limit, std::uint32_t* index, int count) {
+  for (; q < n; ++q) {
     index[count] = static_cast<std::uint32_t>(q);
     count += r2[q] < limit;
   }
   return count;
+}
+inline int select_inside_portable(const float* r2, int n, float limit, std::uint32_t* index) {
+  return select_inside_from(r2, 0, n, limit, index, 0);
 }
 
 // r2[q] = |x - (cx[0][q], cx[1][q], ...)|^2 for the n candidates of a cell, the components added in
@@ -78,11 +81,7 @@ constexpr std::array<std::uint32_t, 256> kCompressNibbles = [] {
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(index + count), _mm256_add_epi32(lanes, _mm256_set1_epi32(q)));
     count += __builtin_popcount(static_cast<unsigned>(inside));
   }
-  for (; q < n; ++q) {
-    index[count] = static_cast<std::uint32_t>(q);
-    count += r2[q] < limit;
-  }
-  return count;
+  return select_inside_from(r2, q, n, limit, index, count);
 }
 #endif
 
@@ -101,11 +100,7 @@ inline int select_inside(const float* r2, int n, float limit, std::uint32_t* ind
     count += __builtin_popcount(inside);
     q16 = _mm512_add_epi32(q16, sixteen);
   }
-  for (; q < n; ++q) {
-    index[count] = static_cast<std::uint32_t>(q);
-    count += r2[q] < limit;
-  }
-  return count;
+  return select_inside_from(r2, q, n, limit, index, count);
 #elif defined(__AVX2__)
   return select_inside_avx2(r2, n, limit, index);
 #else
