@@ -377,6 +377,8 @@ int info_command(const InfoArgs& a) {
   const FluidMaterial& fluid = P.materials.fluid[0];
   const double dt = c.fixed_dt ? *c.fixed_dt : c.cfl * P.h / fluid.c0;
   const std::vector<std::string> names = material_names(c);
+  // The case's optional fields (surface tension's, heat transfer's) count, as in its run.
+  const OptionalFields optional_fields(FieldGroups{optional_field_groups(P)});
   const std::size_t bpp = ParticleStore(c.dim).bytes_per_particle();
   const double memory = static_cast<double>(n.total()) * bpp;
   const MemoryEstimate run_memory = estimate_run_memory(c, process_group().ranks, process_group().ranks_on_node);
@@ -475,6 +477,26 @@ int info_command(const InfoArgs& a) {
                     motion > 0 ? fmt::format(", moving (motion {})", motion - 1).c_str() : "");
       }
     }
+    if (P.heat.on) {
+      // Heat transfer: each material's thermal properties, the tank faces' conditions, the limit.
+      std::printf("heat transfer   on: conduction limit dt <= %g s; buoyancy gravity (%g, %g, %g) m/s2\n",
+                  heat_time_step(P, TimeStepControl{}), P.heat.gravity[0], P.heat.gravity[1], P.heat.gravity[2]);
+      for (int m = 0; m < P.materials.count; ++m) {
+        const ThermalMaterial& t = P.heat.material(static_cast<std::uint8_t>(m));
+        std::printf("  %-3d %-12s k = %g W/(m K), c_p = %g J/(kg K)%s%s\n", m, names[m].c_str(), t.conductivity, t.specific_heat,
+                    P.is_fluid(m) ? fmt::format(", beta = {:g} 1/K, T_ref = {:g} K", t.expansion, t.reference_temperature).c_str()
+                                  : fmt::format(", rho = {:g} kg/m3", t.density).c_str(),
+                    t.condition == ThermalCondition::Fixed ? ", held at its temperature" : "");
+      }
+      const char* kinds[] = {"conducting", "held", "temperature", "heat flux", "adiabatic"};
+      for (int f = 0; f < 2 * c.dim; ++f) {
+        const FaceCondition& fc = P.heat.face[f];
+        std::printf("  face %c%c        %s", "xyz"[f / 2], f % 2 ? '+' : '-', kinds[static_cast<int>(fc.kind)]);
+        if (fc.kind == ThermalCondition::FaceTemperature) std::printf(" %g K", fc.value);
+        if (fc.kind == ThermalCondition::FaceFlux) std::printf(" %g W/m2 into the fluid", fc.value);
+        std::printf("\n");
+      }
+    }
     if (!c.motions.empty()) std::printf("motions         %zu\n", c.motions.size());
     for (std::size_t k = 0; k < c.motions.size(); ++k) {
       const MotionSpec& ms = c.motions[k];
@@ -519,6 +541,17 @@ int compare_command(const CompareArgs& a) {
   if (!(a.tolerance >= 0)) throw BadInput(fmt::format("--tolerance {}: must be >= 0", a.tolerance));
   if (a.scaled_tolerance && !(*a.scaled_tolerance >= 0))
     throw BadInput(fmt::format("--scaled-tolerance {}: must be >= 0", *a.scaled_tolerance));
+  // A heat run's checkpoints hold its temperatures: compare them too (the optional fields of the
+  // case the first checkpoint ran, read once without them to learn which).
+  std::uint16_t groups = 0;
+  try {
+    ParticleStore first;
+    const CheckpointMeta m = read_checkpoint(a.a, first);
+    if (!m.case_yaml.empty()) groups = optional_field_groups(physics_params(parse_case(m.case_yaml, a.a + " (its stored case)")));
+  } catch (const std::exception& e) {
+    throw BadInput(e.what());
+  }
+  const OptionalFields optional_fields(FieldGroups{static_cast<std::uint16_t>(groups & kThermal)});
   ParticleStore pa, pb;
   CheckpointMeta ma, mb;
   try {

@@ -141,6 +141,8 @@ int post_command(const PostArgs& a) {
 
   const std::filesystem::path out = a.out.empty() ? run_dir / "post" : std::filesystem::path(a.out);
   omp_set_num_threads(a.threads > 0 ? a.threads : hardware_threads());
+  // The saved particles as the run had them: its optional fields (the temperature of a heat run).
+  const OptionalFields optional_fields(FieldGroups{optional_field_groups(physics_params(c))});
   std::unique_ptr<SavedProbes> probes;
   if (!c.probes.empty()) {
     // The run's steering, so that steered wall motions are replayed (probes that follow a body).

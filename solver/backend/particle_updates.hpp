@@ -9,6 +9,7 @@
 #include "../particles/particle_access.hpp"
 #include "../physics/density_gradient.hpp"
 #include "../physics/fluid_interactions.hpp"
+#include "../physics/heat_transfer.hpp"
 #include "../physics/integrator.hpp"
 #include "../physics/multiphase_interactions.hpp"
 #include "../physics/surface_tension.hpp"
@@ -17,11 +18,44 @@
 
 namespace spate {
 
+// Heat transfer (physics/heat_transfer.hpp): how particle i's temperature is found, and the face a
+// tank particle stands behind.
+template <class Fields>
+SPATE_HD ThermalCondition particle_temperature_condition(const PhysicsParams& P, const Fields& f, std::uint32_t i, ThermalFace& face) {
+  float x[3] = {0.0f, 0.0f, 0.0f};
+  for (int k = 0; k < P.dim; ++k) x[k] = f.pos[k][i];
+  return temperature_condition(P.heat, f.material[i], P.materials.tank(), P.tank_lo, P.tank_hi, x, P.dim, face);
+}
+
+// The integrator's halves for the temperature (as for the density, physics/integrator.hpp, with
+// compensated sums) of a particle whose temperature is integrated; the others are set by the wall
+// temperature pass or held.
+template <class Fields>
+SPATE_HD void predict_temperature(const PhysicsParams& P, Fields& f, std::uint32_t i, float dt) {
+  ThermalFace face;
+  if (particle_temperature_condition(P, f, i, face) == ThermalCondition::Conducting)
+    compensated_add(f.temperature[i], f.temperature_residual[i], dt * f.temperature_rate_prev[i]);
+}
+// With particle shifting, a fluid particle's temperature follows it to its shifted position
+// (T += grad T . dr, the first-order correction of delta-plus-SPH for any transported field).
+template <class Fields>
+SPATE_HD void correct_temperature(const PhysicsParams& P, Fields& f, std::uint32_t i, float dt) {
+  ThermalFace face;
+  if (particle_temperature_condition(P, f, i, face) != ThermalCondition::Conducting) return;
+  compensated_add(f.temperature[i], f.temperature_residual[i], 0.5f * dt * (f.temperature_rate[i] - f.temperature_rate_prev[i]));
+  if (P.shifting.enabled && P.is_fluid(f.material[i])) {
+    float carried = 0.0f;
+    for (int k = 0; k < P.dim; ++k) carried += f.temperature_gradient[k][i] * f.shift[k][i];
+    compensated_add(f.temperature[i], f.temperature_residual[i], carried);
+  }
+}
+
 // The predictor of particle i (physics/integrator.hpp): a fluid particle drifts and kicks with
 // the previous rates; a wall particle that follows a motion moves rigidly from t_n to t_n+1
 // (physics/wall_motion.hpp); a static wall stays.
 template <class Fields>
 SPATE_HD void predict_particle(const PhysicsParams& P, Fields& f, std::uint32_t i, float dt) {
+  if (P.heat.on) predict_temperature(P, f, i, dt);
   const std::uint8_t m = f.material[i];
   if (!P.is_fluid(m)) {
     const int motion = P.materials.motion[m];
@@ -190,6 +224,120 @@ SPATE_HD void add_antuono_diffusion(const PhysicsParams& P, const CellGridView& 
       diffusion += antuono_diffusion_term<Kernel, Dim>(P, M, si, grad_i, load_state<Dim>(f, j), load_vec<Dim>(f.density_gradient, j));
   });
   f.density_rate[i] += diffusion;
+}
+
+// Heat transfer, the wall pass: the temperature of owned wall particle w behind a tank face with a
+// condition (heat_transfer.hpp), from the particles around it that carry their own temperature
+// (fluids and conducting solids): the one nearest w's mirror point across the face, carried there
+// by the fitted gradient of its material. Other particles are left alone.
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void update_wall_temperature(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t w, const int g[3]) {
+  if (P.is_fluid(f.material[w])) return;
+  ThermalFace face;
+  const ThermalCondition c = particle_temperature_condition(P, f, w, face);
+  if (face.axis < 0 || c == ThermalCondition::Conducting) return;
+  const HeatParams& H = P.heat;
+  const Vec<Dim> xw = load_vec<Dim>(f.pos, w);
+  auto carries = [&](std::uint8_t m) {
+    return P.is_fluid(m) || (m != P.materials.tank() && H.material(m).condition == ThermalCondition::Conducting);
+  };
+  // The mirror point, and the carrier nearest to it (the first in the visiting order among equals).
+  Vec<Dim> mirror = xw;
+  mirror[face.axis] += 2.0f * face.depth * face.into_fluid;
+  float nearest = INFINITY;
+  std::uint32_t n = 0;
+  int material = -1;
+  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+    for (std::uint32_t j = jb; j < je; ++j) {
+      if (!carries(f.material[j]) || distance_squared<Dim>(xw, f.pos, j) >= P.support2) continue;
+      const float r2 = distance_squared<Dim>(mirror, f.pos, j);
+      if (r2 < nearest) nearest = r2, n = j, material = f.material[j];
+    }
+  });
+  if (material < 0) {  // nothing to mirror: a fixed face keeps its temperature
+    if (c == ThermalCondition::FaceTemperature) f.temperature[w] = H.face[face.index()].value;
+    f.mirror_conductivity[w] = 0.0f;
+    return;
+  }
+  LinearFitSums<Dim> sums;
+  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+    for (std::uint32_t j = jb; j < je; ++j) {
+      const std::uint8_t mj = f.material[j];
+      if (mj != material) continue;
+      const Vec<Dim> dx = load_vec<Dim>(f.pos, j) - xw;
+      const float r2 = dot(dx, dx);
+      if (r2 >= P.support2) continue;
+      const float vj = P.is_fluid(mj) ? P.materials.of(mj).mass / f.density[j] : H.wall_volume;
+      sums.add(vj * Kernel::value(sqrtf(r2) * P.inv_h, P.kernel_norm), P.inv_h * dx, f.temperature[j]);
+    }
+  });
+  const float t_mirror = mirror_temperature<Dim>(sums, f.temperature[n], fitted_gradient<Dim>(sums), P.inv_h * (mirror - load_vec<Dim>(f.pos, n)));
+  const float k = H.material(static_cast<std::uint8_t>(material)).conductivity;
+  f.temperature[w] = face_wall_temperature(H.face[face.index()], t_mirror, k, face.depth);
+  f.mirror_conductivity[w] = k;
+}
+
+// Heat transfer: neighbour j's share of rho_i c_i dT_i/dt for particle i (material Mi, at xi, at
+// temperature ti) whose temperature is integrated. A neighbour behind a tank face with a condition
+// conducts with the k of the material it mirrors (mirror_conductivity, set by the wall pass); a
+// solid held at a fixed temperature with its own k, or i's when it has none.
+template <class Kernel, int Dim, class Fields>
+SPATE_HD float heat_pair_term(const PhysicsParams& P, const Fields& f, const ThermalMaterial& Mi, const Vec<Dim>& xi, float ti, std::uint32_t j) {
+  const HeatParams& H = P.heat;
+  const std::uint8_t mj = f.material[j];
+  const bool fluid_j = P.is_fluid(mj);
+  float kj = H.material(mj).conductivity;
+  if (!fluid_j) {
+    ThermalFace fj;
+    const ThermalCondition cj = particle_temperature_condition(P, f, j, fj);
+    if (fj.axis >= 0 && cj != ThermalCondition::Conducting) kj = f.mirror_conductivity[j];
+    else if (cj == ThermalCondition::Fixed && !(kj > 0.0f)) kj = Mi.conductivity;
+  }
+  const float vj = fluid_j ? P.materials.of(mj).mass / f.density[j] : H.wall_volume;
+  return conduction_term<Kernel, Dim>(H, P.inv_h, P.inv_h2, P.eta2, P.support2, xi, ti, load_vec<Dim>(f.pos, j), f.temperature[j],
+                                      pair_conductivity(Mi.conductivity, kj), vj);
+}
+
+// Heat transfer, after the fluid rates: the conduction rate dT/dt of owned particle i whose
+// temperature is integrated (0 for the others), and the Boussinesq buoyancy added to a fluid's
+// acceleration (physics/heat_transfer.hpp).
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void update_heat_rates(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
+  ThermalFace face;
+  if (particle_temperature_condition(P, f, i, face) != ThermalCondition::Conducting) {
+    f.temperature_rate[i] = 0.0f;
+    return;
+  }
+  const HeatParams& H = P.heat;
+  const std::uint8_t mi = f.material[i];
+  const bool fluid_i = P.is_fluid(mi);
+  const ThermalMaterial& Mi = H.material(mi);
+  const Vec<Dim> xi = load_vec<Dim>(f.pos, i);
+  const float ti = f.temperature[i];
+  float sum = 0.0f;
+  // With shifting, also the temperature gradient of a fluid particle (renormalised on the lattice
+  // like every SPH gradient, kernels.hpp), for the corrector's T += grad T . dr.
+  const bool gradient = fluid_i && P.shifting.enabled;
+  Vec<Dim> grad = zero_vec<Dim>();
+  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+    for (std::uint32_t j = jb; j < je; ++j) {
+      const float r2 = distance_squared<Dim>(xi, f.pos, j);
+      if (r2 >= P.support2) continue;
+      sum += heat_pair_term<Kernel, Dim>(P, f, Mi, xi, ti, j);
+      if (gradient && P.is_fluid(f.material[j])) {
+        const Vec<Dim> xj = load_vec<Dim>(f.pos, j);
+        const float vj = P.materials.of(f.material[j]).mass / f.density[j];
+        grad = grad + (vj * (f.temperature[j] - ti) * kernel_gradient_factor<Kernel>(P, r2)) * (xi - xj);
+      }
+    }
+  });
+  if (gradient) SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.temperature_gradient[k][i] = grad[k];
+  const float rho_c = (fluid_i ? f.density[i] : Mi.density) * Mi.specific_heat;
+  f.temperature_rate[i] = rho_c > 0.0f ? sum / rho_c : 0.0f;
+  if (fluid_i && Mi.expansion != 0.0f) {
+    const Vec<Dim> a = buoyancy_acceleration<Dim>(Mi, H.gravity, ti);
+    SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] += a[k];
+  }
 }
 
 }  // namespace spate

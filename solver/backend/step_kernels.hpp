@@ -61,6 +61,18 @@ class StepKernels {
     (void)p, (void)g, (void)P, (void)dt;
     throw std::logic_error(std::string(name()) + " backend: no particle shifting");
   }
+  // Heat transfer (only when P.heat.on; physics/heat_transfer.hpp): the temperatures of the owned
+  // wall particles behind tank faces with a condition, after the wall state and before the halo
+  // refresh; the conduction rates (and the buoyancy, added to the fluid's acceleration) of the owned
+  // particles, after the fluid rates.
+  virtual void wall_temperature(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) {
+    (void)p, (void)g, (void)P;
+    throw std::logic_error(std::string(name()) + " backend: no heat transfer");
+  }
+  virtual void heat_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) {
+    (void)p, (void)g, (void)P;
+    throw std::logic_error(std::string(name()) + " backend: no heat transfer");
+  }
   virtual float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) = 0;
 
   // The backend's particles, on which the worker runs the step topology. The worker's host store

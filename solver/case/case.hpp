@@ -24,6 +24,34 @@ struct Box {
   Vec3d max{0, 0, 0};
 };
 
+// Heat transfer (the case's `heat:` section and the `thermal:` keys; physics/heat_transfer.hpp,
+// docs/cases.md "Heat transfer"). A material's thermal properties; `given` when the case has them.
+struct ThermalSpec {
+  bool given = false;
+  double conductivity = 0.0;   // k [W/(m K)]
+  double specific_heat = 0.0;  // c_p [J/(kg K)]
+  double density = 0.0;        // walls and solids: their density [kg/m3] (fluids: their rest density)
+  double expansion = 0.0;      // fluids: beta [1/K] of the Boussinesq buoyancy
+  std::optional<double> reference_temperature;  // fluids: T_ref [K] (default: heat.initial_temperature)
+  std::optional<double> temperature;  // walls and solids: the starting temperature [K]
+  bool fixed = false;          // solids: held at `temperature`
+};
+
+// A tank face's thermal condition (`tank.thermal.faces`).
+struct FaceThermalSpec {
+  ThermalCondition kind = ThermalCondition::Conducting;  // Conducting: none given (the tank's default)
+  double value = 0.0;  // temperature [K] or heat flux into the fluid [W/m2]
+};
+
+// An initial temperature: `mean` plus an optional sinusoid along `axis` (amplitude, wavelength),
+// T = mean + amplitude sin(2 pi (x_axis - origin) / wavelength), origin the tank's lower corner.
+struct TemperatureField {
+  double mean = 0.0;
+  double amplitude = 0.0;
+  double wavelength = 0.0;
+  int axis = 0;
+};
+
 // A block of one fluid at rest at t = 0: a box, or a disc (2D) / sphere (3D) when `radius` > 0
 // (min and max are then its bounding box), optionally with a sinusoidal top face. Where blocks
 // overlap, the first listed holds the site (a bubble listed before the water around it).
@@ -34,6 +62,7 @@ struct FluidBlock : Box {
   // top_wave: the top face at max_v + amplitude sin(2 pi (x - min_x) / wavelength) (0: flat).
   double wave_amplitude = 0.0;
   double wavelength = 0.0;
+  std::optional<TemperatureField> temperature{};  // heat transfer: the block's (default: heat.initial_temperature)
 };
 
 struct SolidSpec {
@@ -41,9 +70,10 @@ struct SolidSpec {
   Box box;
   bool hollow = true;  // only `wall_layers` layers under its surface are particles
   int motion = -1;     // index into Case::motions, or -1: static
+  ThermalSpec thermal{};
 };
 
-enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid };
+enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid, Temperature, HeatFlux };
 
 struct ProbeSpec {
   std::string name;
@@ -51,7 +81,7 @@ struct ProbeSpec {
   Vec3d position{0, 0, 0};  // pressure/velocity: the point; height: the gauge (x, y) in 3D, (x) in 2D;
                             // wall_pressure: the centre of the sensing disc, on a wall or solid face
   std::string solid;        // force: the solid's name
-  int face = -1;            // force: -1 the whole solid, else one face: 2 axis + (0 lower, 1 upper side)
+  int face = -1;            // force, heat_flux: -1 the whole solid, else one face: 2 axis + (0 lower, 1 upper side)
   int axis = 0;             // front: the axis along which the front advances
   Vec3d normal{0, 0, 0};    // wall_pressure: unit normal of the face, pointing into the fluid
   double diameter = 0.0;    // wall_pressure: diameter of the sensing disc [m] (0: a point)
@@ -63,6 +93,11 @@ struct ProbeSpec {
   // -1: every fluid); `phase_name` its name, for descriptions.
   int phase = -1;
   std::string phase_name;
+  // heat_flux: the Nusselt number q L / (k dT) beside the flux when length and temperature_difference
+  // are given (k: `conductivity`, default the first fluid's).
+  double length = 0.0;
+  double temperature_difference = 0.0;
+  double conductivity = 0.0;
 };
 
 // A fluid (a material, physics/materials.hpp): the case's `fluid:` section, or each entry of its
@@ -74,6 +109,7 @@ struct FluidSpec {
   std::optional<double> sound_speed;     // empty: automatic, 10 sqrt(g H)
   double tait_exponent = 7.0;            // gamma of eq. 9
   double background_pressure = 0.0;      // [Pa], added to the Tait pressure
+  ThermalSpec thermal{};                 // heat transfer: k, c_p, beta, T_ref
 };
 
 // A surface-tension coefficient between two fluids (an entry of the case's `surface_tension:`
@@ -94,6 +130,17 @@ struct Case {
 
   std::vector<FluidSpec> fluids{FluidSpec{}};  // material k is fluids[k]
   std::vector<SurfaceTensionSpec> surface_tension;  // empty: no surface tension
+  // Heat transfer: on with a `heat:` section; every particle starts at initial_temperature unless
+  // its block, the tank or its solid says otherwise.
+  bool heat = false;
+  double initial_temperature = 293.15;  // [K]
+  // The gravity of the Boussinesq buoyancy (heat.gravity; default: the case's). A closed, full tank
+  // may leave gravity out of the momentum equation (gravity: 0) and keep it here: the flow is the
+  // same, its pressure the departure from hydrostatic, and the sound speed need not carry the
+  // hydrostatic head (docs/physics.md, "Heat transfer").
+  Vec3d buoyancy_gravity{0, 0, 0};
+  ThermalSpec tank_thermal;
+  std::array<FaceThermalSpec, 6> tank_faces;  // 2 axis + side (0 lower, 1 upper)
   double artificial_viscosity = 0.0;
   double wall_artificial_viscosity = 1.0;  // the factor on alpha in fluid-wall pairs
   bool tension = true;  // false: fluid pressures clipped at 0 (eos.hpp fluid_pressure)

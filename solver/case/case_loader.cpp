@@ -288,8 +288,75 @@ bool overlap(const Box& a, const Box& b, int dim, double tol) {
   return true;
 }
 
+// Heat transfer: a temperature [K], which cannot be below absolute zero.
+double read_temperature(Section& s, const std::string& key, std::optional<double> fallback = {}) {
+  const double t = s.number(key, fallback);
+  if (t < 0) s.fail(s.raw(key), key, "is below absolute zero (temperatures are in kelvin)");
+  return t;
+}
+
+// A material's `thermal:` section (heat_transfer.hpp). Fluids: conductivity and specific_heat
+// (required), expansion and reference_temperature. Walls (`wall`: the tank, a solid): conductivity
+// (0: they do not conduct), with specific_heat and density when it is > 0, and a temperature; a
+// solid may be `fixed` at its temperature.
+ThermalSpec read_thermal(Section& t, const Case& c, bool wall, bool solid) {
+  ThermalSpec s;
+  s.given = true;
+  s.conductivity = t.number("conductivity", wall ? std::optional<double>(0.0) : std::nullopt);
+  if (s.conductivity < 0) t.fail(t.raw("conductivity"), "conductivity", "must be >= 0 [W/(m K)]");
+  const bool conducts = !wall || s.conductivity > 0;
+  s.specific_heat = t.number("specific_heat", conducts ? std::nullopt : std::optional<double>(0.0));
+  if (conducts ? !(s.specific_heat > 0) : s.specific_heat < 0) t.fail(t.raw("specific_heat"), "specific_heat", "must be > 0 [J/(kg K)]");
+  if (wall) {
+    s.density = t.number("density", conducts ? std::nullopt : std::optional<double>(0.0));
+    if (conducts ? !(s.density > 0) : s.density < 0) t.fail(t.raw("density"), "density", "must be > 0 [kg/m3]");
+    if (t.has("temperature")) s.temperature = read_temperature(t, "temperature");
+    if (solid) {
+      s.fixed = t.boolean("fixed", false);
+      if (s.fixed && !s.temperature) t.fail(t.raw("fixed"), "fixed", "a solid held at a fixed temperature needs thermal.temperature");
+    }
+  } else {
+    s.expansion = t.number("expansion", 0.0);
+    if (std::fabs(s.expansion) > 0.1) t.fail(t.raw("expansion"), "expansion", "must be a thermal expansion coefficient [1/K] (|beta| <= 0.1)");
+    if (t.has("reference_temperature")) s.reference_temperature = read_temperature(t, "reference_temperature");
+    double g2 = 0;
+    for (double g : c.buoyancy_gravity) g2 += g * g;
+    if (s.expansion != 0 && g2 == 0)
+      t.fail(t.raw("expansion"), "expansion", "buoyancy needs gravity (the case's gravity and heat.gravity are zero)");
+  }
+  return s;
+}
+
+// The `thermal:` section of `parent`, if any; only with heat transfer on.
+std::optional<Section> thermal_section(Section& parent, const Case& c) {
+  auto t = parent.child("thermal");
+  if (t && !c.heat) parent.fail(parent.raw("thermal"), "thermal", "heat transfer is off: add a `heat:` section (e.g. heat: {initial_temperature: 293.15})");
+  return t;
+}
+
+// An initial temperature: a number, or {mean, amplitude, wavelength, axis} (a sinusoid).
+TemperatureField read_temperature_field(Section& s, const std::string& key, int dim) {
+  TemperatureField f;
+  if (s.raw(key).IsScalar()) {
+    f.mean = read_temperature(s, key);
+    return f;
+  }
+  auto t = s.child(key);
+  if (!t) s.fail(s.raw(key), key, "expected a temperature [K] or {mean, amplitude, wavelength, axis}");
+  f.mean = read_temperature(*t, "mean");
+  f.amplitude = t->number("amplitude", 0.0);
+  if (!(std::fabs(f.amplitude) <= f.mean)) t->fail(t->raw("amplitude"), "amplitude", "would take the temperature below absolute zero");
+  f.wavelength = t->number("wavelength", f.amplitude != 0 ? std::nullopt : std::optional<double>(1.0));
+  if (!(f.wavelength > 0)) t->fail(t->raw("wavelength"), "wavelength", "must be > 0");
+  const std::string axis = t->text("axis", std::string("x"));
+  f.axis = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;
+  if (f.axis < 0 || f.axis >= dim) t->fail(t->raw("axis"), "axis", "'" + axis + "' is not an axis of this case");
+  t->finish();
+  return f;
+}
+
 // One fluid material (the `fluid:` section or an entry of `fluids:`).
-void read_fluid(Section& f, FluidSpec& fluid, bool name_required) {
+void read_fluid(Section& f, FluidSpec& fluid, bool name_required, const Case& c) {
   fluid.name = name_required ? f.text("name") : f.text("name", std::string("water"));
   if (fluid.name.empty()) f.fail(f.raw("name"), "name", "must not be empty");
   fluid.density = f.number("density", 1000.0);
@@ -305,6 +372,12 @@ void read_fluid(Section& f, FluidSpec& fluid, bool name_required) {
     f.fail(f.raw("tait_exponent"), "tait_exponent", "must be between 1 and 10 (7 for water)");
   fluid.background_pressure = f.number("background_pressure", 0.0);
   if (fluid.background_pressure < 0) f.fail(f.raw("background_pressure"), "background_pressure", "must be >= 0");
+  if (auto t = thermal_section(f, c)) {
+    fluid.thermal = read_thermal(*t, c, /*wall=*/false, /*solid=*/false);
+    t->finish();
+  } else if (c.heat) {
+    f.fail(f.node(), "thermal", "is required with heat transfer (conductivity [W/(m K)] and specific_heat [J/(kg K)] of fluid '" + fluid.name + "')");
+  }
 }
 
 // The index of the fluid named by `key` (the first fluid when the key is absent).
@@ -343,6 +416,10 @@ FluidBlock read_fluid_block(Section& f, const Case& c) {
     }
   }
   b.fluid = fluid_index(f, "fluid", c);
+  if (f.has("temperature")) {
+    if (!c.heat) f.fail(f.raw("temperature"), "temperature", "heat transfer is off: add a `heat:` section");
+    b.temperature = read_temperature_field(f, "temperature", d);
+  }
   return b;
 }
 
@@ -540,6 +617,43 @@ bool on_moving_body(const Vec3d& x, const Case& c) {
   return on_box(c.tank_origin, particle_tank_max(c));
 }
 
+// `tank.thermal.faces`: {x-: {temperature: T}, x+: {heat_flux: q}, y-: adiabatic, ...}, on faces the
+// tank has (not along a periodic axis, not the open top).
+void read_tank_faces(Section& t, Case& c) {
+  auto faces = t.child("faces");
+  if (!faces) return;
+  const int d = c.dim;
+  for (auto it = faces->node().begin(); it != faces->node().end(); ++it) {
+    const std::string name = it->first.Scalar();
+    const int f = face_index(name, d);
+    if (f < 0) faces->fail(it->first, name, "is not a face of this " + std::to_string(d) + "D tank (x-, x+, y-, ...)");
+    const int axis = f / 2;
+    if (c.periodic[axis]) faces->fail(it->first, name, "the tank has no wall here (the axis is periodic)");
+    if (axis == d - 1 && f % 2 == 1 && c.open_top) faces->fail(it->first, name, "the tank has no wall here (its top is open)");
+    FaceThermalSpec& spec = c.tank_faces[f];
+    if (faces->raw(name).IsScalar()) {
+      const std::string v = faces->text(name);
+      if (v == "adiabatic") spec.kind = ThermalCondition::Adiabatic;
+      else if (v == "conducting" && c.tank_thermal.conductivity > 0) spec.kind = ThermalCondition::Conducting;
+      else faces->fail(faces->raw(name), name, v == "conducting" ? "a conducting face needs tank.thermal.conductivity > 0"
+                                                                  : "expected adiabatic, conducting, {temperature: T} or {heat_flux: q}");
+      continue;
+    }
+    auto e = faces->child(name);
+    if (!e || e->has("temperature") == e->has("heat_flux"))
+      faces->fail(faces->raw(name), name, "expected adiabatic, conducting, {temperature: T} or {heat_flux: q}");
+    if (e->has("temperature")) {
+      spec.kind = ThermalCondition::FaceTemperature;
+      spec.value = read_temperature(*e, "temperature");
+    } else {
+      spec.kind = ThermalCondition::FaceFlux;
+      spec.value = e->number("heat_flux");
+    }
+    e->finish();
+  }
+  faces->finish();
+}
+
 Case read(Section& root, const std::string& file) {
   Case c;
   c.file = file;
@@ -558,6 +672,15 @@ Case read(Section& root, const std::string& file) {
   Vec3d g_default{0, 0, 0};
   g_default[d - 1] = -9.81;
   c.gravity = root.vector("gravity", d, g_default);
+  // Heat transfer: on with a `heat:` section (heat_transfer.hpp).
+  if (auto h = root.child("heat")) {
+    c.heat = true;
+    c.initial_temperature = read_temperature(*h, "initial_temperature", 293.15);
+    c.buoyancy_gravity = h->vector("gravity", d, c.gravity);
+    h->finish();
+  } else if (root.has("heat")) {
+    root.fail(root.raw("heat"), "heat", "expected a map (e.g. {initial_temperature: 293.15})");
+  }
 
   // Fluids: `fluid:` (one), or a `fluids:` list of materials (several phases); `fluid:` then keeps
   // only the case-wide artificial_viscosity, body_force and tension.
@@ -570,7 +693,7 @@ Case read(Section& root, const std::string& file) {
     c.fluids.clear();
     for (auto& e : entries) {
       FluidSpec fluid;
-      read_fluid(e, fluid, /*name_required=*/true);
+      read_fluid(e, fluid, /*name_required=*/true, c);
       for (auto& other : c.fluids)
         if (other.name == fluid.name) e.fail(e.raw("name"), "name", "fluid '" + fluid.name + "' is defined twice");
       e.finish();
@@ -580,9 +703,9 @@ Case read(Section& root, const std::string& file) {
   {
     auto f = root.optional_child("fluid");
     if (!listed) {
-      read_fluid(f, c.fluids[0], /*name_required=*/false);
+      read_fluid(f, c.fluids[0], /*name_required=*/false, c);
     } else {
-      for (const char* key : {"name", "density", "viscosity", "sound_speed", "tait_exponent", "background_pressure"})
+      for (const char* key : {"name", "density", "viscosity", "sound_speed", "tait_exponent", "background_pressure", "thermal"})
         if (f.has(key))
           f.fail(f.raw(key), key, "with a 'fluids' list each fluid's properties go in its entry; 'fluid' keeps only "
                                   "artificial_viscosity, wall_artificial_viscosity, body_force and tension");
@@ -713,6 +836,11 @@ Case read(Section& root, const std::string& file) {
   for (int k = 0; k < d; ++k)
     if (c.periodic[k] && c.free_slip[k]) tank->fail(tank->raw("free_slip"), "free_slip", "an axis cannot be periodic and have walls");
   c.wall_shear = tank->choice<WallShear>("wall_shear", WallShear::Laminar, {{"laminar", WallShear::Laminar}, {"log_law", WallShear::LogLaw}});
+  if (auto t = thermal_section(*tank, c)) {
+    c.tank_thermal = read_thermal(*t, c, /*wall=*/true, /*solid=*/false);
+    read_tank_faces(*t, c);
+    t->finish();
+  }
   if (auto m = tank->child("motion")) {
     Vec3d lo = c.tank_origin, hi = c.tank_origin;
     for (int k = 0; k < d; ++k) {
@@ -726,6 +854,10 @@ Case read(Section& root, const std::string& file) {
     if (c.wall_shear == WallShear::LogLaw)
       tank->fail(tank->raw("wall_shear"), "wall_shear", "the log law is for a tank at rest (not with tank.motion)");
   }
+  if (c.tank_motion >= 0)
+    for (const FaceThermalSpec& f : c.tank_faces)
+      if (f.kind != ThermalCondition::Conducting)
+        tank->fail(tank->raw("thermal"), "thermal.faces", "face conditions are for a tank at rest (not with tank.motion)");
   tank->finish();
   {
     double largest = 0;
@@ -775,6 +907,10 @@ Case read(Section& root, const std::string& file) {
     spec.name = s.text("name");
     spec.box = read_box(s, d);
     spec.hollow = s.boolean("hollow", true);
+    if (auto t = thermal_section(s, c)) {
+      spec.thermal = read_thermal(*t, c, /*wall=*/true, /*solid=*/true);
+      t->finish();
+    }
     if (auto m = s.child("motion")) {
       spec.motion = static_cast<int>(c.motions.size());
       c.motions.push_back(read_motion(*m, c, spec.name, spec.box.min, spec.box.max));
@@ -808,19 +944,49 @@ Case read(Section& root, const std::string& file) {
     probe.type = p.choice<ProbeType>("type", ProbeType::Pressure,
                                      {{"pressure", ProbeType::Pressure}, {"velocity", ProbeType::Velocity}, {"height", ProbeType::Height},
                                       {"force", ProbeType::Force}, {"front", ProbeType::Front}, {"wall_pressure", ProbeType::WallPressure},
-                                      {"centroid", ProbeType::Centroid}});
+                                      {"centroid", ProbeType::Centroid}, {"temperature", ProbeType::Temperature},
+                                      {"heat_flux", ProbeType::HeatFlux}});
+    if ((probe.type == ProbeType::Temperature || probe.type == ProbeType::HeatFlux) && !c.heat)
+      p.fail(p.raw("type"), "type", "a " + p.text("type") + " probe needs heat transfer (a `heat:` section)");
     // A phase (fluid) to measure: required by a centroid, optional for a point, a gauge or a front.
-    const bool phased = probe.type == ProbeType::Pressure || probe.type == ProbeType::Velocity ||
+    const bool phased = probe.type == ProbeType::Pressure || probe.type == ProbeType::Velocity || probe.type == ProbeType::Temperature ||
                         probe.type == ProbeType::Height || probe.type == ProbeType::Centroid || probe.type == ProbeType::Front;
     if (probe.type == ProbeType::Centroid && !p.has("phase")) p.text("phase");  // reports it as required
     if (p.has("phase")) {
-      if (!phased) p.fail(p.raw("phase"), "phase", "only pressure, velocity, height, front and centroid probes take a phase");
+      if (!phased) p.fail(p.raw("phase"), "phase", "only pressure, velocity, temperature, height, front and centroid probes take a phase");
       probe.phase = fluid_index(p, "phase", c);
       probe.phase_name = c.fluids[probe.phase].name;
     }
     switch (probe.type) {
       case ProbeType::Pressure:
+      case ProbeType::Temperature:
       case ProbeType::Velocity: probe.position = p.vector("position", d); break;
+      case ProbeType::HeatFlux: {
+        // A tank face (face: x-), or a solid (solid: name), whole or one face of its box.
+        if (p.has("solid")) {
+          probe.solid = p.text("solid");
+          if (!solid_names.count(probe.solid)) p.fail(p.raw("solid"), "solid", "no solid named '" + probe.solid + "'");
+        } else if (!p.has("face")) {
+          p.fail(p.node(), "face", "is required: the tank face (x-, x+, y-, ...) or a solid (solid: name)");
+        }
+        if (p.has("face")) {
+          const std::string face = p.text("face");
+          probe.face = face_index(face, d);
+          if (probe.face < 0) p.fail(p.raw("face"), "face", "'" + face + "' is not a face of this " + std::to_string(d) + "D case (x-, x+, y-, ...)");
+          if (probe.solid.empty() && c.periodic[probe.face / 2]) p.fail(p.raw("face"), "face", "the tank has no wall here (the axis is periodic)");
+        }
+        if (p.has("length") != p.has("temperature_difference"))
+          p.fail(p.node(), p.has("length") ? "temperature_difference" : "length", "the Nusselt number needs both length and temperature_difference");
+        if (p.has("length")) {
+          probe.length = p.number("length");
+          probe.temperature_difference = p.number("temperature_difference");
+          if (!(probe.length > 0)) p.fail(p.raw("length"), "length", "must be > 0 [m]");
+          if (probe.temperature_difference == 0) p.fail(p.raw("temperature_difference"), "temperature_difference", "must not be 0 [K]");
+        }
+        probe.conductivity = p.number("conductivity", c.fluids[0].thermal.conductivity);
+        if (!(probe.conductivity > 0)) p.fail(p.raw("conductivity"), "conductivity", "must be > 0 [W/(m K)]");
+        break;
+      }
       case ProbeType::Height:
         probe.position = p.vector("position", d - 1);
         probe.connected = p.boolean("connected", false);
@@ -975,6 +1141,55 @@ double sound_speed(const Case& c, int fluid) {
   return auto_c0 > 0 ? auto_c0 : 1.0;
 }
 
+namespace {
+// Heat transfer's constants (physics/heat_transfer.hpp): one thermal entry per fluid, one for the
+// tank, one per solid with thermal properties (the solids without share one that does not conduct);
+// the tank faces' conditions.
+void set_heat_params(const Case& c, PhysicsParams& P) {
+  HeatParams& H = P.heat;
+  H.on = true;
+  const double moment = c.kernel == KernelType::WendlandC2 ? lattice_gradient_moment<WendlandC2>(c.dim, P.h, c.dp, P.eta2)
+                                                          : lattice_gradient_moment<CubicSpline>(c.dim, P.h, c.dp, P.eta2);
+  H.laplacian_norm = static_cast<float>(P.kernel_norm / moment);
+  H.wall_volume = static_cast<float>(std::pow(c.dp, c.dim));
+  for (int k = 0; k < 3; ++k) H.gravity[k] = static_cast<float>(c.buoyancy_gravity[k]);
+  int entries = 0;
+  auto add = [&](const ThermalSpec& t, ThermalCondition condition) {
+    if (entries >= kMaxThermalEntries)
+      throw CaseError(c.file + ": key 'solids': at most " + std::to_string(kMaxThermalEntries) +
+                      " materials with thermal properties (fluids, the tank and solids together)");
+    ThermalMaterial& m = H.entry[entries];
+    m.conductivity = static_cast<float>(t.conductivity);
+    m.specific_heat = static_cast<float>(t.specific_heat);
+    m.density = static_cast<float>(t.density);
+    m.expansion = static_cast<float>(t.expansion);
+    m.reference_temperature = static_cast<float>(t.reference_temperature.value_or(c.initial_temperature));
+    m.condition = condition;
+    return static_cast<std::uint8_t>(entries++);
+  };
+  for (std::size_t k = 0; k < c.fluids.size(); ++k) H.of[k] = add(c.fluids[k].thermal, ThermalCondition::Conducting);
+  H.of[P.materials.tank()] = add(c.tank_thermal, ThermalCondition::Conducting);
+  int inert = -1;  // the shared entry of the solids without thermal properties
+  for (std::size_t k = 0; k < c.solids.size(); ++k) {
+    const ThermalSpec& t = c.solids[k].thermal;
+    const std::uint8_t m = P.materials.solid(static_cast<int>(k));
+    if (t.given) {
+      H.of[m] = add(t, t.fixed ? ThermalCondition::Fixed : ThermalCondition::Conducting);
+    } else {
+      if (inert < 0) inert = add(ThermalSpec{}, ThermalCondition::Conducting);
+      H.of[m] = static_cast<std::uint8_t>(inert);
+    }
+  }
+  // A face without a condition: the tank's own conduction when it conducts, else adiabatic.
+  for (int f = 0; f < 6; ++f) {
+    const FaceThermalSpec& s = c.tank_faces[f];
+    const bool conducts = c.tank_thermal.conductivity > 0;
+    H.face[f].kind = s.kind != ThermalCondition::Conducting ? s.kind : conducts ? ThermalCondition::Conducting : ThermalCondition::Adiabatic;
+    H.face[f].value = static_cast<float>(s.value);
+  }
+}
+}  // namespace
+
 PhysicsParams physics_params(const Case& c) {
   PhysicsParams P;
   P.dim = c.dim;
@@ -1033,8 +1248,10 @@ PhysicsParams physics_params(const Case& c) {
     P.gravity[k] = static_cast<float>(c.gravity[k]);
     P.body_force[k] = static_cast<float>(c.body_force[k]);
   }
+  if (c.heat) set_heat_params(c, P);
   return P;
 }
+
 
 std::vector<std::string> material_names(const Case& c) {
   std::vector<std::string> names;

@@ -395,6 +395,21 @@ void layered_hydrostatic_density(const Case& c, const PhysicsParams& P, Particle
 }
 }  // namespace
 
+double initial_temperature(const Case& c, const MaterialTable& M, std::uint8_t kind, const double x[3]) {
+  if (M.is_fluid(kind)) {
+    for (const FluidBlock& b : c.fluid_blocks) {
+      if (b.fluid != kind || !in_block(b, x, c.dim)) continue;
+      if (!b.temperature) break;
+      const TemperatureField& t = *b.temperature;
+      const double wave = t.amplitude != 0 ? t.amplitude * std::sin(2.0 * M_PI * (x[t.axis] - c.tank_origin[t.axis]) / t.wavelength) : 0.0;
+      return t.mean + wave;
+    }
+    return c.initial_temperature;
+  }
+  if (kind == M.tank()) return c.tank_thermal.temperature.value_or(c.initial_temperature);
+  return c.solids[kind - M.tank() - 1].thermal.temperature.value_or(c.initial_temperature);
+}
+
 ParticleStore generate_particles(const Case& c) {
   const ParticleCounts n = count_particles(c);
   if (n.fluid == 0) throw CaseError(c.file + ": the case generates no fluid particles (check fluid_blocks, wet_bed and dp)");
@@ -405,6 +420,8 @@ ParticleStore generate_particles(const Case& c) {
   double g = 0;
   for (int a = 0; a < c.dim; ++a) g += c.gravity[a] * c.gravity[a];
   g = std::sqrt(g);
+  // Heat transfer: only a store made while the run carries the thermal fields has a temperature.
+  const bool heat = c.heat && p.temperature.size() == p.size();
   std::size_t i = 0;
   for_each_site(c, [&](const Sites& s, const int* idx, std::uint8_t kind) {
     if (i >= p.size()) {  // a miscount: reported below, never written past the arrays
@@ -414,6 +431,10 @@ ParticleStore generate_particles(const Case& c) {
     for (int a = 0; a < c.dim; ++a) p.pos[a][i] = static_cast<float>(s.coord(a, idx[a]));
     p.material[i] = kind;
     p.id[i] = static_cast<std::uint32_t>(i);
+    if (heat) {
+      const double x[3] = {s.coord(0, idx[0]), c.dim > 1 ? s.coord(1, idx[1]) : 0.0, c.dim > 2 ? s.coord(2, idx[2]) : 0.0};
+      p.temperature[i] = static_cast<float>(initial_temperature(c, P.materials, kind, x));
+    }
     const FluidMaterial& fluid = P.materials.wall_fluid();
     p.density[i] = fluid.rho0;
     if (P.is_fluid(kind)) {

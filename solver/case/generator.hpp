@@ -28,6 +28,9 @@ std::string geometry_hash(const Case& c);
 
 // How deep x lies below face `face` (2 axis + (0 lower, 1 upper side)) of box b.
 double face_depth(const Box& b, const double x[3], int face);
+// Heat transfer: the starting temperature of a particle of material `kind` at x: its fluid block's
+// (the first of its fluid that holds x), the tank's or its solid's, else heat.initial_temperature.
+double initial_temperature(const Case& c, const MaterialTable& M, std::uint8_t kind, const double x[3]);
 // Counts without allocating, in closed form (spate info answers at once at any dp).
 ParticleCounts count_particles(const Case& c);
 // All particles, ids 0..n-1 in generation order, all owned.

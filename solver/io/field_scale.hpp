@@ -11,8 +11,9 @@ namespace spate {
 // Positions: dp. Velocities: c0 (weakly compressible SPH keeps speeds below c0 / 10).
 // Density: rho0. Pressure: rho0 c0^2 (a density off by a fraction e gives e rho0 c0^2, eq. 9).
 // Accelerations: c0^2 / h (the pressure gradient of a 1 % density jump over h is 0.01 c0^2 / h).
-// Density rates: rho0 c0 / h. Anything else (material, id): 0, compared exactly. c0 and rho0 are
-// the first fluid's (the case constants).
+// Density rates: rho0 c0 / h. Temperatures (heat transfer): 1 K; their rates 1 K alpha / h^2, alpha
+// = k / (rho0 c_p) of the first fluid (the rate of a 1 K bump over h). Anything else (material,
+// id): 0, compared exactly. c0 and rho0 are the first fluid's (the case constants).
 inline double field_scale(std::string_view field, const PhysicsParams& P) {
   auto is = [&](std::initializer_list<std::string_view> names) {
     for (auto n : names)
@@ -27,6 +28,11 @@ inline double field_scale(std::string_view field, const PhysicsParams& P) {
   if (is({"pressure"})) return rho0 * c0 * c0;
   if (is({"ax", "ay", "az", "ax_prev", "ay_prev", "az_prev"})) return c0 * c0 / h;
   if (is({"density_rate", "density_rate_prev"})) return rho0 * c0 / h;
+  if (is({"temperature", "temperature_residual"})) return 1.0;
+  if (is({"temperature_rate"}) && P.heat.on) {
+    const ThermalMaterial& t = P.heat.material(0);
+    return t.specific_heat > 0 ? t.conductivity / (rho0 * t.specific_heat) / (h * h) : 0.0;
+  }
   return 0.0;
 }
 

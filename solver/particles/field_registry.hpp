@@ -42,7 +42,12 @@ enum FieldFlag : std::uint16_t {
   kNeighbour = 1 << 5,   // packed into the CPU fluid pass's 32-byte neighbour record (floats only)
   kOptional = 1 << 6,    // only in the stores of runs that need it (OptionalFields, particle_store.hpp):
                          // a feature's field that every other run must not pay for
+  kThermal = 1 << 7,     // optional too, in its own group: only in the stores of runs with heat
+                         // transfer (physics/heat_transfer.hpp), which do not pay for kOptional's
 };
+// The groups of optional fields (OptionalFields): a field in a group is in the stores of the runs
+// that enable that group and no others.
+constexpr std::uint16_t kOptionalGroups = kOptional | kThermal;
 
 struct FieldSpec {
   std::string_view member;  // C++ member of ParticleStore / DeviceFields
@@ -72,6 +77,16 @@ constexpr FieldType field_type_of() {
 // `shift`: the particle-shifting displacement (physics/shifting.hpp), scratch between the fluid
 // rates and the corrector of one step (FieldSpec::scratch). `density_gradient`: the renormalised
 // density gradient of `density.diffusion: antuono` (physics/density_gradient.hpp), sent to ghosts.
+// `temperature` [K] and its rates: heat transfer (physics/heat_transfer.hpp), integrated like the
+// density (predicted, corrected) for fluids and conducting walls; imposed by the wall temperature
+// pass for the faces that take a condition. `temperature_residual`: what the compensated (Kahan)
+// sum of the temperature's increments has not yet added (integrator.hpp compensated_add): a float
+// at 300 K resolves 3e-5 K, and a slow approach to a steady state, whose increments per step fall
+// below that, would otherwise stall short of it. The wall pass also sets `mirror_conductivity`, the k of the
+// material such a wall particle mirrors (its neighbours read it, so it is sent to ghosts; saved
+// with snapshots and checkpoints, so that `spate post` evaluates a heat-flux probe as the run did).
+// `temperature_gradient`: per-step scratch of the heat pass when particles are shifted (the corrector
+// carries the temperature to the shifted position, T += grad T . dr).
 // Order matters only for readability and the neighbour record layout (kNeighbour fields in this
 // order). Renaming a dataset is a checkpoint format change (kCheckpointFormatVersion, checkpoint.cpp).
 // clang-format off
@@ -92,7 +107,16 @@ constexpr FieldType field_type_of() {
     "colour_gradient_y", "colour_gradient_z")                                                                         \
   F(shift, float, Vector, Derived, kOptional, "", "sx", "sy", "sz")                                                   \
   F(density_gradient, float, Vector, Derived, kGhost | kRefreshed | kOptional, "", "density_gradient_x",             \
-    "density_gradient_y", "density_gradient_z")
+    "density_gradient_y", "density_gradient_z")                                                                       \
+  F(temperature, float, Scalar, State, kMigrated | kCheckpointed | kGhost | kRefreshed | kExported | kThermal,        \
+    "temperature", "temperature")                                                                                     \
+  F(temperature_residual, float, Scalar, State, kMigrated | kCheckpointed | kThermal, "", "temperature_residual")    \
+  F(temperature_rate, float, Scalar, Rate, kMigrated | kCheckpointed | kThermal, "", "temperature_rate")              \
+  F(temperature_rate_prev, float, Scalar, History, kMigrated | kThermal, "", "temperature_rate_prev")              \
+  F(mirror_conductivity, float, Scalar, Derived, kGhost | kRefreshed | kExported | kThermal, "mirror_conductivity",   \
+    "mirror_conductivity")          \
+  F(temperature_gradient, float, Vector, Derived, kThermal, "", "temperature_gradient_x", "temperature_gradient_y",     \
+    "temperature_gradient_z")
 // clang-format on
 
 #define SPATE_FIELD_SPEC(member, ctype, shape, role, flags, exported, ...) \
@@ -131,12 +155,12 @@ static_assert([] {
   return true;
 }(), "a refreshed field must be a ghost field");
 
-// Bytes one particle's fields take in every run (every field but the optional ones, dim
+// Bytes one particle's fields take in every run (every field but the optional groups', dim
 // components per vector).
 constexpr std::size_t builtin_field_bytes(int dim) {
   std::size_t b = 0;
   for (const FieldSpec& f : kParticleFields)
-    if (!f.has(kOptional)) b += static_cast<std::size_t>(f.components(dim)) * f.elem_size();
+    if ((f.flags & kOptionalGroups) == 0) b += static_cast<std::size_t>(f.components(dim)) * f.elem_size();
   return b;
 }
 

@@ -97,21 +97,34 @@ std::vector<const FieldSpec*> field_extensions() {
 }
 
 namespace {
-std::atomic<int>& optional_users() {
-  static std::atomic<int> n{0};
-  return n;
+// Runs holding each optional group (bit k of kOptionalGroups counts in users[k]).
+std::atomic<int>& optional_users(int bit) {
+  static std::atomic<int> n[16]{};
+  return n[bit];
+}
+template <class F>
+void for_each_group_bit(std::uint16_t groups, F&& f) {
+  for (int bit = 0; bit < 16; ++bit)
+    if (groups & kOptionalGroups & (1u << bit)) f(bit);
 }
 }  // namespace
 
-OptionalFields::OptionalFields(bool enable) : enabled_(enable) {
-  if (enabled_) ++optional_users();
+OptionalFields::OptionalFields(FieldGroups groups) : groups_(static_cast<std::uint16_t>(groups)) {
+  for_each_group_bit(groups_, [](int bit) { ++optional_users(bit); });
 }
 OptionalFields::~OptionalFields() {
-  if (enabled_) --optional_users();
+  for_each_group_bit(groups_, [](int bit) { --optional_users(bit); });
 }
-bool optional_fields_enabled() { return optional_users() > 0; }
+std::uint16_t optional_field_groups_enabled() {
+  std::uint16_t g = 0;
+  for_each_group_bit(kOptionalGroups, [&](int bit) {
+    if (optional_users(bit) > 0) g |= static_cast<std::uint16_t>(1u << bit);
+  });
+  return g;
+}
+bool optional_fields_enabled() { return (optional_field_groups_enabled() & kOptional) != 0; }
 
-ParticleStore::ParticleStore(int dim) : dim_(dim), optional_(optional_fields_enabled()) {
+ParticleStore::ParticleStore(int dim) : dim_(dim), groups_(optional_field_groups_enabled()) {
   for (const FieldSpec* spec : field_extensions()) extensions_.push_back(Extension{spec, {}, {}});
 }
 
@@ -119,7 +132,7 @@ std::vector<FieldRef> ParticleStore::fields() {
   std::vector<FieldRef> f;
   f.reserve(3 * kBuiltinFieldCount + 3 * extensions_.size());
 #define SPATE_STORE_REF(member, ...) \
-  if (optional_ || !kParticleFields[kField_##member].has(kOptional)) add(f, kParticleFields[kField_##member], dim_, member);
+  if (carries(kParticleFields[kField_##member])) add(f, kParticleFields[kField_##member], dim_, member);
   SPATE_PARTICLE_FIELDS(SPATE_STORE_REF)
 #undef SPATE_STORE_REF
   for (Extension& e : extensions_) {
@@ -204,6 +217,7 @@ std::vector<ExportedField> exported_fields(ParticleStore& p) {
 void ParticleStore::swap_rates() {
   for (int k = 0; k < 3; ++k) std::swap(acc[k], acc_prev[k]);
   std::swap(density_rate, density_rate_prev);
+  std::swap(temperature_rate, temperature_rate_prev);  // empty without heat transfer
 }
 
 }  // namespace spate

@@ -58,22 +58,26 @@ class FieldExtension {
 // The registered extensions, in registration order (stable addresses).
 std::vector<const FieldSpec*> field_extensions();
 
-// The optional registry fields (kOptional, e.g. surface tension's colour gradient) are part of the
-// stores made while an OptionalFields(true) is alive, and of no other: a run that needs them holds
-// one for its whole length (Simulation::run), so all of its stores, buffers and device arrays agree
-// on the fields; every other run has the stores, halos and footprint it had without them.
+// The optional registry fields (the groups of kOptionalGroups: kOptional, e.g. surface tension's
+// colour gradient; kThermal, the temperature) are part of the stores made while an OptionalFields
+// enabling their group is alive, and of no other: a run that needs them holds one for its whole
+// length (Simulation::run), so all of its stores, buffers and device arrays agree on the fields;
+// every other run has the stores, halos and footprint it had without them.
+enum class FieldGroups : std::uint16_t {};  // a mask of kOptionalGroups flags
 class OptionalFields {
  public:
-  explicit OptionalFields(bool enable);
+  explicit OptionalFields(bool enable) : OptionalFields(static_cast<FieldGroups>(enable ? std::uint16_t{kOptional} : std::uint16_t{0})) {}
+  explicit OptionalFields(FieldGroups groups);
   ~OptionalFields();
   OptionalFields(const OptionalFields&) = delete;
   OptionalFields& operator=(const OptionalFields&) = delete;
 
  private:
-  bool enabled_;
+  std::uint16_t groups_;
 };
-// Whether stores made now carry the optional fields.
+// Whether stores made now carry the kOptional fields; the groups they carry.
 bool optional_fields_enabled();
+std::uint16_t optional_field_groups_enabled();
 
 class ParticleStore;
 
@@ -126,7 +130,8 @@ class ParticleStore {
     FieldVector<std::uint8_t> bytes[3];   // 1-byte fields
   };
   int dim_;
-  bool optional_;  // carries the kOptional fields (OptionalFields)
+  std::uint16_t groups_;  // the optional groups it carries (OptionalFields)
+  bool carries(const FieldSpec& f) const { return (f.flags & kOptionalGroups & ~groups_) == 0; }
   std::size_t owned_ = 0;
   std::vector<Extension> extensions_;
   std::vector<std::uint32_t> scratch_;  // permute(): one word per particle for every field type

@@ -28,6 +28,17 @@ SPATE_HD void correct_density(float& rho, float new_rate, float old_rate, float 
   rho = rho < floor ? floor : rho;
 }
 
+// value += increment, compensated (Kahan): `residual` keeps the low-order part the float sum lost,
+// and gives it back in later additions, so that many increments far below value's resolution add up
+// as they would in exact arithmetic (the temperature's, heat_transfer.hpp). Plain float arithmetic
+// in this order (no -ffast-math, which would reassociate it away).
+SPATE_HD void compensated_add(float& value, float& residual, float increment) {
+  const float y = increment - residual;
+  const float t = value + y;
+  residual = (t - value) - y;
+  value = t;
+}
+
 // The particle-shifting displacement (shifting.hpp), added after the corrector.
 SPATE_HD void apply_shift(float& x, float shift) { x += shift; }
 

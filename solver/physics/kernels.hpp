@@ -64,9 +64,10 @@ struct CubicSpline {
 // Wendland C2 in 2D at h = 1.3 dp): every SPH gradient and divergence is off by that factor, and a
 // hydrostatic column then needs a few percent more pressure than rho g d to stand. Dividing the
 // gradient by the lattice moment (computed once per run) makes the operator exact for linear
-// fields on the undisturbed lattice, where most of the fluid spends its life.
+// fields on the undisturbed lattice, where most of the fluid spends its life. With eta2, the moment of
+// the conduction operator (heat_transfer.hpp), whose pair factor carries r^2 / (r^2 + eta^2).
 template <class Kernel>
-double lattice_gradient_moment(int dim, double h, double dp) {
+double lattice_gradient_moment(int dim, double h, double dp, double eta2 = 0.0) {
   const float norm = Kernel::normalisation(dim, static_cast<float>(h));
   const float inv_h2 = static_cast<float>(1.0 / (h * h));
   const int reach = static_cast<int>(2.0 * h / dp) + 1;
@@ -78,7 +79,9 @@ double lattice_gradient_moment(int dim, double h, double dp) {
         const double r2 = (double(i) * i + double(j) * j + double(k) * k) * dp * dp;
         if (r2 == 0.0) continue;
         const float F = Kernel::gradient_factor(static_cast<float>(std::sqrt(r2) / h), norm, inv_h2);
-        moment += volume * (i * dp) * (i * dp) * F;  // -(x_j - x_i)_x * F * (x_i - x_j)_x
+        // -(x_j - x_i)_x * F * (x_i - x_j)_x; with eta2 > 0 times the Laplacian's r^2 / (r^2 + eta^2)
+        // (heat_transfer.hpp; eta2 = 0 multiplies by exactly 1).
+        moment += volume * (i * dp) * (i * dp) * F * (r2 / (r2 + eta2));
       }
   return -moment;
 }

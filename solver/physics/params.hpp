@@ -4,7 +4,9 @@
 #include <cstdint>
 
 #include "kernels.hpp"
+#include "../particles/field_registry.hpp"
 #include "vec.hpp"
+#include "heat_transfer.hpp"
 #include "materials.hpp"
 #include "wall_motion.hpp"
 
@@ -71,6 +73,9 @@ struct PhysicsParams {
   // (materials.hpp). The pair terms read fluid properties from here, never from scalars.
   MaterialTable materials;
   SurfaceTensionTable surface_tension;
+  // Heat transfer (heat_transfer.hpp; the case's `heat:` section): thermal properties per material,
+  // the tank faces' conditions. Off: no temperature field, no thermal pass.
+  HeatParams heat;
   // Free-slip tank walls (tank.free_slip, wall_boundary.hpp): bit k set for the walls normal to
   // axis k; the tank's fluid region [tank_lo, tank_hi] tells a tank wall particle's side.
   std::uint8_t free_slip_axes = 0;
@@ -154,6 +159,12 @@ inline bool uses_antuono_diffusion(const PhysicsParams& P) {
 // them: a run with any of these features carries all.
 inline bool needs_optional_fields(const PhysicsParams& P) {
   return P.surface_tension.on || P.shifting.enabled || uses_antuono_diffusion(P);
+}
+
+// The optional field groups a run carries (OptionalFields, particle_store.hpp, as a mask of
+// kOptionalGroups): kOptional as above, kThermal (the temperature and its rates) with heat transfer.
+inline std::uint16_t optional_field_groups(const PhysicsParams& P) {
+  return static_cast<std::uint16_t>((needs_optional_fields(P) ? kOptional : 0) | (P.heat.on ? kThermal : 0));
 }
 
 }  // namespace spate

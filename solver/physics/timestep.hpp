@@ -12,6 +12,7 @@ struct TimeStepControl {
   float force_factor = 0.25f;
   float viscous_factor = 0.125f;
   float surface_tension_factor = 0.25f;
+  float conduction_factor = 0.1f;  // dt <= 0.1 rho c_p h^2 / k (Cleary & Monaghan 1999)
 };
 
 // The step one fluid particle allows. A particle whose speed is NaN allows 0, not NaN: the global
@@ -62,11 +63,26 @@ inline float surface_tension_time_step(const PhysicsParams& P, const TimeStepCon
   return dt;
 }
 
-// The limits that do not depend on the particles' state: viscous diffusion and capillary waves.
+// The conduction limit (heat_transfer.hpp), over every thermal entry in use: fluids at their rest
+// density, conducting walls and solids at theirs. Infinity without heat transfer.
+inline float heat_time_step(const PhysicsParams& P, const TimeStepControl& c) {
+  float dt = INFINITY;
+  if (!P.heat.on) return dt;
+  for (int m = 0; m < P.materials.count; ++m) {
+    const ThermalMaterial& t = P.heat.material(static_cast<std::uint8_t>(m));
+    if (t.condition != ThermalCondition::Conducting) continue;
+    const float rho = P.is_fluid(static_cast<std::uint8_t>(m)) ? P.materials.fluid[m].rho0 : t.density;
+    dt = std::fmin(dt, conduction_time_step(t, rho, P.h, c.conduction_factor));
+  }
+  return dt;
+}
+
+// The limits that do not depend on the particles' state: viscous diffusion, capillary waves and
+// heat conduction.
 inline float state_free_time_step(const PhysicsParams& P, const TimeStepControl& c) {
   const float viscous = viscous_time_step(P, c);
   const float capillary = surface_tension_time_step(P, c);
-  return capillary < viscous ? capillary : viscous;
+  return std::fmin(heat_time_step(P, c), capillary < viscous ? capillary : viscous);
 }
 
 }  // namespace spate

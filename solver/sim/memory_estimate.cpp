@@ -75,6 +75,8 @@ std::string cgroup_folder() {
 std::int64_t checkpoint_read_bytes(int dim, std::int64_t particles) { return particles * field_bytes(dim); }
 
 MemoryEstimate estimate_run_memory(const Case& c, int ranks, int ranks_on_node) {
+  // The case's optional fields (surface tension's, heat transfer's) count, as in its run.
+  const OptionalFields optional_fields(FieldGroups{optional_field_groups(physics_params(c))});
   MemoryEstimate e;
   e.particles = count_particles(c).total();
   const double all = static_cast<double>(e.particles);

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "../case/generator.hpp"
+#include "../backend/particle_updates.hpp"
 #include "../particles/particle_access.hpp"
 #include "../physics/dispatch.hpp"
 #include "../physics/interpolation.hpp"
@@ -61,6 +62,16 @@ double sample_pressure(SlabWorker& w, const Vec3d& at, int phase) {
     out = s.weight > 0 ? s.value / s.weight : 0.0;
   });
   return out;
+}
+
+double sample_temperature(SlabWorker& w, const Vec3d& at, int phase) {
+  if (!owns_point(w, at)) return kNaN;
+  double out = kNaN;
+  dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
+    const auto s = shepard<Kernel, Dim>(w, at, &w.particles().temperature, phase);
+    if (s.weight > 0) out = s.value / s.weight;
+  });
+  return std::isnan(out) ? 0.0 : out;  // owned but dry: 0, as the pressure
 }
 
 std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at, int phase) {
@@ -300,6 +311,82 @@ Bytes solid_force_records(SlabWorker& w, std::uint8_t kind, const Box& box, int 
   return out;
 }
 
+// Heat into the fluid through a tank face (solid empty) or a solid (whole, or one face of its box),
+// per owned fluid particle, as (id, watts, 0, 0) records (2D: watts per metre of depth): the
+// conduction from the face's wall particles, the same pair terms as the fluid's rate
+// (heat_pair_term), times the particle's volume.
+Bytes heat_flux_records(SlabWorker& w, const ProbeSpec& probe, const Case& c) {
+  Bytes out;
+  ParticleStore& p = w.particles();
+  const PhysicsParams& P = w.params();
+  const CellGrid& grid = w.grid();
+  int solid = -1;
+  for (std::size_t k = 0; k < c.solids.size(); ++k)
+    if (c.solids[k].name == probe.solid) solid = static_cast<int>(k);
+  // Whether wall particle j is on the probed surface.
+  auto on_surface = [&](std::uint32_t j) {
+    const std::uint8_t m = p.material[j];
+    double x[3] = {0, 0, 0};
+    for (int a = 0; a < c.dim; ++a) x[a] = p.pos[a][j];
+    if (solid >= 0) {
+      if (m != P.materials.solid(solid)) return false;
+      return probe.face < 0 || face_depth(c.solids[solid].box, x, probe.face) < 2.0 * P.h;
+    }
+    if (m != P.materials.tank()) return false;
+    float xf[3] = {0, 0, 0};
+    for (int a = 0; a < c.dim; ++a) xf[a] = p.pos[a][j];
+    const ThermalFace f = thermal_face(P.tank_lo, P.tank_hi, xf, c.dim);
+    return f.axis >= 0 && f.index() == probe.face;
+  };
+  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+    const CellGridView view = grid.view();
+    for (std::uint32_t cell = 0; cell < grid.owned_cell_count(); ++cell) {
+      int g[3];
+      grid.global_coords(cell, g);
+      for (std::uint32_t i = grid.begin(cell); i < grid.end(cell); ++i) {
+        if (!P.is_fluid(p.material[i])) continue;
+        const ThermalMaterial& Mi = P.heat.material(p.material[i]);
+        const Vec<Dim> xi = load_vec<Dim>(p.pos, i);
+        float sum = 0.0f;
+        bool near = false;
+        view.for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
+          for (std::uint32_t j = b; j < e; ++j)
+            if (!P.is_fluid(p.material[j]) && distance_squared<Dim>(xi, p.pos, j) < P.support2 && on_surface(j)) {
+              sum += heat_pair_term<Kernel, Dim>(P, p, Mi, xi, p.temperature[i], j);
+              near = true;
+            }
+        });
+        if (!near) continue;
+        // sum is the surface's share of rho_i c_i dT_i/dt [W/m^3]: times V_i, the watts into i.
+        float rec[4] = {0, 0, 0, 0};
+        std::memcpy(&rec[0], &p.id[i], sizeof(float));
+        rec[1] = sum * P.materials.of(p.material[i]).mass / p.density[i];
+        out.insert(out.end(), reinterpret_cast<char*>(rec), reinterpret_cast<char*>(rec) + sizeof rec);
+      }
+    }
+  });
+  return out;
+}
+
+// The area of the surface a heat_flux probe integrates over [m^2] (2D: its length, per metre of
+// depth): a tank face, a solid's box face, or its whole surface.
+double heat_flux_area(const ProbeSpec& probe, const Case& c) {
+  Vec3d size = c.tank_size;
+  for (const SolidSpec& s : c.solids)
+    if (s.name == probe.solid)
+      for (int a = 0; a < 3; ++a) size[a] = s.box.max[a] - s.box.min[a];
+  auto face_area = [&](int axis) {
+    double a = 1.0;
+    for (int k = 0; k < c.dim; ++k)
+      if (k != axis) a *= size[k];
+    return a;
+  };
+  if (probe.face >= 0) return face_area(probe.face / 2);
+  double total = 0.0;
+  for (int axis = 0; axis < c.dim; ++axis) total += 2.0 * face_area(axis);
+  return total;
+}
+
 // Values that each belong to one slab (NaN elsewhere), gathered: element k from the slab that has a
 // number there (0 if none does).
 std::vector<double> owners_values(SlabTransport& t, const std::vector<double>& mine) {
@@ -346,6 +433,11 @@ std::vector<std::string> probe_columns(const ProbeSpec& p, int dim) {
   };
   switch (p.type) {
     case ProbeType::Pressure: columns.push_back("pressure[Pa]"); break;
+    case ProbeType::Temperature: columns.push_back("temperature[K]"); break;
+    case ProbeType::HeatFlux:
+      columns.push_back("q[W/m2]");  // into the fluid
+      if (p.length > 0) columns.push_back("nu[-]");
+      break;
     case ProbeType::WallPressure:
       // The sensor's reading first (averaged when it has a window), then the instantaneous value.
       columns.push_back("pressure[Pa]");
@@ -373,6 +465,11 @@ std::string probe_description(const ProbeSpec& p, int dim) {
   const std::string of_phase = p.phase >= 0 ? " of " + p.phase_name : "";
   switch (p.type) {
     case ProbeType::Pressure: return "pressure" + of_phase + " at " + point(dim);
+    case ProbeType::Temperature: return "temperature" + of_phase + " at " + point(dim);
+    case ProbeType::HeatFlux: {
+      const std::string face = p.face >= 0 ? fmt::format("face {}{}", axes[p.face / 2], p.face % 2 ? "+" : "-") : "";
+      return "heat flux into the fluid through " + (p.solid.empty() ? "the tank's " + face : "solid '" + p.solid + "'" + (face.empty() ? "" : " " + face));
+    }
     case ProbeType::WallPressure:
       return fmt::format("wall pressure on a sensor of diameter {:g} mm", 1e3 * p.diameter) + " at " + point(dim) +
              (p.window > 0 ? fmt::format(", {:g} ms mean", 1e3 * p.window) : "");
@@ -510,6 +607,13 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
           if (case_.solids[k].name == p.solid) kind = w.params().materials.solid(static_cast<int>(k)), box = case_.solids[k].box;
         row = sum_by_id(t.allgather(solid_force_records(w, kind, box, p.face)));
         row.resize(case_.dim);
+        break;
+      }
+      case ProbeType::Temperature: row = owners_values(t, {sample_temperature(w, p.position, p.phase)}); break;
+      case ProbeType::HeatFlux: {
+        const double q = sum_by_id(t.allgather(heat_flux_records(w, p, case_)))[0] / heat_flux_area(p, case_);
+        row.push_back(q);
+        if (p.length > 0) row.push_back(q * p.length / (p.conductivity * p.temperature_difference));
         break;
       }
       case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis, front_level(p, case_), p.phase))); break;

@@ -71,6 +71,8 @@ std::string probe_description(const ProbeSpec& p, int dim);
 // Single probe evaluations on one slab (exposed for tests). NaN when this slab does not own the
 // point. `phase`: only that fluid's particles count (-1: every fluid).
 double sample_pressure(SlabWorker& w, const Vec3d& at, int phase = -1);
+// Shepard-averaged fluid temperature [K] (heat transfer), NaN when not owned.
+double sample_temperature(SlabWorker& w, const Vec3d& at, int phase = -1);
 // Shepard-averaged fluid velocity (dim components), NaN components when not owned.
 std::vector<double> sample_velocity(SlabWorker& w, const Vec3d& at, int phase = -1);
 // Water height above the tank floor at a gauge (the probe's position, `connected` and `phase`);

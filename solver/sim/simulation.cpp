@@ -637,9 +637,10 @@ Simulation::Simulation(Case c, RunOptions options) : case_(std::move(c)), option
 void request_stop(int signal) noexcept { stop_signal.store(signal); }
 
 RunResult Simulation::run() {
-  // Surface tension's colour gradient and shifting's displacement are optional fields: only the
-  // stores of a run that needs them carry them (made before the first of them, in Shared).
-  const OptionalFields optional_fields(needs_optional_fields(physics_params(case_)));
+  // Surface tension's colour gradient, shifting's displacement and heat transfer's temperature are
+  // optional fields: only the stores of a run that needs them carry them (made before the first of
+  // them, in Shared).
+  const OptionalFields optional_fields(FieldGroups{optional_field_groups(physics_params(case_))});
   Shared s(case_, options_);
   s.lattice = make_lattice(case_);
   s.params = physics_params(case_);

@@ -90,6 +90,9 @@ void SlabWorker::compute_rates() {
   // Antuono's diffusion: the same for the renormalised density gradient (density_gradient.hpp).
   const bool tension = params_.surface_tension.on;
   const bool antuono = uses_antuono_diffusion(params_);
+  const bool heat = params_.heat.on;
+  // Heat transfer: the temperatures behind the tank faces ride on the same refresh.
+  if (heat) kernels_->wall_temperature(particles_, grid_, params_);
   if (tension) kernels_->colour_gradient(particles_, grid_, params_);
   if (antuono) kernels_->density_gradient(particles_, grid_, params_);
   const double wall = since(t0);
@@ -98,6 +101,7 @@ void SlabWorker::compute_rates() {
   const auto t1 = Clock::now();
   if (tension) kernels_->surface_tension(particles_, grid_, params_);
   if (antuono) kernels_->antuono_diffusion(particles_, grid_, params_);
+  if (heat) kernels_->heat_rates(particles_, grid_, params_);
   fluid += since(t1);
   busy_seconds_ += wall + fluid;
   window_wall_seconds_ += wall;

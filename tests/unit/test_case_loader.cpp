@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <string>
 
+#include "case_errors.hpp"
 #include "../source_dir.hpp"
 #include "case/case.hpp"
 #include "physics/density_gradient.hpp"
@@ -88,14 +89,7 @@ decomposition:
   balance_every: 20
 )";
 
-std::string error_of(const std::string& yaml, const std::vector<std::string>& overrides = {}) {
-  try {
-    parse_case(yaml, "case.yaml", overrides);
-  } catch (const CaseError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using test::error_of;
 
 TEST(CaseLoader, MinimalCaseGetsDefaults) {
   const Case c = parse_case(kMinimal2D, "tiny.yaml");

@@ -52,8 +52,10 @@ void correct(ParticleStore& p, const PhysicsParams& P, float dt) {
   const int d = P.dim;
   const bool continuity = P.density_mode == DensityMode::Continuity;
   const bool shifting = P.shifting.enabled;
+  const bool heat = P.heat.on;
 #pragma omp parallel for schedule(static) if (n > kCheapGrain)
   for (std::int64_t i = 0; i < n; ++i) {
+    if (heat) correct_temperature(P, p, static_cast<std::uint32_t>(i), dt);
     if (!P.is_fluid(p.material[i])) continue;
     for (int k = 0; k < d; ++k) spate::correct(p.vel[k][i], p.acc[k][i], p.acc_prev[k][i], dt);
     if (continuity) correct_density(p.density[i], p.density_rate[i], p.density_rate_prev[i], dt, density_floor(P, p.material[i]));
@@ -107,6 +109,18 @@ void density_gradient(ParticleStore& p, const CellGrid& grid, const PhysicsParam
 void antuono_diffusion(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
   per_particle_pass(grid, P, [&]<class Kernel, int Dim>(const CellGridView& v, std::uint32_t i, const int g[3]) {
     add_antuono_diffusion<Kernel, Dim>(P, v, p, i, g);
+  });
+}
+
+void wall_temperature(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  per_particle_pass(grid, P, [&]<class Kernel, int Dim>(const CellGridView& v, std::uint32_t i, const int g[3]) {
+    update_wall_temperature<Kernel, Dim>(P, v, p, i, g);
+  });
+}
+
+void heat_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  per_particle_pass(grid, P, [&]<class Kernel, int Dim>(const CellGridView& v, std::uint32_t i, const int g[3]) {
+    update_heat_rates<Kernel, Dim>(P, v, p, i, g);
   });
 }
 

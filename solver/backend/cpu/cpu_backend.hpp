@@ -39,6 +39,11 @@ void antuono_diffusion(ParticleStore& p, const CellGrid& g, const PhysicsParams&
 // Particle-shifting displacement (physics/shifting.hpp) of the owned fluid particles for a step
 // dt, into `shift`; correct() then adds it to the positions (only when P.shifting.enabled).
 void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt);
+// Heat transfer (physics/heat_transfer.hpp), only when P.heat.on: the temperature of the owned wall
+// particles behind tank faces with a condition (before the halo refresh), then, after the fluid
+// rates, the conduction rates of the owned particles and the buoyancy of the owned fluid.
+void wall_temperature(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+void heat_rates(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 // Smallest stable time step over owned fluid particles (infinity when there are none).
 float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c);
 
@@ -103,6 +108,12 @@ class Kernels : public StepKernels {
   }
   void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
     cpu::shifting(store(), arrays_->grid(), P, dt);
+  }
+  void wall_temperature(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::wall_temperature(store(), arrays_->grid(), P);
+  }
+  void heat_rates(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::heat_rates(store(), arrays_->grid(), P);
   }
   float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
     return cpu::min_time_step(store(), P, c);

@@ -42,7 +42,9 @@ __global__ void predict_kernel(DeviceFields d, std::uint32_t n, float dt, Physic
 
 __global__ void correct_kernel(DeviceFields d, int dim, std::uint32_t n, float dt, bool continuity, PhysicsParams P) {
   const std::uint32_t i = thread_index();
-  if (i >= n || !P.is_fluid(d.material[i])) return;
+  if (i >= n) return;
+  if (P.heat.on) correct_temperature(P, d, i, dt);
+  if (!P.is_fluid(d.material[i])) return;
   for (int k = 0; k < dim; ++k) correct(d.vel[k][i], d.acc[k][i], d.acc_prev[k][i], dt);
   if (continuity) correct_density(d.density[i], d.density_rate[i], d.density_rate_prev[i], dt, density_floor(P, d.material[i]));
   if (P.shifting.enabled)
@@ -98,6 +100,18 @@ struct AntuonoDiffusionPass {
   template <class Kernel, int Dim>
   __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
     add_antuono_diffusion<Kernel, Dim>(P, v, d, i, g);
+  }
+};
+struct WallTemperaturePass {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
+    update_wall_temperature<Kernel, Dim>(P, v, d, i, g);
+  }
+};
+struct HeatRatesPass {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
+    update_heat_rates<Kernel, Dim>(P, v, d, i, g);
   }
 };
 struct SurfaceTensionPass {
@@ -186,6 +200,12 @@ class CudaKernels final : public StepKernels {
   }
   void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
     neighbour_pass<ShiftingPass>(P, ParticleRange{0, owned()}, dt);
+  }
+  void wall_temperature(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    neighbour_pass<WallTemperaturePass>(P, ParticleRange{0, owned()});
+  }
+  void heat_rates(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    neighbour_pass<HeatRatesPass>(P, ParticleRange{0, owned()});
   }
   float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
     arrays_.select();

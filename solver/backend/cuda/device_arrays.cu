@@ -268,6 +268,8 @@ DeviceFields DeviceSlabArrays::fields() const {
 void DeviceSlabArrays::swap_rates() {
   for (int k = 0; k < dim_; ++k) std::swap(arrays_[index_of(kField_acc, k)].data, arrays_[index_of(kField_acc_prev, k)].data);
   std::swap(arrays_[index_of(kField_density_rate, 0)].data, arrays_[index_of(kField_density_rate_prev, 0)].data);
+  const bool heat = std::any_of(arrays_.begin(), arrays_.end(), [](const auto& a) { return a.meta.spec == &kParticleFields[kField_temperature_rate]; });
+  if (heat) std::swap(arrays_[index_of(kField_temperature_rate, 0)].data, arrays_[index_of(kField_temperature_rate_prev, 0)].data);
 }
 
 // Grows every per-slot array, keeping the fields and keys of [0, size_); the sort buffers and the

@@ -1,0 +1,187 @@
+// Heat transfer (physics/heat_transfer.hpp): the conduction pair term, the wall temperature behind
+// a face, the compensated temperature sum, the conduction time step, the case keys and their errors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "case_errors.hpp"
+#include "case/case.hpp"
+#include "particles/particle_store.hpp"
+#include "physics/heat_transfer.hpp"
+#include "physics/integrator.hpp"
+#include "physics/timestep.hpp"
+
+namespace spate {
+namespace {
+
+// Twice the harmonic mean: equal conductivities give 2k; one adiabatic (k = 0) side none at all.
+TEST(HeatTransfer, PairConductivityIsTwiceTheHarmonicMean) {
+  EXPECT_FLOAT_EQ(pair_conductivity(1.0f, 1.0f), 2.0f);
+  EXPECT_FLOAT_EQ(pair_conductivity(10.0f, 1.0f), 40.0f / 11.0f);
+  EXPECT_FLOAT_EQ(pair_conductivity(0.0f, 5.0f), 0.0f);
+  EXPECT_FLOAT_EQ(pair_conductivity(0.0f, 0.0f), 0.0f);
+}
+
+// The pair exchanges heat, it does not make any: V_i x (i's term) = -V_j x (j's term), whatever the
+// conductivities and volumes; and the hotter particle cools.
+TEST(HeatTransfer, ConductionConservesHeatPairByPair) {
+  HeatParams H;
+  const float h = 0.013f, dp = 0.01f;
+  H.laplacian_norm = WendlandC2::normalisation(2, h);
+  const float inv_h = 1.0f / h, eta2 = 0.01f * h * h, support2 = 4.0f * h * h;
+  const Vec<2> xi{{0.0f, 0.0f}}, xj{{0.008f, 0.011f}};
+  const float vi = dp * dp * 0.98f, vj = dp * dp * 1.03f, k = pair_conductivity(0.6f, 15.0f);
+  const float ti = 350.0f, tj = 300.0f;
+  const float to_i = conduction_term<WendlandC2, 2>(H, inv_h, inv_h * inv_h, eta2, support2, xi, ti, xj, tj, k, vj);
+  const float to_j = conduction_term<WendlandC2, 2>(H, inv_h, inv_h * inv_h, eta2, support2, xj, tj, xi, ti, k, vi);
+  EXPECT_LT(to_i, 0.0f);
+  EXPECT_GT(to_j, 0.0f);
+  EXPECT_NEAR(vi * to_i, -vj * to_j, 1e-6 * std::fabs(vi * to_i));
+  // Beyond the support: nothing.
+  const Vec<2> far{{0.03f, 0.0f}};
+  EXPECT_EQ((conduction_term<WendlandC2, 2>(H, inv_h, inv_h * inv_h, eta2, support2, xi, ti, far, tj, k, vj)), 0.0f);
+}
+
+// The fit recovers a linear temperature's gradient from scattered neighbours; the mirror value is
+// limited to the neighbours' range; neighbours in one line give no gradient (the Shepard fallback).
+TEST(HeatTransfer, MirrorTemperatureFromTheFittedGradient) {
+  LinearFitSums<2> s;
+  const float gx = 3.0f, gy = -2.0f;
+  const float pts[][2] = {{0.1f, 0.4f}, {-0.7f, 0.9f}, {0.5f, 1.3f}, {1.1f, 0.6f}, {-0.2f, 1.7f}, {0.8f, 1.9f}};
+  for (auto& p : pts) s.add(0.3f + 0.1f * p[0] * p[0], Vec<2>{{p[0], p[1]}}, 300.0f + gx * p[0] + gy * p[1]);
+  const Vec<2> g = fitted_gradient<2>(s);
+  EXPECT_NEAR(g[0], gx, 1e-3);
+  EXPECT_NEAR(g[1], gy, 1e-3);
+  // From the neighbour at (0.1, 0.4) to the point (0.1, 0.9): inside the range, exact.
+  const Vec<2> up{{0.0f, 0.5f}}, right{{100.0f, 0.0f}}, left{{-100.0f, 0.0f}};
+  EXPECT_NEAR(mirror_temperature<2>(s, 300.0f + gx * 0.1f + gy * 0.4f, g, up), 300.0f + gx * 0.1f + gy * 0.9f, 1e-3);
+  // Far beyond the neighbours: held at their extremes.
+  EXPECT_FLOAT_EQ(mirror_temperature<2>(s, 300.0f, g, right), s.highest);
+  EXPECT_FLOAT_EQ(mirror_temperature<2>(s, 300.0f, g, left), s.lowest);
+  LinearFitSums<2> line;
+  for (int k = 0; k < 4; ++k) line.add(1.0f, Vec<2>{{0.5f * k, 1.0f}}, 300.0f + k);
+  const Vec<2> none = fitted_gradient<2>(line);
+  EXPECT_EQ(none[0], 0.0f);
+  EXPECT_EQ(none[1], 0.0f);
+}
+
+// Behind a face at T_w the wall holds 2 T_w - T_mirror (the face at their mean); behind a face
+// passing q into the fluid, T_mirror + q 2 depth / k; adiabatic, T_mirror.
+TEST(HeatTransfer, FaceConditions) {
+  EXPECT_FLOAT_EQ(face_wall_temperature(FaceCondition{ThermalCondition::FaceTemperature, 310.0f}, 305.0f, 1.0f, 0.01f), 315.0f);
+  EXPECT_FLOAT_EQ(face_wall_temperature(FaceCondition{ThermalCondition::FaceFlux, 200.0f}, 300.0f, 0.5f, 0.01f), 308.0f);
+  EXPECT_FLOAT_EQ(face_wall_temperature(FaceCondition{ThermalCondition::Adiabatic, 0.0f}, 301.5f, 0.5f, 0.01f), 301.5f);
+  // A tank particle in a corner belongs to the face of the lower axis; inside, to none.
+  const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  const float corner[3] = {-0.05f, 1.05f, 0}, inside[3] = {0.5f, 0.5f, 0}, top[3] = {0.5f, 1.15f, 0};
+  EXPECT_EQ(thermal_face(lo, hi, corner, 2).index(), 0);
+  EXPECT_EQ(thermal_face(lo, hi, inside, 2).axis, -1);
+  const ThermalFace f = thermal_face(lo, hi, top, 2);
+  EXPECT_EQ(f.index(), 3);
+  EXPECT_FLOAT_EQ(f.depth, 0.15f);
+  EXPECT_FLOAT_EQ(f.into_fluid, -1.0f);
+}
+
+// A million increments of 1e-6 K added to 300 K: a plain float sum never moves (each is below half
+// the resolution at 300 K), the compensated one arrives at 301 K.
+TEST(HeatTransfer, CompensatedSumKeepsIncrementsBelowTheResolution) {
+  float plain = 300.0f, value = 300.0f, residual = 0.0f;
+  for (int k = 0; k < 1000000; ++k) {
+    plain += 1.0e-6f;
+    compensated_add(value, residual, 1.0e-6f);
+  }
+  EXPECT_EQ(plain, 300.0f);
+  EXPECT_NEAR(value, 301.0f, 1e-4);
+}
+
+const char* kSlab = R"(
+name: slab
+dimensions: 2
+dp: 0.005
+gravity: [0, 0]
+heat: {initial_temperature: 300, gravity: [0, -9.81]}
+fluid:
+  thermal: {conductivity: 0.6, specific_heat: 4000, expansion: 2.0e-4}
+time: {end: 1}
+tank:
+  size: [0.1, 0.05]
+  open_top: false
+  thermal:
+    faces:
+      x-: {temperature: 310}
+      x+: {heat_flux: -50}
+fluid_blocks:
+  - {min: [0, 0], max: [0.1, 0.05]}
+)";
+
+using test::error_of;
+
+TEST(HeatTransfer, CaseKeysBecomeTheHeatParams) {
+  const Case c = parse_case(kSlab, "slab.yaml");
+  const PhysicsParams P = physics_params(c);
+  ASSERT_TRUE(P.heat.on);
+  EXPECT_FLOAT_EQ(P.heat.material(0).conductivity, 0.6f);
+  EXPECT_FLOAT_EQ(P.heat.material(0).reference_temperature, 300.0f);  // default: the initial temperature
+  EXPECT_EQ(P.heat.face[0].kind, ThermalCondition::FaceTemperature);
+  EXPECT_EQ(P.heat.face[1].kind, ThermalCondition::FaceFlux);
+  EXPECT_FLOAT_EQ(P.heat.face[1].value, -50.0f);
+  EXPECT_EQ(P.heat.face[2].kind, ThermalCondition::Adiabatic);  // a tank that does not conduct
+  EXPECT_FLOAT_EQ(P.heat.gravity[1], -9.81f);
+  EXPECT_EQ(optional_field_groups(P), kThermal);
+  // The conduction limit: 0.1 rho c_p h^2 / k.
+  const double limit = 0.1 * 1000.0 * 4000.0 * P.h * P.h / 0.6;
+  EXPECT_NEAR(heat_time_step(P, TimeStepControl{}), limit, 1e-6 * limit);
+  EXPECT_FALSE(physics_params(parse_case(kSlab, "slab.yaml", {"heat=null", "fluid.thermal=null", "tank.thermal=null"})).heat.on);
+}
+
+// Whether an error message names the key and says why.
+bool names(const std::string& message, const std::string& key, const std::string& why) {
+  const bool ok = message.find("key '" + key + "'") != std::string::npos && message.find(why) != std::string::npos;
+  if (!ok) std::printf("message: %s\n", message.c_str());
+  return ok;
+}
+
+// Bad input names the key and the reason.
+TEST(HeatTransfer, BadInputIsRefused) {
+  EXPECT_TRUE(names(error_of(kSlab, {"fluid.thermal.conductivity=-1"}), "fluid.thermal.conductivity", "must be >= 0"));
+  EXPECT_TRUE(names(error_of(kSlab, {"fluid.thermal.specific_heat=0"}), "fluid.thermal.specific_heat", "must be > 0"));
+  EXPECT_NE(error_of(kSlab, {"heat.initial_temperature=-3"}).find("below absolute zero"), std::string::npos);
+  EXPECT_TRUE(names(error_of(kSlab, {"tank.thermal.faces.x-.temperature=-1"}), "tank.thermal.faces.x-.temperature", "is below absolute zero"));
+  EXPECT_TRUE(names(error_of(kSlab, {"tank.thermal.faces.z-=adiabatic"}), "tank.thermal.faces.z-", "is not a face of this 2D tank"));
+  EXPECT_NE(error_of(kSlab, {"tank.open_top=true", "tank.thermal.faces.y+={temperature: 300}"}).find("its top is open"), std::string::npos);
+  EXPECT_NE(error_of(kSlab, {"tank.thermal.faces.x-=conducting"}).find("needs tank.thermal.conductivity > 0"), std::string::npos);
+  EXPECT_NE(error_of(kSlab, {"tank.thermal.faces.x-={temperature: 300, heat_flux: 1}"}).find("expected adiabatic, conducting"), std::string::npos);
+  // Buoyancy without gravity (neither the case's nor heat.gravity).
+  EXPECT_TRUE(names(error_of(kSlab, {"heat.gravity=[0, 0]"}), "fluid.thermal.expansion", "buoyancy needs gravity"));
+  // Thermal keys without heat transfer; heat transfer without a fluid's properties.
+  EXPECT_TRUE(names(error_of(kSlab, {"heat=null"}), "fluid.thermal", "heat transfer is off"));
+  EXPECT_TRUE(names(error_of(kSlab, {"fluid.thermal=null"}), "fluid.thermal", "is required with heat transfer"));
+  EXPECT_TRUE(names(error_of(kSlab, {"solids=[{name: s, min: [0.01, 0], max: [0.02, 0.01], thermal: {conductivity: 5}}]"}),
+                    "solids[0].thermal.specific_heat", "is required"));
+  EXPECT_NE(error_of(kSlab, {"probes=[{name: q, type: heat_flux, face: x-, length: 0.05}]"})
+                .find("needs both length and temperature_difference"),
+            std::string::npos);
+}
+
+// A run with heat transfer carries the temperature (its residual, rates, the mirror conductivity and
+// the gradient) in its stores; a run without it
+// pays nothing: the same fields, the same bytes per particle.
+TEST(HeatTransfer, OnlyRunsWithHeatCarryTheTemperature) {
+  const std::size_t without = ParticleStore(2).bytes_per_particle();
+  {
+    const OptionalFields thermal(FieldGroups{kThermal});
+    ParticleStore p(2);
+    p.resize(3);
+    EXPECT_EQ(p.temperature.size(), 3u);
+    EXPECT_TRUE(p.colour_gradient[0].empty());  // the other optional group stays out
+    EXPECT_EQ(p.bytes_per_particle(), without + (5 + 2) * sizeof(float));  // 5 scalars, the 2D gradient
+  }
+  ParticleStore q(2);
+  q.resize(3);
+  EXPECT_TRUE(q.temperature.empty());
+  EXPECT_EQ(q.bytes_per_particle(), without);
+}
+
+}  // namespace
+}  // namespace spate
