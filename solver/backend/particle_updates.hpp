@@ -226,17 +226,24 @@ SPATE_HD void add_antuono_diffusion(const PhysicsParams& P, const CellGridView& 
   f.density_rate[i] += diffusion;
 }
 
-// Heat transfer, the wall pass: the temperature of owned wall particle w behind a tank face with a
-// condition (heat_transfer.hpp), from the particles around it that carry their own temperature
-// (fluids and conducting solids): the one nearest w's mirror point across the face, carried there
-// by the fitted gradient of its material. Other particles are left alone.
+// Heat transfer, the wall pass over the owned particles: the temperature of wall particle w behind a
+// tank face with a condition (heat_transfer.hpp), from the particles around it that carry their own
+// temperature (fluids and conducting solids): the one nearest w's mirror point across the face,
+// carried there by the fitted gradient of its material; and every particle's `conductivity`, the k
+// its neighbours' pair terms use (set once here, so that the heat pass need not work out each
+// neighbour's face condition per pair).
 template <class Kernel, int Dim, class Fields>
 SPATE_HD void update_wall_temperature(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t w, const int g[3]) {
-  if (P.is_fluid(f.material[w])) return;
   ThermalFace face;
   const ThermalCondition c = particle_temperature_condition(P, f, w, face);
-  if (face.axis < 0 || c == ThermalCondition::Conducting) return;
   const HeatParams& H = P.heat;
+  if (face.axis < 0 || c == ThermalCondition::Conducting) {
+    // Fluids, conducting walls and solids conduct with their own k; a solid held at its temperature
+    // with its own, or (none given: -1) with each neighbour's.
+    const float k = H.material(f.material[w]).conductivity;
+    f.conductivity[w] = c == ThermalCondition::Fixed && !(k > 0.0f) ? -1.0f : k;
+    return;
+  }
   const Vec<Dim> xw = load_vec<Dim>(f.pos, w);
   auto carries = [&](std::uint8_t m) {
     return P.is_fluid(m) || (m != P.materials.tank() && H.material(m).condition == ThermalCondition::Conducting);
@@ -256,7 +263,7 @@ SPATE_HD void update_wall_temperature(const PhysicsParams& P, const CellGridView
   });
   if (material < 0) {  // nothing to mirror: a fixed face keeps its temperature
     if (c == ThermalCondition::FaceTemperature) f.temperature[w] = H.face[face.index()].value;
-    f.mirror_conductivity[w] = 0.0f;
+    f.conductivity[w] = 0.0f;
     return;
   }
   LinearFitSums<Dim> sums;
@@ -274,25 +281,19 @@ SPATE_HD void update_wall_temperature(const PhysicsParams& P, const CellGridView
   const float t_mirror = mirror_temperature<Dim>(sums, f.temperature[n], fitted_gradient<Dim>(sums), P.inv_h * (mirror - load_vec<Dim>(f.pos, n)));
   const float k = H.material(static_cast<std::uint8_t>(material)).conductivity;
   f.temperature[w] = face_wall_temperature(H.face[face.index()], t_mirror, k, face.depth);
-  f.mirror_conductivity[w] = k;
+  f.conductivity[w] = k;
 }
 
 // Heat transfer: neighbour j's share of rho_i c_i dT_i/dt for particle i (material Mi, at xi, at
-// temperature ti) whose temperature is integrated. A neighbour behind a tank face with a condition
-// conducts with the k of the material it mirrors (mirror_conductivity, set by the wall pass); a
-// solid held at a fixed temperature with its own k, or i's when it has none.
+// temperature ti) whose temperature is integrated, with the k the wall pass set for j
+// (`conductivity`: its own; behind a tank face with a condition the mirrored material's; -1 for a
+// held solid without one: i's).
 template <class Kernel, int Dim, class Fields>
 SPATE_HD float heat_pair_term(const PhysicsParams& P, const Fields& f, const ThermalMaterial& Mi, const Vec<Dim>& xi, float ti, std::uint32_t j) {
   const HeatParams& H = P.heat;
   const std::uint8_t mj = f.material[j];
   const bool fluid_j = P.is_fluid(mj);
-  float kj = H.material(mj).conductivity;
-  if (!fluid_j) {
-    ThermalFace fj;
-    const ThermalCondition cj = particle_temperature_condition(P, f, j, fj);
-    if (fj.axis >= 0 && cj != ThermalCondition::Conducting) kj = f.mirror_conductivity[j];
-    else if (cj == ThermalCondition::Fixed && !(kj > 0.0f)) kj = Mi.conductivity;
-  }
+  const float kj = f.conductivity[j] < 0.0f ? Mi.conductivity : f.conductivity[j];
   const float vj = fluid_j ? P.materials.of(mj).mass / f.density[j] : H.wall_volume;
   return conduction_term<Kernel, Dim>(H, P.inv_h, P.inv_h2, P.eta2, P.support2, xi, ti, load_vec<Dim>(f.pos, j), f.temperature[j],
                                       pair_conductivity(Mi.conductivity, kj), vj);

@@ -82,9 +82,10 @@ constexpr FieldType field_type_of() {
 // pass for the faces that take a condition. `temperature_residual`: what the compensated (Kahan)
 // sum of the temperature's increments has not yet added (integrator.hpp compensated_add): a float
 // at 300 K resolves 3e-5 K, and a slow approach to a steady state, whose increments per step fall
-// below that, would otherwise stall short of it. The wall pass also sets `mirror_conductivity`, the k of the
-// material such a wall particle mirrors (its neighbours read it, so it is sent to ghosts; saved
-// with snapshots and checkpoints, so that `spate post` evaluates a heat-flux probe as the run did).
+// below that, would otherwise stall short of it. The wall pass also sets `conductivity`, the k
+// each particle conducts with (its own, or the mirrored material's behind a tank face; its
+// neighbours read it, so it is sent to ghosts; saved with snapshots and checkpoints, so that
+// `spate post` evaluates a heat-flux probe as the run did).
 // `temperature_gradient`: per-step scratch of the heat pass when particles are shifted (the corrector
 // carries the temperature to the shifted position, T += grad T . dr).
 // Order matters only for readability and the neighbour record layout (kNeighbour fields in this
@@ -113,8 +114,7 @@ constexpr FieldType field_type_of() {
   F(temperature_residual, float, Scalar, State, kMigrated | kCheckpointed | kThermal, "", "temperature_residual")    \
   F(temperature_rate, float, Scalar, Rate, kMigrated | kCheckpointed | kThermal, "", "temperature_rate")              \
   F(temperature_rate_prev, float, Scalar, History, kMigrated | kThermal, "", "temperature_rate_prev")              \
-  F(mirror_conductivity, float, Scalar, Derived, kGhost | kRefreshed | kExported | kThermal, "mirror_conductivity",   \
-    "mirror_conductivity")          \
+  F(conductivity, float, Scalar, Derived, kGhost | kRefreshed | kExported | kThermal, "conductivity", "conductivity")          \
   F(temperature_gradient, float, Vector, Derived, kThermal, "", "temperature_gradient_x", "temperature_gradient_y",     \
     "temperature_gradient_z")
 // clang-format on
