@@ -253,7 +253,12 @@ struct CatalystSink::Impl : ScriptObserver {
                    {"initial",
                     {{"gravity", l.initial.gravity},
                      {"viscosity", l.initial.viscosity},
+                     {"phase_viscosity", l.initial.phase_viscosity},
                      {"artificial_viscosity", l.initial.artificial_viscosity},
+                     {"motion_amplitude", l.initial.motion_amplitude},
+                     {"motion_frequency", l.initial.motion_frequency},
+                     {"face_temperature", l.initial.face_temperature},
+                     {"face_heat_flux", l.initial.face_heat_flux},
                      {"insitu_every", l.initial.insitu_every}}}};
     }
     return j;

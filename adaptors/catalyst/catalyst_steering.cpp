@@ -41,6 +41,8 @@ void SteeringInitial::take(const SteeringChange& c) {
   if (c.name == "insitu_every" && v.size() == 1) insitu_every = static_cast<int>(v[0]);
   if (c.name == "motion_amplitude" && v.size() == 2) motion_amplitude = {v[0], v[1]};
   if (c.name == "motion_frequency" && v.size() == 2) motion_frequency = {v[0], v[1]};
+  if (c.name == "face_temperature" && v.size() == 2) face_temperature = {v[0], v[1]};
+  if (c.name == "face_heat_flux" && v.size() == 2) face_heat_flux = {v[0], v[1]};
 }
 
 CatalystSteering::CatalystSteering(const std::filesystem::path& xml, const SteeringInitial& initial) {
@@ -62,6 +64,8 @@ CatalystSteering::CatalystSteering(const std::filesystem::path& xml, const Steer
   vtkSMPropertyHelper(proxy, "artificial_viscosity").Set(initial.artificial_viscosity);
   vtkSMPropertyHelper(proxy, "motion_amplitude").Set(initial.motion_amplitude.data(), 2);
   vtkSMPropertyHelper(proxy, "motion_frequency").Set(initial.motion_frequency.data(), 2);
+  vtkSMPropertyHelper(proxy, "face_temperature").Set(initial.face_temperature.data(), 2);
+  vtkSMPropertyHelper(proxy, "face_heat_flux").Set(initial.face_heat_flux.data(), 2);
   vtkSMPropertyHelper(proxy, "insitu_every").Set(initial.insitu_every);
   vtkSMPropertyHelper(proxy, "write_checkpoint").Set(0);
   vtkSMPropertyHelper(proxy, "stop").Set(0);

@@ -27,6 +27,8 @@ struct SteeringInitial {
   double artificial_viscosity = 0.0;
   std::array<double, 2> motion_amplitude{0.0, 1.0};  // motion number, amplitude scale
   std::array<double, 2> motion_frequency{0.0, 0.0};  // motion number, frequency [Hz]
+  std::array<double, 2> face_temperature{0.0, 293.15};  // tank face number, its temperature [K]
+  std::array<double, 2> face_heat_flux{0.0, 0.0};        // tank face number, heat flux into the fluid [W/m2]
   int insitu_every = 1;
 
   // Shows an accepted change (a restart's history, or one steered before a fresh in-situ helper

@@ -176,7 +176,12 @@ SteeringInitial initial_from(const nlohmann::json& j) {
   SteeringInitial s;
   for (int k = 0; k < 3; ++k) s.gravity[k] = j.at("gravity").at(k).get<double>();
   s.viscosity = j.at("viscosity").get<double>();
+  s.phase_viscosity = j.at("phase_viscosity").get<std::array<double, 2>>();
   s.artificial_viscosity = j.at("artificial_viscosity").get<double>();
+  s.motion_amplitude = j.at("motion_amplitude").get<std::array<double, 2>>();
+  s.motion_frequency = j.at("motion_frequency").get<std::array<double, 2>>();
+  s.face_temperature = j.at("face_temperature").get<std::array<double, 2>>();
+  s.face_heat_flux = j.at("face_heat_flux").get<std::array<double, 2>>();
   s.insitu_every = j.at("insitu_every").get<int>();
   return s;
 }

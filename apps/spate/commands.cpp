@@ -247,6 +247,12 @@ int run_case(const RunArgs& a, RunRecord& record) {
       init.artificial_viscosity = c.artificial_viscosity;
       init.insitu_every = insitu_every;
       if (!c.motions.empty()) init.motion_frequency = {0.0, MotionSet(c.motions, c.dim).frequency(0)};
+      // The first tank face that holds a temperature, and the first with a heat flux.
+      for (int f = 5; f >= 0; --f) {
+        const FaceThermalSpec& face = c.tank_faces[f];
+        if (face.kind == ThermalCondition::FaceTemperature) init.face_temperature = {double(f), face.value};
+        if (face.kind == ThermalCondition::FaceFlux) init.face_heat_flux = {double(f), face.value};
+      }
       // A restart continues steered (the checkpoint holds the accepted changes): show those values.
       if (o.restart) {
         try {

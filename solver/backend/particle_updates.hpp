@@ -229,7 +229,7 @@ SPATE_HD void add_antuono_diffusion(const PhysicsParams& P, const CellGridView& 
 // Heat transfer, the wall pass over the owned particles: the temperature of wall particle w behind a
 // tank face with a condition (heat_transfer.hpp), from the particles around it that carry their own
 // temperature (fluids and conducting solids): the one nearest w's mirror point across the face,
-// carried there by the fitted gradient of its material; and every particle's `conductivity`, the k
+// carried along the face to it by the fitted gradient of its material; and every particle's `conductivity`, the k
 // its neighbours' pair terms use (set once here, so that the heat pass need not work out each
 // neighbour's face condition per pair).
 template <class Kernel, int Dim, class Fields>
@@ -278,9 +278,17 @@ SPATE_HD void update_wall_temperature(const PhysicsParams& P, const CellGridView
       sums.add(vj * Kernel::value(sqrtf(r2) * P.inv_h, P.kernel_norm), P.inv_h * dx, f.temperature[j]);
     }
   });
-  const float t_mirror = mirror_temperature<Dim>(sums, f.temperature[n], fitted_gradient<Dim>(sums), P.inv_h * (mirror - load_vec<Dim>(f.pos, n)));
+  // Carried along the face only: across it, the face's condition draws the line from n itself
+  // (face_wall_temperature), at n's own distance from the face, kept at 0.2 h at least so that a
+  // particle pressed against the face does not turn its noise into a steep line.
+  Vec<Dim> along = mirror - load_vec<Dim>(f.pos, n);
+  along[face.axis] = 0.0f;
+  const float t_near = mirror_temperature<Dim>(sums, f.temperature[n], fitted_gradient<Dim>(sums), P.inv_h * along);
+  float xn[3] = {0.0f, 0.0f, 0.0f};
+  for (int a = 0; a < Dim; ++a) xn[a] = f.pos[a][n];
+  const float near_depth = fmaxf(distance_from_face(P.tank_lo, P.tank_hi, face, xn), 0.2f * P.h);
   const float k = H.material(static_cast<std::uint8_t>(material)).conductivity;
-  f.temperature[w] = face_wall_temperature(H.face[face.index()], t_mirror, k, face.depth);
+  f.temperature[w] = face_wall_temperature(H.face[face.index()], t_near, near_depth, k, face.depth);
   f.conductivity[w] = k;
 }
 

@@ -211,6 +211,9 @@ double highest_fluid_column(const Case& c);
 // The sound speed of fluid k: given, or automatic.
 double sound_speed(const Case& c, int fluid = 0);
 PhysicsParams physics_params(const Case& c);
+// Why the tank has no wall at face f (2 axis + side): not a face of a case of this dimension, a
+// periodic axis, the open top; nothing when it has one.
+std::optional<std::string> tank_wall_missing(const Case& c, int face);
 // Names of the materials of the case, by material index (fluids, then "tank", then the solids).
 std::vector<std::string> material_names(const Case& c);
 

@@ -530,6 +530,17 @@ int face_index(const std::string& name, int dim) {
   return 2 * axis + (name[1] == '+' ? 1 : 0);
 }
 
+}  // namespace
+
+std::optional<std::string> tank_wall_missing(const Case& c, int face) {
+  if (face < 0 || face >= 2 * c.dim) return "is not a face of this " + std::to_string(c.dim) + "D tank (x-, x+, y-, ...)";
+  if (c.periodic[face / 2]) return "the tank has no wall here (the axis is periodic)";
+  if (face / 2 == c.dim - 1 && face % 2 == 1 && c.open_top) return "the tank has no wall here (its top is open)";
+  return std::nullopt;
+}
+
+namespace {
+
 // The tank's upper corner as its particles make it: its extents rounded to whole dp.
 Vec3d particle_tank_max(const Case& c) {
   Vec3d hi{0, 0, 0};
@@ -626,10 +637,7 @@ void read_tank_faces(Section& t, Case& c) {
   for (auto it = faces->node().begin(); it != faces->node().end(); ++it) {
     const std::string name = it->first.Scalar();
     const int f = face_index(name, d);
-    if (f < 0) faces->fail(it->first, name, "is not a face of this " + std::to_string(d) + "D tank (x-, x+, y-, ...)");
-    const int axis = f / 2;
-    if (c.periodic[axis]) faces->fail(it->first, name, "the tank has no wall here (the axis is periodic)");
-    if (axis == d - 1 && f % 2 == 1 && c.open_top) faces->fail(it->first, name, "the tank has no wall here (its top is open)");
+    if (auto why = tank_wall_missing(c, f)) faces->fail(it->first, name, *why);
     FaceThermalSpec& spec = c.tank_faces[f];
     if (faces->raw(name).IsScalar()) {
       const std::string v = faces->text(name);
@@ -973,7 +981,8 @@ Case read(Section& root, const std::string& file) {
           const std::string face = p.text("face");
           probe.face = face_index(face, d);
           if (probe.face < 0) p.fail(p.raw("face"), "face", "'" + face + "' is not a face of this " + std::to_string(d) + "D case (x-, x+, y-, ...)");
-          if (probe.solid.empty() && c.periodic[probe.face / 2]) p.fail(p.raw("face"), "face", "the tank has no wall here (the axis is periodic)");
+          if (probe.solid.empty())
+            if (auto why = tank_wall_missing(c, probe.face)) p.fail(p.raw("face"), "face", *why);
         }
         if (p.has("length") != p.has("temperature_difference"))
           p.fail(p.node(), p.has("length") ? "temperature_difference" : "length", "the Nusselt number needs both length and temperature_difference");

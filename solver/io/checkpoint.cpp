@@ -577,9 +577,9 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
   }
   if (!history.empty() && history.back().step > meta.step)
     r.fail(fmt::format("attribute 'steering_log': a change at step {}, after the checkpoint's step {}", history.back().step, meta.step));
-  // A phase_viscosity change must name one of the case's fluids.
+  // A phase_viscosity change must name one of the case's fluids, a face change one of its walls.
   for (const SteeringChange& change : history)
-    if (auto why = validate(change, dim, nullptr, static_cast<int>(domain_case.fluids.size())))
+    if (auto why = validate(change, dim, nullptr, &domain_case))
       r.fail(fmt::format("attribute 'steering_log', step {}: {}", change.step, *why));
 
   // The datasets, before anything is allocated.

@@ -107,7 +107,7 @@ SPATE_HD ThermalFace thermal_face(const float (&lo)[3], const float (&hi)[3], co
   return f;
 }
 
-// Distance of x into the fluid from face f's plane.
+// Distance of x into the fluid from face f's plane (negative behind it).
 SPATE_HD float distance_from_face(const float (&lo)[3], const float (&hi)[3], const ThermalFace& f, const float* x) {
   return f.side == 0 ? x[f.axis] - lo[f.axis] : hi[f.axis] - x[f.axis];
 }
@@ -223,15 +223,20 @@ SPATE_HD Vec<Dim> fitted_gradient(const LinearFitSums<Dim>& s) {
   return g;
 }
 
-// The temperature of a wall particle `depth` behind a face with condition c, given the fluid's
-// temperature t_mirror at its mirror point (as far in front of the face as it is behind) and the
-// conductivity k there: the face at c.value (the mean of the two is the face's temperature), the
-// flux c.value into the fluid (k (T_wall - t_mirror) / (2 depth) = q), or none (adiabatic).
-SPATE_HD float face_wall_temperature(const FaceCondition& c, float t_mirror, float k, float depth) {
+// The temperature of a wall particle `depth` behind a face with condition c, on the straight line
+// through the temperature t_near of a particle `near_depth` in front of the face (the fluid nearest
+// the wall particle's mirror point, carried along the face to it), with conductivity k there: the
+// face at c.value (T_w = c.value - (t_near - c.value) depth / near_depth), the flux c.value into the
+// fluid (k (T_w - t_near) / (depth + near_depth) = q), or none (adiabatic: t_near). A line through
+// the particle itself rather than through the mirror point keeps a deep wall layer right where its
+// mirror point lies beyond its neighbours (they are then one row of fluid along the face, which
+// fixes no gradient across it: the deeper layer took the first row's temperature, and a face with a
+// heat flux passed 3.7% too much, docs/studies/heated-cavity.md).
+SPATE_HD float face_wall_temperature(const FaceCondition& c, float t_near, float near_depth, float k, float depth) {
   switch (c.kind) {
-    case ThermalCondition::FaceTemperature: return 2.0f * c.value - t_mirror;
-    case ThermalCondition::FaceFlux: return k > 0.0f ? t_mirror + c.value * 2.0f * depth / k : t_mirror;
-    default: return t_mirror;
+    case ThermalCondition::FaceTemperature: return c.value - (t_near - c.value) * depth / near_depth;
+    case ThermalCondition::FaceFlux: return k > 0.0f ? t_near + c.value * (depth + near_depth) / k : t_near;
+    default: return t_near;
   }
 }
 

@@ -353,7 +353,7 @@ class Worker {
       for (auto& change : share_changes(t_, asked)) {
         change.step = step;
         change.time = time;
-        if (auto why = validate(change, s_.c.dim, &motions, static_cast<int>(s_.c.fluids.size()))) {
+        if (auto why = validate(change, s_.c.dim, &motions, &s_.c)) {
           if (writer) spdlog::warn("steering: rejected {} at step {}: {}", change.name, step, *why);
           if (writer) ++s_.result.steering_rejected;
           continue;

@@ -1,5 +1,6 @@
 #include "steering.hpp"
 
+#include "../case/case.hpp"
 #include "../io/input_file.hpp"
 
 #include <cerrno>
@@ -23,6 +24,9 @@ const std::vector<SteeringParameter>& steering_parameters() {
       {"motion_amplitude", 2, 0.0, kMaxMotionAmplitudeScale, "",
        "motion number, amplitude scale (1: the case's amplitude; blends over one period, no jump)"},
       {"motion_frequency", 2, 0.0, 100.0, "Hz", "motion number, frequency of a sinusoidal motion (the phase stays continuous)"},
+      {"face_temperature", 2, 0.0, 1.0e4, "K",
+       "tank face number (0 x-, 1 x+, 2 y-, 3 y+, 4 z-, 5 z+), its fixed temperature (heat transfer; the face holds it from the next step)"},
+      {"face_heat_flux", 2, -1.0e9, 1.0e9, "W/m2", "tank face number, the heat flux into the fluid through it (0: adiabatic)"},
       {"insitu_every", 1, 1.0, 1.0e6, "steps", "steps between in-situ pipeline executions"},
       {"write_checkpoint", 1, 0.0, 1.0, "", "1: write a checkpoint at the next step boundary"},
       {"stop", 1, 0.0, 1.0, "", "1: write a checkpoint and stop cleanly (exit 0)"},
@@ -30,7 +34,7 @@ const std::vector<SteeringParameter>& steering_parameters() {
   return p;
 }
 
-std::optional<std::string> validate(const SteeringChange& c, int dim, const MotionSet* motions, int fluids) {
+std::optional<std::string> validate(const SteeringChange& c, int dim, const MotionSet* motions, const Case* known) {
   const SteeringParameter* spec = nullptr;
   for (auto& p : steering_parameters())
     if (p.name == c.name) spec = &p;
@@ -66,12 +70,21 @@ std::optional<std::string> validate(const SteeringChange& c, int dim, const Moti
   if (c.name == "phase_viscosity") {
     const double k = c.value[0];
     if (k != std::floor(k) || k < 0) return "phase_viscosity: the fluid number must be a whole number >= 0";
+    const int fluids = known ? static_cast<int>(known->fluids.size()) : 0;
     if (fluids > 0 && k >= fluids)
       return "phase_viscosity: the case has " + std::to_string(fluids) + " fluid(s), numbered from 0; there is no fluid " +
              std::to_string(static_cast<long long>(k));
     if (k >= kMaxFluids) return "phase_viscosity: there is no fluid " + std::to_string(static_cast<long long>(k));
   }
-  // The value's range (phase_viscosity: its second value, after the fluid number).
+  if (c.name == "face_temperature" || c.name == "face_heat_flux") {
+    const double f = c.value[0];
+    if (f != std::floor(f) || f < 0 || f > 5) return c.name + ": the face number must be a whole number from 0 to 5 (x-, x+, y-, y+, z-, z+)";
+    if (known) {
+      if (!known->heat) return c.name + ": the case has no heat transfer (no heat: section)";
+      if (auto why = tank_wall_missing(*known, static_cast<int>(f))) return c.name + ": face " + std::to_string(static_cast<int>(f)) + " " + *why;
+    }
+  }
+  // The value's range (phase_viscosity, face_*: the second value, after the number).
   const double v = c.value.back();
   if (v < spec->min || v > spec->max) {
     std::ostringstream s;
@@ -95,6 +108,12 @@ void apply(const SteeringChange& c, SteeringTarget& t) {
     if (t.motions) t.motions->set_amplitude(static_cast<int>(c.value[0]), c.value[1], c.time);
   } else if (c.name == "motion_frequency") {
     if (t.motions) t.motions->set_frequency(static_cast<int>(c.value[0]), c.value[1], c.time);
+  } else if (c.name == "face_temperature" || c.name == "face_heat_flux") {
+    // A face may change its kind too (an adiabatic face heated, a held face given a flux): the
+    // wall pass reads the face's condition every step (backend/particle_updates.hpp).
+    FaceCondition& face = t.params->heat.face[static_cast<int>(c.value[0])];
+    face.kind = c.name == "face_temperature" ? ThermalCondition::FaceTemperature : ThermalCondition::FaceFlux;
+    face.value = static_cast<float>(c.value[1]);
   } else if (c.name == "insitu_every") {
     if (t.insitu_every) *t.insitu_every = static_cast<int>(c.value[0]);
   } else if (c.name == "write_checkpoint") {

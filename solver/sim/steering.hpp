@@ -13,6 +13,8 @@
 
 namespace spate {
 
+struct Case;
+
 struct SteeringParameter {
   std::string name;
   int components;         // 1 for scalars, 3 for the gravity vector
@@ -21,7 +23,7 @@ struct SteeringParameter {
 };
 
 // The documented set (docs/live.md): gravity, viscosity, phase_viscosity, artificial_viscosity,
-// motion_amplitude, motion_frequency, insitu_every, write_checkpoint, stop.
+// motion_amplitude, motion_frequency, face_temperature, face_heat_flux, insitu_every, write_checkpoint, stop.
 const std::vector<SteeringParameter>& steering_parameters();
 
 struct SteeringChange {
@@ -42,9 +44,10 @@ struct SteeringTarget {
 
 // Reason for rejection, or nothing when the change is acceptable. `motions`: the run's wall
 // motions (a motion change names one of them); null: not known (a recorded log read before the
-// run), only the ranges are checked. `fluids`: the case's number of fluids (phase_viscosity names
-// one of them); 0: not known, only the ranges are checked.
-std::optional<std::string> validate(const SteeringChange& change, int dim, const MotionSet* motions = nullptr, int fluids = 0);
+// run), only the ranges are checked. `known`: the case (phase_viscosity names one of its fluids,
+// face_temperature and face_heat_flux one of its tank's walls, in a case with heat transfer); null:
+// not known, only the ranges are checked.
+std::optional<std::string> validate(const SteeringChange& change, int dim, const MotionSet* motions = nullptr, const Case* known = nullptr);
 void apply(const SteeringChange& change, SteeringTarget& target);
 
 // One line per change: "<step> <time> <name> <v0> [<v1> <v2>]", '#' starts a comment.

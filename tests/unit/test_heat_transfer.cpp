@@ -11,6 +11,7 @@
 #include "physics/heat_transfer.hpp"
 #include "physics/integrator.hpp"
 #include "physics/timestep.hpp"
+#include "sim/steering.hpp"
 
 namespace spate {
 namespace {
@@ -66,12 +67,20 @@ TEST(HeatTransfer, MirrorTemperatureFromTheFittedGradient) {
   EXPECT_EQ(none[1], 0.0f);
 }
 
-// Behind a face at T_w the wall holds 2 T_w - T_mirror (the face at their mean); behind a face
-// passing q into the fluid, T_mirror + q 2 depth / k; adiabatic, T_mirror.
+// A wall particle behind a face lies on the straight line through the particle nearest its mirror
+// point: behind a face at T_f, T_f - (T_near - T_f) depth / near_depth (2 T_f - T_near when the
+// particle is its mirror image); behind a face passing q into the fluid, T_near + q (depth +
+// near_depth) / k; adiabatic, T_near. A deep layer's line through the first row is exact for a
+// linear profile.
 TEST(HeatTransfer, FaceConditions) {
-  EXPECT_FLOAT_EQ(face_wall_temperature(FaceCondition{ThermalCondition::FaceTemperature, 310.0f}, 305.0f, 1.0f, 0.01f), 315.0f);
-  EXPECT_FLOAT_EQ(face_wall_temperature(FaceCondition{ThermalCondition::FaceFlux, 200.0f}, 300.0f, 0.5f, 0.01f), 308.0f);
-  EXPECT_FLOAT_EQ(face_wall_temperature(FaceCondition{ThermalCondition::Adiabatic, 0.0f}, 301.5f, 0.5f, 0.01f), 301.5f);
+  const FaceCondition fixed{ThermalCondition::FaceTemperature, 310.0f}, flux{ThermalCondition::FaceFlux, 200.0f};
+  EXPECT_FLOAT_EQ(face_wall_temperature(fixed, 305.0f, 0.01f, 1.0f, 0.01f), 315.0f);
+  EXPECT_FLOAT_EQ(face_wall_temperature(flux, 300.0f, 0.01f, 0.5f, 0.01f), 308.0f);
+  EXPECT_FLOAT_EQ(face_wall_temperature(FaceCondition{ThermalCondition::Adiabatic, 0.0f}, 301.5f, 0.01f, 0.5f, 0.01f), 301.5f);
+  // T = 310 + 1000 s (s into the fluid): the row at s = 0.005 gives the layer at depth 0.015.
+  EXPECT_NEAR(face_wall_temperature(fixed, 315.0f, 0.005f, 1.0f, 0.015f), 310.0f - 15.0f, 1e-3);
+  // Flux into the fluid q = -k dT/ds = -2000 W/m2 for k = 2.
+  EXPECT_NEAR(face_wall_temperature(FaceCondition{ThermalCondition::FaceFlux, -2000.0f}, 315.0f, 0.005f, 2.0f, 0.015f), 295.0f, 1e-3);
   // A tank particle in a corner belongs to the face of the lower axis; inside, to none.
   const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
   const float corner[3] = {-0.05f, 1.05f, 0}, inside[3] = {0.5f, 0.5f, 0}, top[3] = {0.5f, 1.15f, 0};
@@ -162,6 +171,32 @@ TEST(HeatTransfer, BadInputIsRefused) {
   EXPECT_NE(error_of(kSlab, {"probes=[{name: q, type: heat_flux, face: x-, length: 0.05}]"})
                 .find("needs both length and temperature_difference"),
             std::string::npos);
+}
+
+// Steering a face (docs/live.md): face_temperature and face_heat_flux name a wall the tank has, in a
+// case with heat transfer; the change sets the face's kind and value (an adiabatic face may be heated).
+TEST(HeatTransfer, SteeringAFace) {
+  const Case c = parse_case(kSlab, "slab.yaml");
+  auto change = [](const std::string& name, double face, double value) { return SteeringChange{0, 0.0, name, {face, value}}; };
+  EXPECT_FALSE(validate(change("face_temperature", 1, 300), 2, nullptr, &c).has_value());
+  EXPECT_FALSE(validate(change("face_heat_flux", 2, -50), 2, nullptr, &c).has_value());
+  EXPECT_NE(validate(change("face_temperature", 4, 300), 2, nullptr, &c).value_or("").find("not a face of this 2D tank"), std::string::npos);
+  EXPECT_NE(validate(change("face_temperature", 1.5, 300), 2, nullptr, &c).value_or("").find("whole number from 0 to 5"), std::string::npos);
+  EXPECT_NE(validate(change("face_temperature", 1, -2), 2, nullptr, &c).value_or("").find("outside"), std::string::npos);
+  const Case open = parse_case(kSlab, "slab.yaml", {"tank.open_top=true"});
+  EXPECT_NE(validate(change("face_heat_flux", 3, 10), 2, nullptr, &open).value_or("").find("its top is open"), std::string::npos);
+  const Case cold = parse_case(kSlab, "slab.yaml", {"heat=null", "fluid.thermal=null", "tank.thermal=null"});
+  EXPECT_NE(validate(change("face_temperature", 1, 300), 2, nullptr, &cold).value_or("").find("no heat transfer"), std::string::npos);
+  // Without the case (a log read before the run), only the ranges.
+  EXPECT_FALSE(validate(change("face_temperature", 4, 300), 2).has_value());
+  PhysicsParams P = physics_params(c);
+  SteeringTarget t{&P};
+  apply(change("face_heat_flux", 2, -50), t);
+  EXPECT_EQ(P.heat.face[2].kind, ThermalCondition::FaceFlux);
+  EXPECT_EQ(P.heat.face[2].value, -50.0f);
+  apply(change("face_temperature", 1, 300), t);
+  EXPECT_EQ(P.heat.face[1].kind, ThermalCondition::FaceTemperature);
+  EXPECT_EQ(P.heat.face[1].value, 300.0f);
 }
 
 // A run with heat transfer carries the temperature (its residual, rates, the mirror conductivity and
