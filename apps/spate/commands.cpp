@@ -493,9 +493,15 @@ int info_command(const InfoArgs& a) {
                     P.is_fluid(m) ? fmt::format(", beta = {:g} 1/K, T_ref = {:g} K", t.expansion, t.reference_temperature).c_str()
                                   : fmt::format(", rho = {:g} kg/m3", t.density).c_str(),
                     t.condition == ThermalCondition::Fixed ? ", held at its temperature" : "");
+        if (P.is_fluid(m) && !c.fluids[m].thermal.viscosity.empty()) {
+          std::string rows;
+          for (const auto& [T, mu] : c.fluids[m].thermal.viscosity) rows += fmt::format(" ({:g} K, {:g})", T, mu);
+          std::printf("      viscosity from its table [Pa s], linear between:%s\n", rows.c_str());
+        }
       }
       const char* kinds[] = {"conducting", "held", "temperature", "heat flux", "adiabatic"};
       for (int f = 0; f < 2 * c.dim; ++f) {
+        if (tank_wall_missing(c, f)) continue;  // periodic, the open top
         const FaceCondition& fc = P.heat.face[f];
         std::printf("  face %c%c        %s", "xyz"[f / 2], f % 2 ? '+' : '-', kinds[static_cast<int>(fc.kind)]);
         if (fc.kind == ThermalCondition::FaceTemperature) std::printf(" %g K", fc.value);

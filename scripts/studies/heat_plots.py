@@ -1,13 +1,15 @@
 #!/usr/bin/env /usr/bin/python3
 """Figures of the heat-transfer validation (docs/validation.md, docs/studies/heated-cavity.md):
-the two-material slab's steady profile beside the exact one, and the heated cavity's isotherms and
-streamlines with its Nusselt-number history. Reads the final checkpoint and the probes of runs of
-cases/conduction_2d.yaml and cases/heated_cavity_2d.yaml (e.g. the folders the validation tests leave
-in /tmp/spate-test-*-heat-slab and -heat-cavity-2.6295e-3).
-Usage: scripts/studies/heat_plots.py SLAB_RUN CAVITY_RUN [OUT_DIR (default docs/images)]"""
+the two-material slab's steady profile beside the exact one; the heated cavity's isotherms and
+streamlines with its Nusselt-number history; the Poiseuille channel with a temperature-dependent
+viscosity against its exact profile; the cavity's Nusselt number at Ra = 1e5 at several resolutions.
+Reads the final checkpoint and the probes of runs of cases/conduction_2d.yaml,
+cases/heated_cavity_2d.yaml and cases/poiseuille_thermal_2d.yaml (e.g. the folders the validation
+tests leave in /tmp/spate-test-*-heat-slab, -heat-cavity-2.6295e-3, -heat-poiseuille).
+Usage: scripts/studies/heat_plots.py [--slab RUN] [--cavity RUN] [--poiseuille RUN]
+                                     [--ra1e5 RUN ...] [--out DIR (default docs/images)]"""
+import argparse
 import glob
-import sys
-
 import h5py
 import matplotlib
 matplotlib.use("Agg")
@@ -70,7 +72,61 @@ def cavity(run, out):
     fig.savefig(out + "/heat_cavity_ra1e4.png", dpi=120)
 
 
+def poiseuille(run, out):
+    """Velocity across the channel against the exact profile u(y) = int_0^y rho F (y* - s) / mu(s) ds."""
+    p = particles(run)
+    fl = p["material"] == 0
+    L, F, rho = 1e-3, 2e-4, 1000.0
+    table_T, table_mu = [290, 300, 310], [2e-3, 1e-3, 0.5e-3]
+    y = np.linspace(0, L, 20001)
+    mu = np.interp(290 + 20 * y / L, table_T, table_mu)
+    y_star = np.trapz(y / mu, y) / np.trapz(1 / mu, y)
+    g = rho * F * (y_star - y) / mu
+    u = np.concatenate([[0], np.cumsum(0.5 * (g[1:] + g[:-1]) * np.diff(y))])
+    u_const = rho * F / (2 * 1e-3) * y * (L - y)
+    fig, ax = plt.subplots(figsize=(6, 3.8))
+    ax.plot(y / L, u * 1e6, "k-", lw=1, label="exact, mu(T) from the table")
+    ax.plot(y / L, u_const * 1e6, "k:", lw=1, label="exact, constant mu = 1 mPa s (300 K)")
+    ax.plot(p["y"][fl] / L, p["vx"][fl] * 1e6, "o", ms=2.5, color="tab:red", label="spate, every particle")
+    ax.set_xlabel("y / L  (floor 290 K, lid 310 K)")
+    ax.set_ylabel("u [µm/s]")
+    ax.set_title("cases/poiseuille_thermal_2d.yaml: steady profile at t = 1 s")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out + "/heat_poiseuille_viscosity.png", dpi=120)
+
+
+def ra1e5(runs, out):
+    """nu_hot against time at Ra = 1e5 for runs at several resolutions (their dp from case.yaml)."""
+    fig, ax = plt.subplots(figsize=(6.4, 3.8))
+    for run in runs:
+        dp = float([l.split(":")[1] for l in open(run + "/case.yaml") if l.startswith("dp:")][0])
+        d = np.loadtxt(run + "/probes/nu_hot.csv", delimiter=",", skiprows=1)
+        ax.plot(d[:, 0], d[:, 3], lw=0.8, label="L/%d" % round(0.05 / dp))
+    ax.axhline(4.519, color="k", lw=1, ls="--", label="de Vahl Davis 4.519")
+    ax.axhspan(4.519 * 0.9, 4.519 * 1.1, color="0.9", label="±10%")
+    ax.set_ylim(3, 7)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("nu_hot")
+    ax.set_title("heated cavity, Ra = 1e5")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out + "/heat_cavity_ra1e5.png", dpi=120)
+
+
 if __name__ == "__main__":
-    out = sys.argv[3] if len(sys.argv) > 3 else "docs/images"
-    slab(sys.argv[1], out)
-    cavity(sys.argv[2], out)
+    a = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    a.add_argument("--slab")
+    a.add_argument("--cavity")
+    a.add_argument("--poiseuille")
+    a.add_argument("--ra1e5", nargs="+")
+    a.add_argument("--out", default="docs/images")
+    args = a.parse_args()
+    if args.slab:
+        slab(args.slab, args.out)
+    if args.cavity:
+        cavity(args.cavity, args.out)
+    if args.poiseuille:
+        poiseuille(args.poiseuille, args.out)
+    if args.ra1e5:
+        ra1e5(args.ra1e5, args.out)

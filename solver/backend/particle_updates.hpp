@@ -66,8 +66,22 @@ SPATE_HD void predict_particle(const PhysicsParams& P, Fields& f, std::uint32_t 
   if (P.density_mode == DensityMode::Continuity) predict_density(f.density[i], f.density_rate_prev[i], dt);
 }
 
+// The viscosity of fluid particle i, and what the multiphase pair terms read of neighbour j's
+// fluid: with a temperature table (heat_transfer.hpp), at their own temperatures.
+template <class Fields>
+SPATE_HD float particle_viscosity(const PhysicsParams& P, const Fields& f, std::uint32_t i) {
+  const std::uint8_t m = f.material[i];
+  const float mu = P.materials.of(m).viscosity;
+  return P.heat.viscosity_varies ? P.heat.viscosity(m, mu, f.temperature[i]) : mu;
+}
+template <class Fields>
+SPATE_HD NeighbourFluid particle_neighbour_fluid(const PhysicsParams& P, const Fields& f, std::uint32_t j) {
+  return P.heat.viscosity_varies ? neighbour_fluid(P, f.material[j], f.temperature[j]) : neighbour_fluid(P, f.material[j]);
+}
+
 // Acceleration and density rate of fluid particle i (zero rates for walls). Multiphase: the pair
-// terms of multiphase_interactions.hpp with each neighbour's own fluid. MovingWalls: walls carry
+// terms of multiphase_interactions.hpp with each neighbour's own fluid (and viscosity: every run
+// with a temperature table takes them, dispatch.hpp). MovingWalls: walls carry
 // their prescribed velocity into continuity (ParticleState::w), and free-slip faces slide for the
 // artificial viscosity (PairKinematics::vr_av). Riemann: the Riemann options' terms
 // (dispatch_pair_flags).
@@ -80,6 +94,7 @@ SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, 
   }
   const ParticleState<Dim> si = load_state<Dim>(f, i);
   const FluidMaterial& M = P.materials.of(si.material);
+  [[maybe_unused]] const float mu_i = Multiphase ? particle_viscosity(P, f, i) : M.viscosity;
   FluidRates<Dim> rates;
   // About 1 in 6 candidates of the 27 cells lies inside the support (3D); skip the others before
   // paying for the pair terms (which would add exactly zero for them).
@@ -92,7 +107,8 @@ SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, 
           sj.w_av = sliding_velocity<Dim>(P, sj);
         }
         if constexpr (Multiphase) {
-          accumulate_multiphase_pair<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj, rates);
+          add_pair_rates(rates, multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj,
+                                                                                                particle_neighbour_fluid(P, f, j), mu_i));
         } else {
           accumulate_fluid_pair<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj, rates);
         }

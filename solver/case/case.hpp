@@ -35,6 +35,9 @@ struct ThermalSpec {
   std::optional<double> reference_temperature;  // fluids: T_ref [K] (default: heat.initial_temperature)
   std::optional<double> temperature;  // walls and solids: the starting temperature [K]
   bool fixed = false;          // solids: held at `temperature`
+  // fluids: the viscosity against temperature, [T [K], mu [Pa s]] with T ascending (empty: the
+  // fluid's constant `viscosity`)
+  std::vector<std::array<double, 2>> viscosity;
 };
 
 // A tank face's thermal condition (`tank.thermal.faces`).

@@ -295,6 +295,36 @@ double read_temperature(Section& s, const std::string& key, std::optional<double
   return t;
 }
 
+void fill_viscosity_table(const std::vector<std::array<double, 2>>& rows, ViscosityTable& table) {
+  table.points = static_cast<int>(rows.size());
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    table.temperature[k] = static_cast<float>(rows[k][0]);
+    table.viscosity[k] = static_cast<float>(rows[k][1]);
+  }
+}
+
+// A fluid's `thermal.viscosity`: [[T, mu], ...], 2 to kMaxViscosityPoints points, T ascending
+// and >= 0 K, mu >= 0.
+std::vector<std::array<double, 2>> read_viscosity_table(Section& t) {
+  const YAML::Node n = t.raw("viscosity");
+  const char* expected = "expected a table [[T, mu], ...]: temperatures [K] ascending, viscosities [Pa s]";
+  if (!n.IsSequence() || n.size() < 2) t.fail(n, "viscosity", std::string(expected) + ", at least 2 rows");
+  if (n.size() > static_cast<std::size_t>(kMaxViscosityPoints))
+    t.fail(n, "viscosity", "at most " + std::to_string(kMaxViscosityPoints) + " rows");
+  std::vector<std::array<double, 2>> table;
+  for (std::size_t k = 0; k < n.size(); ++k) {
+    const YAML::Node row = n[k];
+    if (!row.IsSequence() || row.size() != 2) t.fail(row, "viscosity", expected);
+    const double T = t.to_number(row[0], "viscosity"), mu = t.to_number(row[1], "viscosity");
+    if (T < 0) t.fail(row, "viscosity", "row " + std::to_string(k) + ": the temperature is below absolute zero");
+    if (mu < 0) t.fail(row, "viscosity", "row " + std::to_string(k) + ": the viscosity must be >= 0");
+    if (!table.empty() && !(T > table.back()[0]))
+      t.fail(row, "viscosity", "row " + std::to_string(k) + ": the temperatures must ascend");
+    table.push_back({T, mu});
+  }
+  return table;
+}
+
 // A material's `thermal:` section (heat_transfer.hpp). Fluids: conductivity and specific_heat
 // (required), expansion and reference_temperature. Walls (`wall`: the tank, a solid): conductivity
 // (0: they do not conduct), with specific_heat and density when it is > 0, and a temperature; a
@@ -319,6 +349,7 @@ ThermalSpec read_thermal(Section& t, const Case& c, bool wall, bool solid) {
     s.expansion = t.number("expansion", 0.0);
     if (std::fabs(s.expansion) > 0.1) t.fail(t.raw("expansion"), "expansion", "must be a thermal expansion coefficient [1/K] (|beta| <= 0.1)");
     if (t.has("reference_temperature")) s.reference_temperature = read_temperature(t, "reference_temperature");
+    if (t.has("viscosity")) s.viscosity = read_viscosity_table(t);
     double g2 = 0;
     for (double g : c.buoyancy_gravity) g2 += g * g;
     if (s.expansion != 0 && g2 == 0)
@@ -374,6 +405,14 @@ void read_fluid(Section& f, FluidSpec& fluid, bool name_required, const Case& c)
   if (fluid.background_pressure < 0) f.fail(f.raw("background_pressure"), "background_pressure", "must be >= 0");
   if (auto t = thermal_section(f, c)) {
     fluid.thermal = read_thermal(*t, c, /*wall=*/false, /*solid=*/false);
+    if (!fluid.thermal.viscosity.empty()) {
+      if (f.has("viscosity"))
+        f.fail(f.raw("viscosity"), "viscosity", "fluid '" + fluid.name + "' has a viscosity table (thermal.viscosity): give one or the other");
+      // Its constant stand-in (the log-law wall, spate info): the table at the starting temperature.
+      ViscosityTable table;
+      fill_viscosity_table(fluid.thermal.viscosity, table);
+      fluid.viscosity = table_viscosity(table, static_cast<float>(c.initial_temperature));
+    }
     t->finish();
   } else if (c.heat) {
     f.fail(f.node(), "thermal", "is required with heat transfer (conductivity [W/(m K)] and specific_heat [J/(kg K)] of fluid '" + fluid.name + "')");
@@ -1177,6 +1216,15 @@ void set_heat_params(const Case& c, PhysicsParams& P) {
     return static_cast<std::uint8_t>(entries++);
   };
   for (std::size_t k = 0; k < c.fluids.size(); ++k) H.of[k] = add(c.fluids[k].thermal, ThermalCondition::Conducting);
+  int tables = 0;
+  for (std::size_t k = 0; k < c.fluids.size(); ++k) {
+    if (c.fluids[k].thermal.viscosity.empty()) continue;
+    if (tables >= kMaxViscosityTables)
+      throw CaseError(c.file + ": key 'fluids': at most " + std::to_string(kMaxViscosityTables) + " fluids with a viscosity table");
+    fill_viscosity_table(c.fluids[k].thermal.viscosity, H.viscosity_table[tables]);
+    H.viscosity_table_of[k] = static_cast<std::uint8_t>(++tables);
+    H.viscosity_varies = true;
+  }
   H.of[P.materials.tank()] = add(c.tank_thermal, ThermalCondition::Conducting);
   int inert = -1;  // the shared entry of the solids without thermal properties
   for (std::size_t k = 0; k < c.solids.size(); ++k) {

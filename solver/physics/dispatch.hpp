@@ -48,7 +48,8 @@ struct PairLoopFlags {
   bool gamma7, multiphase, moving_walls, riemann;
 };
 inline PairLoopFlags pair_loop_flags(const PhysicsParams& P) {
-  return PairLoopFlags{all_fluids_gamma7(P), P.materials.multiphase(), P.walls_have_velocity(),
+  // A temperature-dependent viscosity takes the multiphase pair terms, which read each neighbour's.
+  return PairLoopFlags{all_fluids_gamma7(P), P.materials.multiphase() || P.heat.viscosity_varies, P.walls_have_velocity(),
                        P.flux == MomentumFlux::Riemann || P.diffusion == DensityDiffusion::Riemann};
 }
 

@@ -24,11 +24,12 @@
 // temperature that puts the face at the imposed temperature (or passes the imposed flux, or none)
 // given the fluid's temperature at its mirror point, and it conducts with the k of the material it
 // mirrors. The
-// mirror temperature is that of the particle nearest the mirror point, carried to the point by the
-// gradient of a linear least-squares fit over the neighbours of that particle's material (so that a
-// wall under an interface between two materials mirrors each side with its own slope): exact for a
-// linear temperature on any particle distribution, and for any temperature on the start lattice,
-// where the mirror point is a particle; limited to the range of the neighbours' temperatures
+// line runs through the temperature of the particle nearest the mirror point, carried along the
+// face to the point by the gradient of a linear least-squares fit over the neighbours of that
+// particle's material (so that a wall under an interface between two materials mirrors each side
+// with its own slope), at that particle's own distance from the face (face_wall_temperature):
+// exact for a linear temperature on any particle distribution; limited to the range of the
+// neighbours' temperatures
 // (mirror_temperature). Shepard or fitted means instead smooth the temperature over
 // the kernel (a sinusoid 40 dp long along an adiabatic wall then decays 4% too fast in a tank 10 dp
 // deep); a uniform "wall at T_w" is off by about dp/L of the difference; a wall that does not conduct
@@ -40,6 +41,11 @@
 // gravity unless heat.gravity says otherwise (a closed, full tank may leave gravity out of the
 // momentum equation and keep it for the buoyancy alone: the Boussinesq equations in the departure
 // from the hydrostatic pressure, with a sound speed that need not carry the hydrostatic head).
+//
+// Temperature-dependent viscosity: a fluid's `thermal.viscosity` table, mu(T) piecewise linear
+// between its points and held at the end values beyond them (a cooling melt thickens). Each pair
+// then takes the harmonic mean of its two particles' viscosities (the multiphase pair terms'
+// eq. 8, which every run with a table uses).
 #include <cstdint>
 
 #include "host_device.hpp"
@@ -60,6 +66,27 @@ enum class ThermalCondition : std::uint8_t {
   FaceFlux,         // a fixed heat flux into the fluid through the face [W/m^2]
   Adiabatic,        // no heat through the face
 };
+
+constexpr int kMaxViscosityTables = 4;
+constexpr int kMaxViscosityPoints = 8;
+
+// mu(T) of one fluid: `points` pairs, temperatures ascending.
+struct ViscosityTable {
+  int points = 0;
+  float temperature[kMaxViscosityPoints] = {};  // [K]
+  float viscosity[kMaxViscosityPoints] = {};    // [Pa s]
+};
+
+// Piecewise linear between the points; beyond them, the end values.
+SPATE_HD float table_viscosity(const ViscosityTable& t, float T) {
+  if (!(T > t.temperature[0])) return t.viscosity[0];
+  for (int k = 1; k < t.points; ++k)
+    if (T < t.temperature[k]) {
+      const float s = (T - t.temperature[k - 1]) / (t.temperature[k] - t.temperature[k - 1]);
+      return t.viscosity[k - 1] + s * (t.viscosity[k] - t.viscosity[k - 1]);
+    }
+  return t.viscosity[t.points - 1];
+}
 
 struct ThermalMaterial {
   float conductivity = 0.0f;   // k [W/(m K)]
@@ -83,8 +110,25 @@ struct HeatParams {
   std::uint8_t of[kMaxMaterials] = {};  // material -> entry (fluids, the tank, each solid)
   ThermalMaterial entry[kMaxThermalEntries];
   FaceCondition face[6];  // the tank's faces, 2 axis + side (0 lower, 1 upper)
+  // Temperature-dependent viscosity: fluid m follows table viscosity_table_of[m] - 1 (0: none).
+  bool viscosity_varies = false;
+  std::uint8_t viscosity_table_of[kMaxFluids] = {};
+  ViscosityTable viscosity_table[kMaxViscosityTables];
 
   SPATE_HD const ThermalMaterial& material(std::uint8_t m) const { return entry[of[m]]; }
+  // The viscosity of fluid m at temperature t (`mu`, its constant viscosity, without a table).
+  SPATE_HD float viscosity(std::uint8_t m, float mu, float t) const {
+    const int k = m < kMaxFluids ? viscosity_table_of[m] : 0;
+    return k > 0 ? table_viscosity(viscosity_table[k - 1], t) : mu;
+  }
+  // The largest viscosity fluid m reaches (its table's largest value), for the viscous time step.
+  float largest_viscosity(std::uint8_t m, float mu) const {
+    const int k = m < kMaxFluids ? viscosity_table_of[m] : 0;
+    if (k == 0) return mu;
+    float most = 0.0f;
+    for (int p = 0; p < viscosity_table[k - 1].points; ++p) most = fmaxf(most, viscosity_table[k - 1].viscosity[p]);
+    return most;
+  }
 };
 
 // The tank face a tank wall particle at x stands behind: the first axis along which it lies outside

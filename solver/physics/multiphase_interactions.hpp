@@ -56,14 +56,22 @@ SPATE_HD NeighbourFluid neighbour_fluid(const PhysicsParams& P, std::uint8_t mat
   return NeighbourFluid{m.mass, m.c0, m.viscosity};
 }
 
+// The same at temperature t: a fluid with a viscosity table (heat_transfer.hpp) takes mu(t).
+SPATE_HD NeighbourFluid neighbour_fluid(const PhysicsParams& P, std::uint8_t material, float t) {
+  NeighbourFluid n = neighbour_fluid(P, material);
+  if (P.is_fluid(material)) n.viscosity = P.heat.viscosity(material, n.viscosity, t);
+  return n;
+}
+
 // The contribution of neighbour j (of fluid properties Nj, see neighbour_fluid) to fluid particle
-// i of material M. Branch-free like fluid_pair_terms (selects, no jumps), so the CPU driver's loop
+// i of material M, whose viscosity is mu_i (M.viscosity, or with a temperature table its own
+// mu(T_i); a wall takes i's). Branch-free like fluid_pair_terms (selects, no jumps), so the CPU driver's loop
 // over neighbours vectorises; zero beyond the support and for j = i. MovingWalls: as
 // fluid_pair_terms (j.w is what continuity sees of j; free-slip faces slide for the artificial
 // viscosity, vr_av). Riemann: as fluid_pair_terms.
 template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false, bool Riemann = true>
 SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
-                                               const ParticleState<Dim>& j, const NeighbourFluid& Nj) {
+                                               const ParticleState<Dim>& j, const NeighbourFluid& Nj, float mu_i) {
   const bool j_is_fluid = P.is_fluid(j.material);
   const float j_fluid = j_is_fluid ? 1.0f : 0.0f;
   const PairKinematics<Dim> pk = pair_kinematics<Kernel, Dim, MovingWalls>(P, i, j, j_fluid);
@@ -74,7 +82,7 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
   const float rho_j = j_is_fluid ? j.rho : j.rho * wall_scale;
   const float m_j = j_is_fluid ? Nj.mass : M.mass;
   const float c_j = j_is_fluid ? Nj.c0 : M.c0;
-  const float mu_j = j_is_fluid ? Nj.viscosity : M.viscosity;
+  const float mu_j = j_is_fluid ? Nj.viscosity : mu_i;
   const float inv_rho_i = 1.0f / i.rho;
   const float volume_i = M.mass * inv_rho_i;
   const float volume_j = m_j / rho_j;
@@ -106,17 +114,11 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
   const float pi_ij = -artificial_alpha(P, j_fluid) * (M.c0 + c_j) * mu_ij / (i.rho + rho_j);
   const float radial = -(p_pair * inv_rho_i * volume_j + m_j * pi_ij) * F;
   // Eq. 8 with the harmonic mean of the two viscosities (0 when both fluids are inviscid).
-  const float mu_sum = M.viscosity + mu_j;
-  const float mu_pair = mu_sum > 0.0f ? 2.0f * M.viscosity * mu_j / mu_sum : 0.0f;
+  const float mu_sum = mu_i + mu_j;
+  const float mu_pair = mu_sum > 0.0f ? 2.0f * mu_i * mu_j / mu_sum : 0.0f;
   const float laminar = mu_pair / M.mass * (volume_i * volume_i + volume_j * volume_j) * (r2 * F) * inv_r2_eta;
 
   return pair_rates<Dim, Riemann>(pk, radial, laminar, drho, j_fluid, volume_j);
-}
-
-template <class Kernel, int Dim, bool Gamma7, bool MovingWalls, bool Riemann = true>
-SPATE_HD void accumulate_multiphase_pair(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
-                                         const ParticleState<Dim>& j, FluidRates<Dim>& out) {
-  add_pair_rates(out, multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, i, j, neighbour_fluid(P, j.material)));
 }
 
 }  // namespace spate

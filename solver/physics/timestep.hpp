@@ -32,13 +32,15 @@ SPATE_HD float particle_time_step(const PhysicsParams& P, const FluidMaterial& M
   return dt == dt ? dt : 0.0f;  // NaN != NaN (no -ffast-math here)
 }
 
-// The smallest over the fluids (kinematic viscosity nu = mu / rho0).
+// The smallest over the fluids (kinematic viscosity nu = mu / rho0; with a temperature table, its
+// largest mu).
 inline float viscous_time_step(const PhysicsParams& P, const TimeStepControl& c) {
   float dt = INFINITY;
   for (int m = 0; m < P.materials.fluids; ++m) {
     const FluidMaterial& M = P.materials.fluid[m];
-    if (M.viscosity <= 0.0f) continue;
-    const float dt_m = c.viscous_factor * P.h * P.h * M.rho0 / M.viscosity;
+    const float mu = P.heat.largest_viscosity(static_cast<std::uint8_t>(m), M.viscosity);  // a table's largest
+    if (mu <= 0.0f) continue;
+    const float dt_m = c.viscous_factor * P.h * P.h * M.rho0 / mu;
     dt = dt_m < dt ? dt_m : dt;
   }
   return dt;

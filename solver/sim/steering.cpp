@@ -76,6 +76,11 @@ std::optional<std::string> validate(const SteeringChange& c, int dim, const Moti
              std::to_string(static_cast<long long>(k));
     if (k >= kMaxFluids) return "phase_viscosity: there is no fluid " + std::to_string(static_cast<long long>(k));
   }
+  if ((c.name == "viscosity" || c.name == "phase_viscosity") && known) {
+    const auto k = static_cast<std::size_t>(c.name == "viscosity" ? 0.0 : c.value[0]);
+    if (k < known->fluids.size() && !known->fluids[k].thermal.viscosity.empty())
+      return c.name + ": fluid '" + known->fluids[k].name + "' follows its viscosity table (thermal.viscosity)";
+  }
   if (c.name == "face_temperature" || c.name == "face_heat_flux") {
     const double f = c.value[0];
     if (f != std::floor(f) || f < 0 || f > 5) return c.name + ": the face number must be a whole number from 0 to 5 (x-, x+, y-, y+, z-, z+)";

@@ -173,6 +173,40 @@ TEST(HeatTransfer, BadInputIsRefused) {
             std::string::npos);
 }
 
+// A fluid's viscosity table: linear between its points, the end values beyond them; the case's
+// table reaches the physics constants, the viscous time step takes its largest value, and bad
+// tables are rejected with the key and the reason.
+TEST(HeatTransfer, ViscosityTable) {
+  ViscosityTable t;
+  t.points = 3;
+  const float T[] = {290, 300, 310}, mu[] = {2e-3f, 1e-3f, 0.5e-3f};
+  for (int k = 0; k < 3; ++k) t.temperature[k] = T[k], t.viscosity[k] = mu[k];
+  EXPECT_FLOAT_EQ(table_viscosity(t, 295.0f), 1.5e-3f);
+  EXPECT_FLOAT_EQ(table_viscosity(t, 307.5f), 0.625e-3f);
+  EXPECT_FLOAT_EQ(table_viscosity(t, 300.0f), 1e-3f);
+  EXPECT_FLOAT_EQ(table_viscosity(t, 250.0f), 2e-3f);
+  EXPECT_FLOAT_EQ(table_viscosity(t, 400.0f), 0.5e-3f);
+  const std::string table = "fluid.thermal.viscosity=[[290, 2.0e-3], [300, 1.0e-3], [310, 0.5e-3]]";
+  const Case c = parse_case(kSlab, "slab.yaml", {table});
+  const PhysicsParams P = physics_params(c);
+  EXPECT_TRUE(P.heat.viscosity_varies);
+  EXPECT_FLOAT_EQ(P.heat.viscosity(0, 7.0f, 305.0f), 0.75e-3f);
+  EXPECT_FLOAT_EQ(P.heat.viscosity(1, 7.0f, 305.0f), 7.0f);  // the tank: no table
+  EXPECT_FLOAT_EQ(P.materials.fluid[0].viscosity, 1e-3f);    // the stand-in: at the starting temperature
+  EXPECT_FLOAT_EQ(viscous_time_step(P, TimeStepControl{}), TimeStepControl{}.viscous_factor * P.h * P.h * 1000.0f / 2e-3f);
+  EXPECT_FALSE(physics_params(parse_case(kSlab, "slab.yaml")).heat.viscosity_varies);
+  EXPECT_TRUE(names(error_of(kSlab, {"fluid.thermal.viscosity=[[300, 1.0e-3], [290, 2.0e-3]]"}), "fluid.thermal.viscosity", "must ascend"));
+  EXPECT_TRUE(names(error_of(kSlab, {"fluid.thermal.viscosity=[[300, 1.0e-3]]"}), "fluid.thermal.viscosity", "at least 2 rows"));
+  EXPECT_TRUE(names(error_of(kSlab, {"fluid.thermal.viscosity=[[-1, 1.0e-3], [290, 2.0e-3]]"}), "fluid.thermal.viscosity", "below absolute zero"));
+  EXPECT_TRUE(names(error_of(kSlab, {"fluid.thermal.viscosity=[[280, -1.0e-3], [290, 2.0e-3]]"}), "fluid.thermal.viscosity", "must be >= 0"));
+  EXPECT_TRUE(names(error_of(kSlab, {"fluid.thermal.viscosity=[[280, 1, 2], [290, 2.0e-3]]"}), "fluid.thermal.viscosity", "expected a table"));
+  EXPECT_TRUE(names(error_of(kSlab, {table, "fluid.viscosity=1e-3"}), "fluid.viscosity", "give one or the other"));
+  // Steering a viscosity that follows its table is rejected.
+  EXPECT_NE(validate(SteeringChange{0, 0.0, "viscosity", {2e-3}}, 2, nullptr, &c).value_or("").find("follows its viscosity table"),
+            std::string::npos);
+  EXPECT_FALSE(validate(SteeringChange{0, 0.0, "viscosity", {2e-3}}, 2, nullptr, nullptr).has_value());
+}
+
 // Steering a face (docs/live.md): face_temperature and face_heat_flux name a wall the tank has, in a
 // case with heat transfer; the change sets the face's kind and value (an adiabatic face may be heated).
 TEST(HeatTransfer, SteeringAFace) {

@@ -50,8 +50,8 @@ TEST(PairTerms, LeavingOutTheRiemannTermsChangesNoBitWhenTheOptionsAreOff) {
     const auto with = fluid_pair_terms<WendlandC2, 2, true, false, true>(P, M, i, j);
     const auto without = fluid_pair_terms<WendlandC2, 2, true, false, false>(P, M, i, j);
     EXPECT_TRUE(same_bits(with, without)) << "pair " << pairs;
-    const auto mp_with = multiphase_pair_terms<WendlandC2, 2, true, false, true>(P, M, i, j, neighbour_fluid(P, j.material));
-    const auto mp_without = multiphase_pair_terms<WendlandC2, 2, true, false, false>(P, M, i, j, neighbour_fluid(P, j.material));
+    const auto mp_with = multiphase_pair_terms<WendlandC2, 2, true, false, true>(P, M, i, j, neighbour_fluid(P, j.material), M.viscosity);
+    const auto mp_without = multiphase_pair_terms<WendlandC2, 2, true, false, false>(P, M, i, j, neighbour_fluid(P, j.material), M.viscosity);
     EXPECT_TRUE(same_bits(mp_with, mp_without)) << "pair " << pairs;
     ++pairs;
   });
@@ -96,7 +96,7 @@ FluidRates<2> sliding_over_a_wall_row(const PhysicsParams& P, bool multiphase) {
   for (int k = -4; k <= 4; ++k)
     for (int layer = 0; layer < 3; ++layer) {
       const ParticleState<2> j{{0.2f + 0.01f * k, -0.005f - 0.01f * layer}, {0.0f, 0.0f}, M.rho0, 0.0f, P.materials.tank(), {0, 0}, {0, 0}};
-      add_pair_rates(sum, multiphase ? multiphase_pair_terms<WendlandC2, 2>(P, M, i, j, neighbour_fluid(P, j.material))
+      add_pair_rates(sum, multiphase ? multiphase_pair_terms<WendlandC2, 2>(P, M, i, j, neighbour_fluid(P, j.material), M.viscosity)
                                      : fluid_pair_terms<WendlandC2, 2>(P, M, i, j));
     }
   return sum;

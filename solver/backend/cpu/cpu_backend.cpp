@@ -242,7 +242,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
           }
         if constexpr (Multiphase) {
           for (int q = 0; q < len; ++q) {
-            const NeighbourFluid f = neighbour_fluid(P, ckind[m + q]);
+            const NeighbourFluid f = particle_neighbour_fluid(P, ps, jb + q);
             batch.mass[m + q] = f.mass, batch.c0[m + q] = f.c0, batch.viscosity[m + q] = f.viscosity;
           }
         }
@@ -252,6 +252,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
         if (!P.is_fluid(ps.material[i])) continue;
         const ParticleState<Dim> si = load_state<Dim>(ps, i);
         const FluidMaterial& M = P.materials.of(si.material);  // into the local P (a copy of M stops GCC vectorising)
+        [[maybe_unused]] const float mu_i = Multiphase ? particle_viscosity(P, ps, i) : M.viscosity;
         // 1. Squared distances, summed in the order of distance_squared() and dot().
         candidate_distances<Dim>(si.x, cx, candidates, cr2);
         // 2. In-support candidates, in order.
@@ -297,7 +298,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
             if constexpr (MovingWalls) SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.w[k] = jw[k][n], sj.w_av[k] = jw_av[k][n];
             FluidRates<Dim> t;
             if constexpr (Multiphase)
-              t = multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj, NeighbourFluid{jmass[n], jc0[n], jmu[n]});
+              t = multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj, NeighbourFluid{jmass[n], jc0[n], jmu[n]}, mu_i);
             else t = fluid_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj);
             SPATE_UNROLL for (int k = 0; k < Dim; ++k) tacc[k][n] = t.acc[k];
             tdrho[n] = t.density_rate;
