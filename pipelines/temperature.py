@@ -139,9 +139,9 @@ def _grow_range():
         _lut.RescaleTransferFunction(lo, hi)
 
 
-def _normalised(interpolated):
+def _normalised(interpolated, name="normalised"):
     """The interpolated temperature divided by the Shepard sum (0 where no particle is in reach)."""
-    calc = Calculator(registrationName="normalised", Input=interpolated)
+    calc = Calculator(registrationName=name, Input=interpolated)
     calc.ResultArrayName = "temperature_normalised"
     calc.Function = "temperature/max(shepard,1e-6)"
     return calc
@@ -185,7 +185,6 @@ def _build_scene():
     if dim == 3:
         box.Origin = [wb[0], wb[2], wb[4]]
         box.Scale = [wb[1] - wb[0], wb[3] - wb[2], wb[5] - wb[4]]
-        values = _normalised(sph)
         axis, position = "y", 0.5 * (wb[2] + wb[3])
         if slice_at:
             axis, position = slice_at.split(",")[0].strip(), float(slice_at.split(",")[1])
@@ -193,7 +192,7 @@ def _build_scene():
         origin = [position if normal[k] else 0.5 * (wb[2 * k] + wb[2 * k + 1]) for k in range(3)]
         # The water beyond the slice (its surface, the 0.5 contour of the Shepard sum), cut open
         # where the slice is, so that the slice shows the inside face on.
-        beyond = Clip(registrationName="beyond", Input=values)
+        beyond = Clip(registrationName="beyond", Input=sph)
         beyond.ClipType = "Plane"
         beyond.ClipType.Origin = origin
         beyond.ClipType.Normal = normal
@@ -203,17 +202,18 @@ def _build_scene():
         surface.Isosurfaces = [0.5]
         surface.ComputeScalars = 1
         surface.ComputeNormals = 1
-        _colour(Show(surface, view), "temperature_normalised")
-        cut = Slice(registrationName="slice", Input=values)
+        _colour(Show(_normalised(surface, "surface_normalised"), view), "temperature_normalised")
+        cut = Slice(registrationName="slice", Input=sph)
         cut.SliceType = "Plane"
         cut.SliceType.Origin = origin
         cut.SliceType.Normal = normal
         # The slice's water: where the Shepard sum is above 0.5 (a smooth edge, not the grid's cells).
-        water = Clip(registrationName="water", Input=cut)
-        water.ClipType = "Scalar"
-        water.Scalars = ["POINTS", "shepard"]
-        water.Value = 0.5
-        water.Invert = 0
+        in_water = Clip(registrationName="in_water", Input=cut)
+        in_water.ClipType = "Scalar"
+        in_water.Scalars = ["POINTS", "shepard"]
+        in_water.Value = 0.5
+        in_water.Invert = 0
+        water = _normalised(in_water, "slice_normalised")
         tank_shown.PointSize = solids_shown.PointSize = 1.0
         tank_shown.Opacity = 0.2
         # The three-quarter view of free_surface.py, from the side the slice faces.

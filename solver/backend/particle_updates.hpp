@@ -242,14 +242,36 @@ SPATE_HD void add_antuono_diffusion(const PhysicsParams& P, const CellGridView& 
   f.density_rate[i] += diffusion;
 }
 
+// The volume particle j conducts with: a fluid's m / rho, a wall's or solid's dp^dim.
+template <class Fields>
+SPATE_HD float heat_volume(const PhysicsParams& P, const Fields& f, std::uint32_t j) {
+  const std::uint8_t m = f.material[j];
+  return P.is_fluid(m) ? P.materials.of(m).mass / f.density[j] : P.heat.wall_volume;
+}
+
 // Heat transfer, the wall pass over the owned particles: the temperature of wall particle w behind a
 // tank face with a condition (heat_transfer.hpp), from the particles around it that carry their own
 // temperature (fluids and conducting solids): the one nearest w's mirror point across the face,
 // carried along the face to it by the fitted gradient of its material; and every particle's `conductivity`, the k
 // its neighbours' pair terms use (set once here, so that the heat pass need not work out each
-// neighbour's face condition per pair).
-template <class Kernel, int Dim, class Fields>
-SPATE_HD void update_wall_temperature(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t w, const int g[3]) {
+// neighbour's face condition per pair). `each(fn)` calls fn(j) for the candidates around w in the
+// visiting order (every particle of the 27 cells, or only those that may carry a temperature:
+// carries_temperature; the others are skipped here anyway, so both give the same bits).
+template <class Fields>
+SPATE_HD bool carries_temperature(const PhysicsParams& P, const Fields& f, std::uint32_t j) {
+  const std::uint8_t m = f.material[j];
+  return P.is_fluid(m) || (m != P.materials.tank() && P.heat.material(m).condition == ThermalCondition::Conducting);
+}
+// Whether particle w's temperature comes from its neighbours (it stands behind a tank face with a
+// condition): only those need update_wall_temperature's neighbour loops.
+template <class Fields>
+SPATE_HD bool mirrors_temperature(const PhysicsParams& P, const Fields& f, std::uint32_t w) {
+  ThermalFace face;
+  const ThermalCondition c = particle_temperature_condition(P, f, w, face);
+  return face.axis >= 0 && c != ThermalCondition::Conducting;
+}
+template <class Kernel, int Dim, class Fields, class Each>
+SPATE_HD void wall_temperature_over(const PhysicsParams& P, Fields& f, std::uint32_t w, Each&& each) {
   ThermalFace face;
   const ThermalCondition c = particle_temperature_condition(P, f, w, face);
   const HeatParams& H = P.heat;
@@ -261,39 +283,44 @@ SPATE_HD void update_wall_temperature(const PhysicsParams& P, const CellGridView
     return;
   }
   const Vec<Dim> xw = load_vec<Dim>(f.pos, w);
-  auto carries = [&](std::uint8_t m) {
-    return P.is_fluid(m) || (m != P.materials.tank() && H.material(m).condition == ThermalCondition::Conducting);
-  };
   // The mirror point, and the carrier nearest to it (the first in the visiting order among equals).
   Vec<Dim> mirror = xw;
   mirror[face.axis] += 2.0f * face.depth * face.into_fluid;
   float nearest = INFINITY;
   std::uint32_t n = 0;
   int material = -1;
-  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
-    for (std::uint32_t j = jb; j < je; ++j) {
-      if (!carries(f.material[j]) || distance_squared<Dim>(xw, f.pos, j) >= P.support2) continue;
-      const float r2 = distance_squared<Dim>(mirror, f.pos, j);
-      if (r2 < nearest) nearest = r2, n = j, material = f.material[j];
-    }
+  // The fit over the neighbours of n's material, in the visiting order. In the same loop for the
+  // material of the first carrier met (with one fluid and no conducting solid, the only one); again
+  // for another, should the nearest be of one.
+  LinearFitSums<Dim> sums;
+  auto fit = [&](std::uint32_t j, const Vec<Dim>& dx, float r2) {
+    sums.add(heat_volume(P, f, j) * Kernel::value(sqrtf(r2) * P.inv_h, P.kernel_norm), P.inv_h * dx, f.temperature[j]);
+  };
+  int fitted = -1;
+  each([&](std::uint32_t j) {
+    if (!carries_temperature(P, f, j)) return;
+    const Vec<Dim> dx = load_vec<Dim>(f.pos, j) - xw;
+    const float r2_w = dot(dx, dx);
+    if (r2_w >= P.support2) return;
+    const float r2 = distance_squared<Dim>(mirror, f.pos, j);
+    if (r2 < nearest) nearest = r2, n = j, material = f.material[j];
+    if (fitted < 0) fitted = f.material[j];
+    if (f.material[j] == fitted) fit(j, dx, r2_w);
   });
   if (material < 0) {  // nothing to mirror: a fixed face keeps its temperature
     if (c == ThermalCondition::FaceTemperature) f.temperature[w] = H.face[face.index()].value;
     f.conductivity[w] = 0.0f;
     return;
   }
-  LinearFitSums<Dim> sums;
-  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
-    for (std::uint32_t j = jb; j < je; ++j) {
-      const std::uint8_t mj = f.material[j];
-      if (mj != material) continue;
+  if (material != fitted) {
+    sums = LinearFitSums<Dim>{};
+    each([&](std::uint32_t j) {
+      if (f.material[j] != material) return;
       const Vec<Dim> dx = load_vec<Dim>(f.pos, j) - xw;
       const float r2 = dot(dx, dx);
-      if (r2 >= P.support2) continue;
-      const float vj = P.is_fluid(mj) ? P.materials.of(mj).mass / f.density[j] : H.wall_volume;
-      sums.add(vj * Kernel::value(sqrtf(r2) * P.inv_h, P.kernel_norm), P.inv_h * dx, f.temperature[j]);
-    }
-  });
+      if (r2 < P.support2) fit(j, dx, r2);
+    });
+  }
   // Carried along the face only: across it, the face's condition draws the line from n itself
   // (face_wall_temperature), at n's own distance from the face, kept at 0.2 h at least so that a
   // particle pressed against the face does not turn its noise into a steep line.
@@ -307,25 +334,51 @@ SPATE_HD void update_wall_temperature(const PhysicsParams& P, const CellGridView
   f.temperature[w] = face_wall_temperature(H.face[face.index()], t_near, near_depth, k, face.depth);
   f.conductivity[w] = k;
 }
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void update_wall_temperature(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t w, const int g[3]) {
+  wall_temperature_over<Kernel, Dim>(P, f, w, [&](auto&& fn) {
+    v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+      for (std::uint32_t j = jb; j < je; ++j) fn(j);
+    });
+  });
+}
 
 // Heat transfer: neighbour j's share of rho_i c_i dT_i/dt for particle i (material Mi, at xi, at
 // temperature ti) whose temperature is integrated, with the k the wall pass set for j
 // (`conductivity`: its own; behind a tank face with a condition the mirrored material's; -1 for a
 // held solid without one: i's).
+// The pair term from j's position, temperature, k (`conductivity`) and volume (heat_volume), for i
+// of conductivity ki: what the CPU's fused loop gathers per neighbour (cpu_backend.cpp).
+template <class Kernel, int Dim>
+SPATE_HD float conduction_from(const PhysicsParams& P, float ki, const Vec<Dim>& xi, float ti, const Vec<Dim>& xj, float tj, float kj,
+                               float vj) {
+  return conduction_term<Kernel, Dim>(P.heat, P.inv_h, P.inv_h2, P.eta2, xi, ti, xj, tj, pair_conductivity(ki, kj < 0.0f ? ki : kj),
+                                      vj);
+}
 template <class Kernel, int Dim, class Fields>
 SPATE_HD float heat_pair_term(const PhysicsParams& P, const Fields& f, const ThermalMaterial& Mi, const Vec<Dim>& xi, float ti, std::uint32_t j) {
-  const HeatParams& H = P.heat;
-  const std::uint8_t mj = f.material[j];
-  const bool fluid_j = P.is_fluid(mj);
-  const float kj = f.conductivity[j] < 0.0f ? Mi.conductivity : f.conductivity[j];
-  const float vj = fluid_j ? P.materials.of(mj).mass / f.density[j] : H.wall_volume;
-  return conduction_term<Kernel, Dim>(H, P.inv_h, P.inv_h2, P.eta2, P.support2, xi, ti, load_vec<Dim>(f.pos, j), f.temperature[j],
-                                      pair_conductivity(Mi.conductivity, kj), vj);
+  return conduction_from<Kernel, Dim>(P, Mi.conductivity, xi, ti, load_vec<Dim>(f.pos, j), f.temperature[j], f.conductivity[j],
+                                      heat_volume(P, f, j));
 }
 
 // Heat transfer, after the fluid rates: the conduction rate dT/dt of owned particle i whose
 // temperature is integrated (0 for the others), and the Boussinesq buoyancy added to a fluid's
 // acceleration (physics/heat_transfer.hpp).
+// Particle i's temperature rate from its conduction sum (rho_i c_i dT_i/dt), and a fluid's
+// Boussinesq buoyancy added to its acceleration (after the fluid rates have set it).
+template <int Dim, class Fields>
+SPATE_HD void finish_heat_rates(const PhysicsParams& P, Fields& f, std::uint32_t i, float sum) {
+  const std::uint8_t mi = f.material[i];
+  const bool fluid_i = P.is_fluid(mi);
+  const ThermalMaterial& Mi = P.heat.material(mi);
+  const float rho_c = (fluid_i ? f.density[i] : Mi.density) * Mi.specific_heat;
+  f.temperature_rate[i] = rho_c > 0.0f ? sum / rho_c : 0.0f;
+  if (fluid_i && Mi.expansion != 0.0f) {
+    const Vec<Dim> a = buoyancy_acceleration<Dim>(Mi, P.heat.gravity, f.temperature[i]);
+    SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] += a[k];
+  }
+}
+
 template <class Kernel, int Dim, class Fields>
 SPATE_HD void update_heat_rates(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
   ThermalFace face;
@@ -333,10 +386,9 @@ SPATE_HD void update_heat_rates(const PhysicsParams& P, const CellGridView& v, F
     f.temperature_rate[i] = 0.0f;
     return;
   }
-  const HeatParams& H = P.heat;
   const std::uint8_t mi = f.material[i];
   const bool fluid_i = P.is_fluid(mi);
-  const ThermalMaterial& Mi = H.material(mi);
+  const ThermalMaterial& Mi = P.heat.material(mi);
   const Vec<Dim> xi = load_vec<Dim>(f.pos, i);
   const float ti = f.temperature[i];
   float sum = 0.0f;
@@ -357,12 +409,7 @@ SPATE_HD void update_heat_rates(const PhysicsParams& P, const CellGridView& v, F
     }
   });
   if (gradient) SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.temperature_gradient[k][i] = grad[k];
-  const float rho_c = (fluid_i ? f.density[i] : Mi.density) * Mi.specific_heat;
-  f.temperature_rate[i] = rho_c > 0.0f ? sum / rho_c : 0.0f;
-  if (fluid_i && Mi.expansion != 0.0f) {
-    const Vec<Dim> a = buoyancy_acceleration<Dim>(Mi, H.gravity, ti);
-    SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] += a[k];
-  }
+  finish_heat_rates<Dim>(P, f, i, sum);
 }
 
 }  // namespace spate

@@ -1237,6 +1237,10 @@ void set_heat_params(const Case& c, PhysicsParams& P) {
       H.of[m] = static_cast<std::uint8_t>(inert);
     }
   }
+  for (int m = P.materials.tank(); m < P.materials.count; ++m) {
+    const ThermalMaterial& t = H.material(static_cast<std::uint8_t>(m));
+    H.walls_conduct = H.walls_conduct || (t.condition == ThermalCondition::Conducting && t.conductivity > 0.0f);
+  }
   // A face without a condition: the tank's own conduction when it conducts, else adiabatic.
   for (int f = 0; f < 6; ++f) {
     const FaceThermalSpec& s = c.tank_faces[f];

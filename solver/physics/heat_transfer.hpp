@@ -104,6 +104,7 @@ struct FaceCondition {
 
 struct HeatParams {
   bool on = false;
+  bool walls_conduct = false;   // the tank or a solid conducts (its own k > 0, integrated)
   float laplacian_norm = 0.0f;  // kernel_norm / lattice_gradient_moment(..., eta2) (kernels.hpp)
   float wall_volume = 0.0f;     // dp^dim
   float gravity[3] = {0.0f, 0.0f, 0.0f};  // of the buoyancy (heat.gravity; default the case's)
@@ -175,11 +176,12 @@ SPATE_HD float pair_conductivity(float ki, float kj) {
 
 // One neighbour's share of rho_i c_i dT_i/dt [W/m^3]: V_j k_ij (T_i - T_j) F r^2 / (r^2 + eta^2).
 template <class Kernel, int Dim>
-SPATE_HD float conduction_term(const HeatParams& H, float inv_h, float inv_h2, float eta2, float support2, const Vec<Dim>& xi,
+SPATE_HD float conduction_term(const HeatParams& H, float inv_h, float inv_h2, float eta2, const Vec<Dim>& xi,
                                float ti, const Vec<Dim>& xj, float tj, float kij, float vj) {
   const Vec<Dim> r = xi - xj;
   const float r2 = dot(r, r);
-  if (r2 >= support2) return 0.0f;
+  // Branch-free, so that the CPU's fused loop vectorises: beyond the support the kernel factor is
+  // exactly 0 (kernels.hpp), and so is the term.
   const float F = Kernel::gradient_factor(sqrtf(r2) * inv_h, H.laplacian_norm, inv_h2);
   return vj * kij * (ti - tj) * F * r2 / (r2 + eta2);
 }

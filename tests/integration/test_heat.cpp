@@ -103,10 +103,10 @@ std::pair<double, double> mid_line_maximum(const ParticleStore& p, int across, i
 // The differentially heated cavity of de Vahl Davis (1983), cases/heated_cavity_2d.yaml at the
 // shipped 40 particles across: the hot wall's mean Nusselt number (the probe nu_hot, averaged
 // over the last 10 s of the run, once the flow has settled) within 3% of the benchmark at Ra = 1e4
-// (2.243; 2.203 measured) and at Ra = 1e3 (1.118; 1.097 measured), the cold wall's the same within
+// (2.243; 2.191 measured) and at Ra = 1e3 (1.118; 1.098 measured), the cold wall's the same within
 // 3% (the heat that enters leaves), and the largest velocities on the mid-lines (u 16.178 alpha/L at
 // y = 0.823 L, v 19.617 at x = 0.119 L for Ra = 1e4; 3.649, 3.697 for Ra = 1e3) within 6% at Ra = 1e4
-// (4% and 1% low measured) and 12% at Ra = 1e3 (9% and 11% low: the slow flow is too weak, an open
+// (4% and 4% low measured) and 12% at Ra = 1e3 (10% low both: the slow flow is too weak, an open
 // problem of docs/studies/heated-cavity.md, which also has the slow rise of Nu with time and the
 // other resolutions).
 TEST(Heat, HeatedCavityNusseltAgainstDeVahlDavis) {

@@ -112,14 +112,18 @@ void antuono_diffusion(ParticleStore& p, const CellGrid& grid, const PhysicsPara
   });
 }
 
-void wall_temperature(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
-  per_particle_pass(grid, P, [&]<class Kernel, int Dim>(const CellGridView& v, std::uint32_t i, const int g[3]) {
-    update_wall_temperature<Kernel, Dim>(P, v, p, i, g);
-  });
-}
+// Heat transfer's conduction sum of a fluid particle runs inside the fluid pass's neighbour loop
+// (fluid_rates_batched), over the neighbours it has selected anyway; the heat pass is then left
+// with the walls and solids that conduct. Not with particle shifting, whose temperature gradient
+// the heat pass computes beside the sum.
+static bool fused_heat(const PhysicsParams& P) { return P.heat.on && !P.shifting.enabled; }
 
 void heat_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  const bool fused = fused_heat(P);
+  // Nothing left when no wall or solid conducts: their rates stay 0 (update_heat_rates' value).
+  if (fused && !P.heat.walls_conduct) return;
   per_particle_pass(grid, P, [&]<class Kernel, int Dim>(const CellGridView& v, std::uint32_t i, const int g[3]) {
+    if (fused && P.is_fluid(p.material[i])) return;  // done by the fluid pass
     update_heat_rates<Kernel, Dim>(P, v, p, i, g);
   });
 }
@@ -148,11 +152,13 @@ struct NeighbourBatch {
   std::vector<std::uint8_t> material;
   // Several fluids: each candidate's fluid mass, sound speed and viscosity (NeighbourFluid).
   std::vector<float> mass, c0, viscosity;
+  // Heat transfer (fused_heat): each candidate's temperature, conductivity and volume.
+  std::vector<float> temperature, conductivity, heat_volume;
   // Neighbours of the current particle: candidate numbers, then the pair terms per neighbour.
   std::vector<std::uint32_t> index;
   std::vector<NeighbourRecord> record;
   int capacity = 0;
-  void reserve(int n, bool multiphase = false, bool moving_walls = false) {
+  void reserve(int n, bool multiphase = false, bool moving_walls = false, bool heat = false) {
     capacity = n;
     record.resize(n);
     for (int k = 0; k < Dim; ++k) x[k].resize(n), v[k].resize(n);
@@ -160,6 +166,7 @@ struct NeighbourBatch {
     rho.resize(n), p.resize(n), r2.resize(n), index.resize(n);
     material.resize(n);
     if (multiphase) mass.resize(n), c0.resize(n), viscosity.resize(n);
+    if (heat) temperature.resize(n), conductivity.resize(n), heat_volume.resize(n);
   }
 };
 
@@ -179,6 +186,13 @@ inline void add_lanes(float (&vec)[Dim][kLanes], float (&scalar)[kLanes], const 
     scalar[l] += tscalar[s + l];
   }
 }
+// The same for one scalar.
+inline void add_lanes(float (&scalar)[kLanes], const float (&tscalar)[kChunk], int len) {
+  int s = 0;
+  for (; s + kLanes <= len; s += kLanes)
+    for (int l = 0; l < kLanes; ++l) scalar[l] += tscalar[s + l];
+  for (int l = 0; s + l < len; ++l) scalar[l] += tscalar[s + l];
+}
 
 template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>
 void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params, ParticleRange range) {
@@ -194,6 +208,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
   const auto first = static_cast<std::int64_t>(std::upper_bound(starts, starts_end, lo) - starts) - 1;
   const auto cells = static_cast<std::int64_t>(std::lower_bound(starts, starts_end, hi) - starts);
   const auto particles = static_cast<std::int64_t>(hi - lo);
+  const bool heat = fused_heat(P);
 #pragma omp parallel if (particles > kPairGrain)
   {
     NeighbourBatch<Dim> batch;
@@ -215,7 +230,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
       grid.global_coords(static_cast<std::uint32_t>(c), g);
       int candidates = 0;
       v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) { candidates += static_cast<int>(je - jb); });
-      if (candidates + kSelectSlack > batch.capacity) batch.reserve(candidates + kSelectSlack, Multiphase, MovingWalls);
+      if (candidates + kSelectSlack > batch.capacity) batch.reserve(candidates + kSelectSlack, Multiphase, MovingWalls, heat);
       float* cx[Dim];
       SPATE_UNROLL for (int k = 0; k < Dim; ++k) cx[k] = batch.x[k].data();
       float* cr2 = batch.r2.data();
@@ -246,6 +261,11 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
             batch.mass[m + q] = f.mass, batch.c0[m + q] = f.c0, batch.viscosity[m + q] = f.viscosity;
           }
         }
+        if (heat) {
+          std::copy_n(ps.temperature.data() + jb, len, batch.temperature.data() + m);
+          std::copy_n(ps.conductivity.data() + jb, len, batch.conductivity.data() + m);
+          for (int q = 0; q < len; ++q) batch.heat_volume[m + q] = heat_volume(P, ps, jb + q);
+        }
         m += len;
       });
       for (std::uint32_t i = b; i < e; ++i) {
@@ -266,6 +286,10 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
         const bool wall_sums = Riemann && P.flux == MomentumFlux::Riemann;
         float wall_gradient[Dim][kLanes] = {};
         float wall_weight[kLanes] = {};
+        // Heat transfer: the conduction sum, in lanes like the rest.
+        float conduction[kLanes] = {};
+        const float ki = heat ? P.heat.material(si.material).conductivity : 0.0f;
+        const float ti = heat ? ps.temperature[i] : 0.0f;
         for (int s0 = 0; s0 < count; s0 += kChunk) {
           const int len = std::min(kChunk, count - s0);
           const std::uint32_t* chunk = index + s0;
@@ -309,6 +333,18 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
           }
           add_lanes<Dim>(acc, drho, tacc, tdrho, len);
           if (wall_sums) add_lanes<Dim>(wall_gradient, wall_weight, twall, tweight, len);
+          if (heat) {
+            float jt[kChunk], jk[kChunk], jv[kChunk], theat[kChunk];
+            gather(batch.temperature.data(), chunk, len, jt);
+            gather(batch.conductivity.data(), chunk, len, jk);
+            gather(batch.heat_volume.data(), chunk, len, jv);
+            for (int n = 0; n < len; ++n) {  // must vectorise: heat-terms
+              Vec<Dim> xj;
+              SPATE_UNROLL for (int k = 0; k < Dim; ++k) xj[k] = jf[kRecX + k][n];
+              theat[n] = conduction_from<Kernel, Dim>(P, ki, si.x, ti, xj, jt[n], jk[n], jv[n]);
+            }
+            add_lanes(conduction, theat, len);
+          }
         }
         FluidRates<Dim> rates;
         for (int l = 0; l < kLanes; ++l) {
@@ -319,6 +355,11 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
         finish_fluid_rates(P, M, si, rates);
         SPATE_UNROLL for (int k = 0; k < Dim; ++k) ps.acc[k][i] = rates.acc[k];
         ps.density_rate[i] = P.density_mode == DensityMode::Continuity ? rates.density_rate : 0.0f;
+        if (heat) {
+          float sum = 0.0f;
+          for (int l = 0; l < kLanes; ++l) sum += conduction[l];
+          finish_heat_rates<Dim>(P, ps, i, sum);
+        }
       }
     }
   }
@@ -425,8 +466,48 @@ void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P,
   });
 }
 
+// Heat transfer's wall pass: every particle's conductivity, and for the particles behind a tank
+// face with a condition the neighbour loops of wall_temperature_over over only the candidates
+// that may carry a temperature, collected once per cell (as wall_state_batched keeps only the
+// fluid): a dry tank cell costs a scan of its own particles. The same candidates in the same
+// order as update_wall_temperature's loops keep (it skips the others), so the same bits.
+template <class Kernel, int Dim>
+void wall_temperature_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params) {
+  const PhysicsParams P = params;
+  const CellGridView v = grid.view();
+  const auto cells = static_cast<std::int64_t>(grid.owned_cell_count());
+  const auto particles = static_cast<std::int64_t>(v.start[cells]);
+#pragma omp parallel if (particles > kPairGrain)
+  {
+    std::vector<std::uint32_t> carriers;
+#pragma omp for schedule(dynamic, 64)
+    for (std::int64_t c = 0; c < cells; ++c) {
+      const std::uint32_t b = v.start[c], e = v.start[c + 1];
+      bool mirrors = false;
+      for (std::uint32_t i = b; i < e && !mirrors; ++i) mirrors = mirrors_temperature(P, ps, i);
+      carriers.clear();
+      if (mirrors) {
+        int g[3];
+        grid.global_coords(static_cast<std::uint32_t>(c), g);
+        v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+          for (std::uint32_t j = jb; j < je; ++j)
+            if (carries_temperature(P, ps, j)) carriers.push_back(j);
+        });
+      }
+      for (std::uint32_t i = b; i < e; ++i)
+        wall_temperature_over<Kernel, Dim>(P, ps, i, [&](auto&& fn) {
+          for (const std::uint32_t j : carriers) fn(j);
+        });
+    }
+  }
+}
+
 void wall_state(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
   dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() { wall_state_batched<Kernel, Dim>(p, grid, P); });
+}
+
+void wall_temperature(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() { wall_temperature_batched<Kernel, Dim>(p, grid, P); });
 }
 
 void shifting(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P, float dt) {
