@@ -152,8 +152,8 @@ struct NeighbourBatch {
   std::vector<std::uint8_t> material;
   // Several fluids: each candidate's fluid mass, sound speed and viscosity (NeighbourFluid).
   std::vector<float> mass, c0, viscosity;
-  // Heat transfer (fused_heat): each candidate's temperature, conductivity and volume.
-  std::vector<float> temperature, conductivity, heat_volume;
+  // Heat transfer (fused_heat): each candidate's temperature and conductivity.
+  std::vector<float> temperature, conductivity;
   // Neighbours of the current particle: candidate numbers, then the pair terms per neighbour.
   std::vector<std::uint32_t> index;
   std::vector<NeighbourRecord> record;
@@ -166,7 +166,7 @@ struct NeighbourBatch {
     rho.resize(n), p.resize(n), r2.resize(n), index.resize(n);
     material.resize(n);
     if (multiphase) mass.resize(n), c0.resize(n), viscosity.resize(n);
-    if (heat) temperature.resize(n), conductivity.resize(n), heat_volume.resize(n);
+    if (heat) temperature.resize(n), conductivity.resize(n);
   }
 };
 
@@ -264,7 +264,6 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
         if (heat) {
           std::copy_n(ps.temperature.data() + jb, len, batch.temperature.data() + m);
           std::copy_n(ps.conductivity.data() + jb, len, batch.conductivity.data() + m);
-          for (int q = 0; q < len; ++q) batch.heat_volume[m + q] = heat_volume(P, ps, jb + q);
         }
         m += len;
       });
@@ -334,14 +333,18 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
           add_lanes<Dim>(acc, drho, tacc, tdrho, len);
           if (wall_sums) add_lanes<Dim>(wall_gradient, wall_weight, twall, tweight, len);
           if (heat) {
-            float jt[kChunk], jk[kChunk], jv[kChunk], theat[kChunk];
+            float jt[kChunk], jk[kChunk], theat[kChunk];
             gather(batch.temperature.data(), chunk, len, jt);
             gather(batch.conductivity.data(), chunk, len, jk);
-            gather(batch.heat_volume.data(), chunk, len, jv);
             for (int n = 0; n < len; ++n) {  // must vectorise: heat-terms
               Vec<Dim> xj;
               SPATE_UNROLL for (int k = 0; k < Dim; ++k) xj[k] = jf[kRecX + k][n];
-              theat[n] = conduction_from<Kernel, Dim>(P, ki, si.x, ti, xj, jt[n], jk[n], jv[n]);
+              // heat_volume() from what is gathered: a fluid's m / rho (with one fluid, i's mass),
+              // a wall's dp^dim.
+              float mj = M.mass;
+              if constexpr (Multiphase) mj = jmass[n];
+              const float vj = jkind[n] < P.materials.fluids ? mj / jf[kRecRho][n] : P.heat.wall_volume;
+              theat[n] = conduction_from<Kernel, Dim>(P, ki, si.x, ti, xj, jt[n], jk[n], vj);
             }
             add_lanes(conduction, theat, len);
           }
@@ -469,8 +472,10 @@ void fluid_rates(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P,
 // Heat transfer's wall pass: every particle's conductivity, and for the particles behind a tank
 // face with a condition the neighbour loops of wall_temperature_over over only the candidates
 // that may carry a temperature, collected once per cell (as wall_state_batched keeps only the
-// fluid): a dry tank cell costs a scan of its own particles. The same candidates in the same
-// order as update_wall_temperature's loops keep (it skips the others), so the same bits.
+// fluid; a dry tank cell costs a scan of its own particles), and of those only the ones inside
+// the support, selected as the fluid pass selects (vectorised distances, branch-free selection).
+// The same candidates in the same order as update_wall_temperature's loops keep (it skips the
+// others), so the same bits.
 template <class Kernel, int Dim>
 void wall_temperature_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params) {
   const PhysicsParams P = params;
@@ -479,25 +484,44 @@ void wall_temperature_batched(ParticleStore& ps, const CellGrid& grid, const Phy
   const auto particles = static_cast<std::int64_t>(v.start[cells]);
 #pragma omp parallel if (particles > kPairGrain)
   {
-    std::vector<std::uint32_t> carriers;
+    std::vector<std::uint32_t> carriers, inside;
+    std::vector<float> cx[Dim], cr2;
 #pragma omp for schedule(dynamic, 64)
     for (std::int64_t c = 0; c < cells; ++c) {
       const std::uint32_t b = v.start[c], e = v.start[c + 1];
       bool mirrors = false;
       for (std::uint32_t i = b; i < e && !mirrors; ++i) mirrors = mirrors_temperature(P, ps, i);
+      if (!mirrors) {  // conductivities only
+        for (std::uint32_t i = b; i < e; ++i) wall_temperature_over<Kernel, Dim>(P, ps, i, [](auto&&) {});
+        continue;
+      }
       carriers.clear();
-      if (mirrors) {
-        int g[3];
-        grid.global_coords(static_cast<std::uint32_t>(c), g);
-        v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
-          for (std::uint32_t j = jb; j < je; ++j)
-            if (carries_temperature(P, ps, j)) carriers.push_back(j);
+      int g[3];
+      grid.global_coords(static_cast<std::uint32_t>(c), g);
+      v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+        for (std::uint32_t j = jb; j < je; ++j)
+          if (carries_temperature(P, ps, j)) carriers.push_back(j);
+      });
+      const int count = static_cast<int>(carriers.size());
+      if (static_cast<int>(cr2.size()) < count + kSelectSlack) {
+        for (auto& a : cx) a.resize(count + kSelectSlack);
+        cr2.resize(count + kSelectSlack), inside.resize(count + kSelectSlack);
+      }
+      float* px[Dim];
+      SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
+        px[k] = cx[k].data();
+        for (int q = 0; q < count; ++q) px[k][q] = ps.pos[k][carriers[q]];
+      }
+      for (std::uint32_t i = b; i < e; ++i) {
+        int n = 0;
+        if (mirrors_temperature(P, ps, i)) {
+          candidate_distances<Dim>(load_vec<Dim>(ps.pos, i), px, count, cr2.data());
+          n = select_inside(cr2.data(), count, P.support2, inside.data());
+        }
+        wall_temperature_over<Kernel, Dim>(P, ps, i, [&](auto&& fn) {
+          for (int s = 0; s < n; ++s) fn(carriers[inside[s]]);
         });
       }
-      for (std::uint32_t i = b; i < e; ++i)
-        wall_temperature_over<Kernel, Dim>(P, ps, i, [&](auto&& fn) {
-          for (const std::uint32_t j : carriers) fn(j);
-        });
     }
   }
 }
