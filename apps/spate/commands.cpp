@@ -649,7 +649,10 @@ int bench_command(const BenchArgs& a) {
     InProcessHub hub(1);
     auto t = hub.endpoint(0, false);
     const Lattice L = make_lattice(c);
-    SlabWorker w(L, physics_params(c), *t);
+    const PhysicsParams P = physics_params(c);
+    // The run's optional fields, so that the passes find what they read (heat's temperature).
+    const OptionalFields optional_fields(FieldGroups{optional_field_groups(P)});
+    SlabWorker w(L, P, *t);
     w.take_share(generate_particles(c), SlabLayout::uniform(L.cells[0], 1));
     w.prepare(false);
     interactions = cpu::count_interactions(w.particles(), w.grid(), w.params());

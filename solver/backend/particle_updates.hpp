@@ -242,25 +242,40 @@ SPATE_HD void add_antuono_diffusion(const PhysicsParams& P, const CellGridView& 
   f.density_rate[i] += diffusion;
 }
 
-// The volume particle j conducts with: a fluid's m / rho, a wall's or solid's dp^dim.
+// The volume particle j conducts with (physics/heat_transfer.hpp).
 template <class Fields>
 SPATE_HD float heat_volume(const PhysicsParams& P, const Fields& f, std::uint32_t j) {
   const std::uint8_t m = f.material[j];
-  return P.is_fluid(m) ? P.materials.of(m).mass / f.density[j] : P.heat.wall_volume;
+  const bool fluid = P.is_fluid(m);
+  return heat_volume(fluid, fluid ? P.materials.of(m).mass : 0.0f, f.density[j], P.heat.wall_volume);
 }
 
 // Heat transfer, the wall pass over the owned particles: the temperature of wall particle w behind a
 // tank face with a condition (heat_transfer.hpp), from the particles around it that carry their own
-// temperature (fluids and conducting solids): the one nearest w's mirror point across the face,
+// temperature (fluids and solids that conduct): the one nearest w's mirror point across the face,
 // carried along the face to it by the fitted gradient of its material; and every particle's `conductivity`, the k
 // its neighbours' pair terms use (set once here, so that the heat pass need not work out each
 // neighbour's face condition per pair). `each(fn)` calls fn(j) for the candidates around w in the
 // visiting order (every particle of the 27 cells, or only those that may carry a temperature:
 // carries_temperature; the others are skipped here anyway, so both give the same bits).
+// A solid carries its temperature when it conducts (k > 0): a solid without thermal properties
+// exchanges no heat, and its starting temperature says nothing about the water beside it.
+SPATE_HD bool solid_carries_temperature(const PhysicsParams& P, std::uint8_t m) {
+  const ThermalMaterial& t = P.heat.material(m);
+  return m != P.materials.tank() && t.condition == ThermalCondition::Conducting && t.conductivity > 0.0f;
+}
 template <class Fields>
 SPATE_HD bool carries_temperature(const PhysicsParams& P, const Fields& f, std::uint32_t j) {
   const std::uint8_t m = f.material[j];
-  return P.is_fluid(m) || (m != P.materials.tank() && P.heat.material(m).condition == ThermalCondition::Conducting);
+  return P.is_fluid(m) || solid_carries_temperature(P, m);
+}
+// Whether any solid carries its own temperature: if none does, the carriers around a wall particle
+// are its fluid neighbours, which the Adami wall state selects anyway (the CPU then mirrors the
+// temperatures in its wall state pass).
+SPATE_HD bool solids_carry_temperature(const PhysicsParams& P) {
+  for (int m = P.materials.tank() + 1; m < P.materials.count; ++m)
+    if (solid_carries_temperature(P, static_cast<std::uint8_t>(m))) return true;
+  return false;
 }
 // Whether particle w's temperature comes from its neighbours (it stands behind a tank face with a
 // condition): only those need update_wall_temperature's neighbour loops.
@@ -270,22 +285,64 @@ SPATE_HD bool mirrors_temperature(const PhysicsParams& P, const Fields& f, std::
   const ThermalCondition c = particle_temperature_condition(P, f, w, face);
   return face.axis >= 0 && c != ThermalCondition::Conducting;
 }
+// The part of the wall pass that needs no neighbours: for a particle whose temperature is not
+// mirrored (a fluid, a conducting wall or solid, a held solid) its conductivity, and false; for one
+// behind a face with a condition, true (the face and its condition in `face`, `c`).
+template <class Fields>
+SPATE_HD bool wall_temperature_needs_neighbours(const PhysicsParams& P, Fields& f, std::uint32_t w, ThermalFace& face,
+                                                ThermalCondition& c) {
+  c = particle_temperature_condition(P, f, w, face);
+  if (face.axis >= 0 && c != ThermalCondition::Conducting) return true;
+  // Fluids, conducting walls and solids conduct with their own k; a solid held at its temperature
+  // with its own, or (none given: -1) with each neighbour's.
+  const float k = P.heat.material(f.material[w]).conductivity;
+  f.conductivity[w] = c == ThermalCondition::Fixed && !(k > 0.0f) ? -1.0f : k;
+  return false;
+}
+// Wall particle w's mirror point across its face.
+template <int Dim, class Fields>
+SPATE_HD Vec<Dim> wall_mirror_point(const Fields& f, std::uint32_t w, const ThermalFace& face) {
+  Vec<Dim> mirror = load_vec<Dim>(f.pos, w);
+  mirror[face.axis] += 2.0f * face.depth * face.into_fluid;
+  return mirror;
+}
+// The weight of carrier j in the fit around a wall particle at squared distance r2: V_j W.
+template <class Kernel>
+SPATE_HD float fit_weight(const PhysicsParams& P, float volume, float r2) {
+  return volume * Kernel::value(sqrtf(r2) * P.inv_h, P.kernel_norm);
+}
+// The rest, from the fit over the carriers of n's material and n, the carrier nearest the mirror
+// point (material: n's; -1 when there is none).
+template <int Dim, class Fields>
+SPATE_HD void finish_wall_temperature(const PhysicsParams& P, Fields& f, std::uint32_t w, const ThermalFace& face, ThermalCondition c,
+                                      const LinearFitSums<Dim>& sums, std::uint32_t n, int material) {
+  const HeatParams& H = P.heat;
+  if (material < 0) {  // nothing to mirror: a fixed face keeps its temperature
+    if (c == ThermalCondition::FaceTemperature) f.temperature[w] = H.face[face.index()].value;
+    f.conductivity[w] = 0.0f;
+    return;
+  }
+  // Carried along the face only: across it, the face's condition draws the line from n itself
+  // (face_wall_temperature), at n's own distance from the face, kept at 0.2 h at least so that a
+  // particle pressed against the face does not turn its noise into a steep line.
+  Vec<Dim> along = wall_mirror_point<Dim>(f, w, face) - load_vec<Dim>(f.pos, n);
+  along[face.axis] = 0.0f;
+  const float t_near = mirror_temperature<Dim>(sums, f.temperature[n], fitted_gradient<Dim>(sums), P.inv_h * along);
+  float xn[3] = {0.0f, 0.0f, 0.0f};
+  for (int a = 0; a < Dim; ++a) xn[a] = f.pos[a][n];
+  const float near_depth = fmaxf(distance_from_face(P.tank_lo, P.tank_hi, face, xn), 0.2f * P.h);
+  const float k = H.material(static_cast<std::uint8_t>(material)).conductivity;
+  f.temperature[w] = face_wall_temperature(H.face[face.index()], t_near, near_depth, k, face.depth);
+  f.conductivity[w] = k;
+}
 template <class Kernel, int Dim, class Fields, class Each>
 SPATE_HD void wall_temperature_over(const PhysicsParams& P, Fields& f, std::uint32_t w, Each&& each) {
   ThermalFace face;
-  const ThermalCondition c = particle_temperature_condition(P, f, w, face);
-  const HeatParams& H = P.heat;
-  if (face.axis < 0 || c == ThermalCondition::Conducting) {
-    // Fluids, conducting walls and solids conduct with their own k; a solid held at its temperature
-    // with its own, or (none given: -1) with each neighbour's.
-    const float k = H.material(f.material[w]).conductivity;
-    f.conductivity[w] = c == ThermalCondition::Fixed && !(k > 0.0f) ? -1.0f : k;
-    return;
-  }
+  ThermalCondition c;
+  if (!wall_temperature_needs_neighbours(P, f, w, face, c)) return;
   const Vec<Dim> xw = load_vec<Dim>(f.pos, w);
   // The mirror point, and the carrier nearest to it (the first in the visiting order among equals).
-  Vec<Dim> mirror = xw;
-  mirror[face.axis] += 2.0f * face.depth * face.into_fluid;
+  const Vec<Dim> mirror = wall_mirror_point<Dim>(f, w, face);
   float nearest = INFINITY;
   std::uint32_t n = 0;
   int material = -1;
@@ -294,7 +351,7 @@ SPATE_HD void wall_temperature_over(const PhysicsParams& P, Fields& f, std::uint
   // for another, should the nearest be of one.
   LinearFitSums<Dim> sums;
   auto fit = [&](std::uint32_t j, const Vec<Dim>& dx, float r2) {
-    sums.add(heat_volume(P, f, j) * Kernel::value(sqrtf(r2) * P.inv_h, P.kernel_norm), P.inv_h * dx, f.temperature[j]);
+    sums.add(fit_weight<Kernel>(P, heat_volume(P, f, j), r2), P.inv_h * dx, f.temperature[j]);
   };
   int fitted = -1;
   each([&](std::uint32_t j) {
@@ -307,12 +364,7 @@ SPATE_HD void wall_temperature_over(const PhysicsParams& P, Fields& f, std::uint
     if (fitted < 0) fitted = f.material[j];
     if (f.material[j] == fitted) fit(j, dx, r2_w);
   });
-  if (material < 0) {  // nothing to mirror: a fixed face keeps its temperature
-    if (c == ThermalCondition::FaceTemperature) f.temperature[w] = H.face[face.index()].value;
-    f.conductivity[w] = 0.0f;
-    return;
-  }
-  if (material != fitted) {
+  if (material >= 0 && material != fitted) {
     sums = LinearFitSums<Dim>{};
     each([&](std::uint32_t j) {
       if (f.material[j] != material) return;
@@ -321,18 +373,7 @@ SPATE_HD void wall_temperature_over(const PhysicsParams& P, Fields& f, std::uint
       if (r2 < P.support2) fit(j, dx, r2);
     });
   }
-  // Carried along the face only: across it, the face's condition draws the line from n itself
-  // (face_wall_temperature), at n's own distance from the face, kept at 0.2 h at least so that a
-  // particle pressed against the face does not turn its noise into a steep line.
-  Vec<Dim> along = mirror - load_vec<Dim>(f.pos, n);
-  along[face.axis] = 0.0f;
-  const float t_near = mirror_temperature<Dim>(sums, f.temperature[n], fitted_gradient<Dim>(sums), P.inv_h * along);
-  float xn[3] = {0.0f, 0.0f, 0.0f};
-  for (int a = 0; a < Dim; ++a) xn[a] = f.pos[a][n];
-  const float near_depth = fmaxf(distance_from_face(P.tank_lo, P.tank_hi, face, xn), 0.2f * P.h);
-  const float k = H.material(static_cast<std::uint8_t>(material)).conductivity;
-  f.temperature[w] = face_wall_temperature(H.face[face.index()], t_near, near_depth, k, face.depth);
-  f.conductivity[w] = k;
+  finish_wall_temperature<Dim>(P, f, w, face, c, sums, n, material);
 }
 template <class Kernel, int Dim, class Fields>
 SPATE_HD void update_wall_temperature(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t w, const int g[3]) {
@@ -347,18 +388,19 @@ SPATE_HD void update_wall_temperature(const PhysicsParams& P, const CellGridView
 // temperature ti) whose temperature is integrated, with the k the wall pass set for j
 // (`conductivity`: its own; behind a tank face with a condition the mirrored material's; -1 for a
 // held solid without one: i's).
-// The pair term from j's position, temperature, k (`conductivity`) and volume (heat_volume), for i
-// of conductivity ki: what the CPU's fused loop gathers per neighbour (cpu_backend.cpp).
-template <class Kernel, int Dim>
-SPATE_HD float conduction_from(const PhysicsParams& P, float ki, const Vec<Dim>& xi, float ti, const Vec<Dim>& xj, float tj, float kj,
-                               float vj) {
-  return conduction_term<Kernel, Dim>(P.heat, P.inv_h, P.inv_h2, P.eta2, xi, ti, xj, tj, pair_conductivity(ki, kj < 0.0f ? ki : kj),
-                                      vj);
+// The pair term from the pair's radial factors (PairKinematics: the CPU's fluid loop passes the
+// fluid pair terms' own), j's temperature, k (`conductivity`) and volume (heat_volume), for i of
+// conductivity ki at temperature ti.
+template <int Dim>
+SPATE_HD float conduction_from(const PhysicsParams& P, const PairKinematics<Dim>& pk, float ki, float ti, float tj, float kj, float vj) {
+  return conduction_term(P.heat, pk.r2, pk.F, pk.inv_r2_eta, ti, tj, pair_conductivity(ki, kj < 0.0f ? ki : kj), vj);
 }
 template <class Kernel, int Dim, class Fields>
 SPATE_HD float heat_pair_term(const PhysicsParams& P, const Fields& f, const ThermalMaterial& Mi, const Vec<Dim>& xi, float ti, std::uint32_t j) {
-  return conduction_from<Kernel, Dim>(P, Mi.conductivity, xi, ti, load_vec<Dim>(f.pos, j), f.temperature[j], f.conductivity[j],
-                                      heat_volume(P, f, j));
+  // The radial factors as the fluid pair terms compute them (the positions are all they read), so
+  // that this per-particle sum and the CPU's fused one add the same terms.
+  const PairKinematics<Dim> pk = radial_kinematics<Kernel, Dim>(P, xi, load_vec<Dim>(f.pos, j));
+  return conduction_from<Dim>(P, pk, Mi.conductivity, ti, f.temperature[j], f.conductivity[j], heat_volume(P, f, j));
 }
 
 // Heat transfer, after the fluid rates: the conduction rate dT/dt of owned particle i whose

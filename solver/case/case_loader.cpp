@@ -1196,9 +1196,13 @@ namespace {
 void set_heat_params(const Case& c, PhysicsParams& P) {
   HeatParams& H = P.heat;
   H.on = true;
-  const double moment = c.kernel == KernelType::WendlandC2 ? lattice_gradient_moment<WendlandC2>(c.dim, P.h, c.dp, P.eta2)
-                                                          : lattice_gradient_moment<CubicSpline>(c.dim, P.h, c.dp, P.eta2);
-  H.laplacian_norm = static_cast<float>(P.kernel_norm / moment);
+  // The Laplacian's normalisation (kernel_norm over the moment with eta^2) over the gradient's
+  // (kernel_norm over the moment without).
+  const auto moment = [&](double eta2) {
+    return c.kernel == KernelType::WendlandC2 ? lattice_gradient_moment<WendlandC2>(c.dim, P.h, c.dp, eta2)
+                                              : lattice_gradient_moment<CubicSpline>(c.dim, P.h, c.dp, eta2);
+  };
+  H.laplacian_scale = static_cast<float>(moment(0.0) / moment(P.eta2));
   H.wall_volume = static_cast<float>(std::pow(c.dp, c.dim));
   for (int k = 0; k < 3; ++k) H.gravity[k] = static_cast<float>(c.buoyancy_gravity[k]);
   int entries = 0;

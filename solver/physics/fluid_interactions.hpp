@@ -113,15 +113,23 @@ struct PairKinematics {
   float vr, vr_av;
 };
 
-template <class Kernel, int Dim, bool MovingWalls = false>
-SPATE_HD PairKinematics<Dim> pair_kinematics(const PhysicsParams& P, const ParticleState<Dim>& i, const ParticleState<Dim>& j,
-                                             float j_fluid) {
-  PairKinematics<Dim> k;
-  k.r = i.x - j.x;
+// The radial part, all that the positions give: r = x_i - x_j, r^2, |r|, F (grad_i W = F r) and
+// 1/(r^2 + eta^2), shared by the fluid pair terms and heat transfer's conduction term.
+template <class Kernel, int Dim>
+SPATE_HD PairKinematics<Dim> radial_kinematics(const PhysicsParams& P, const Vec<Dim>& xi, const Vec<Dim>& xj) {
+  PairKinematics<Dim> k;  // the rest is pair_kinematics's
+  k.r = xi - xj;
   k.r2 = dot(k.r, k.r);
   k.r_len = sqrtf(k.r2);
   k.F = Kernel::gradient_factor(k.r_len * P.inv_h, P.gradient_norm, P.inv_h2);
   k.inv_r2_eta = 1.0f / (k.r2 + P.eta2);
+  return k;
+}
+
+template <class Kernel, int Dim, bool MovingWalls = false>
+SPATE_HD PairKinematics<Dim> pair_kinematics(const PhysicsParams& P, const ParticleState<Dim>& i, const ParticleState<Dim>& j,
+                                             float j_fluid) {
+  PairKinematics<Dim> k = radial_kinematics<Kernel, Dim>(P, i.x, j.x);
   k.g_dot_rji = 0.0f;
   SPATE_UNROLL for (int a = 0; a < Dim; ++a) k.g_dot_rji -= P.gravity[a] * k.r[a];
   SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
@@ -135,6 +143,10 @@ SPATE_HD PairKinematics<Dim> pair_kinematics(const PhysicsParams& P, const Parti
   // j.w_av is sliding_velocity(), which is j.w off a free-slip face (then vr_av = vr exactly).
   if constexpr (MovingWalls) k.vr_av = dot(i.v - j.w_av, k.r);
   return k;
+}
+template <class Kernel, int Dim, bool MovingWalls = false>
+SPATE_HD PairKinematics<Dim> pair_kinematics(const PhysicsParams& P, const ParticleState<Dim>& i, const ParticleState<Dim>& j) {
+  return pair_kinematics<Kernel, Dim, MovingWalls>(P, i, j, P.is_fluid(j.material) ? 1.0f : 0.0f);
 }
 
 // The linearised (acoustic) Riemann problem between i (left) and j (right) along the line from i
@@ -196,11 +208,11 @@ SPATE_HD FluidRates<Dim> pair_rates(const PairKinematics<Dim>& pk, float radial,
 // vr_av); without it walls are at rest.
 // Riemann: the Riemann options' terms (riemann_pair_terms and the wall sums); without it they are
 // left out, which gives the same result when neither option is on (they would add exactly zero).
+// pk: the pair's kinematics (pair_kinematics), which a caller that also needs them passes in.
 template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false, bool Riemann = true>
 SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
-                                          const ParticleState<Dim>& j) {
+                                          const ParticleState<Dim>& j, const PairKinematics<Dim>& pk) {
   const float j_fluid = P.is_fluid(j.material) ? 1.0f : 0.0f;
-  const PairKinematics<Dim> pk = pair_kinematics<Kernel, Dim, MovingWalls>(P, i, j, j_fluid);
   const float r2 = pk.r2, F = pk.F, inv_r2_eta = pk.inv_r2_eta, vr = pk.vr, vr_av = pk.vr_av;
   const float inv_rho_i = 1.0f / i.rho;
   const float inv_rho_j = 1.0f / j.rho;
@@ -229,6 +241,11 @@ SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const FluidMat
   const float laminar = M.viscosity / M.mass * (volume_i * volume_i + volume_j * volume_j) * (r2 * F) * inv_r2_eta;
 
   return pair_rates<Dim, Riemann>(pk, radial, laminar, drho, j_fluid, volume_j);
+}
+template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false, bool Riemann = true>
+SPATE_HD FluidRates<Dim> fluid_pair_terms(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
+                                          const ParticleState<Dim>& j) {
+  return fluid_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, i, j, pair_kinematics<Kernel, Dim, MovingWalls>(P, i, j));
 }
 
 template <int Dim>

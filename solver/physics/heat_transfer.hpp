@@ -105,7 +105,9 @@ struct FaceCondition {
 struct HeatParams {
   bool on = false;
   bool walls_conduct = false;   // the tank or a solid conducts (its own k > 0, integrated)
-  float laplacian_norm = 0.0f;  // kernel_norm / lattice_gradient_moment(..., eta2) (kernels.hpp)
+  // The Laplacian's lattice normalisation over the gradient's: lattice_gradient_moment(...) over
+  // lattice_gradient_moment(..., eta2) (kernels.hpp; conduction_term).
+  float laplacian_scale = 0.0f;
   float wall_volume = 0.0f;     // dp^dim
   float gravity[3] = {0.0f, 0.0f, 0.0f};  // of the buoyancy (heat.gravity; default the case's)
   std::uint8_t of[kMaxMaterials] = {};  // material -> entry (fluids, the tank, each solid)
@@ -174,16 +176,22 @@ SPATE_HD float pair_conductivity(float ki, float kj) {
   return sum > 0.0f ? 4.0f * ki * kj / sum : 0.0f;
 }
 
-// One neighbour's share of rho_i c_i dT_i/dt [W/m^3]: V_j k_ij (T_i - T_j) F r^2 / (r^2 + eta^2).
-template <class Kernel, int Dim>
-SPATE_HD float conduction_term(const HeatParams& H, float inv_h, float inv_h2, float eta2, const Vec<Dim>& xi,
-                               float ti, const Vec<Dim>& xj, float tj, float kij, float vj) {
-  const Vec<Dim> r = xi - xj;
-  const float r2 = dot(r, r);
-  // Branch-free, so that the CPU's fused loop vectorises: beyond the support the kernel factor is
-  // exactly 0 (kernels.hpp), and so is the term.
-  const float F = Kernel::gradient_factor(sqrtf(r2) * inv_h, H.laplacian_norm, inv_h2);
-  return vj * kij * (ti - tj) * F * r2 / (r2 + eta2);
+// One neighbour's share of rho_i c_i dT_i/dt [W/m^3]: V_j k_ij (T_i - T_j) F_lap r^2 / (r^2 + eta^2),
+// from the radial factors the fluid pair terms compute for the same pair (PairKinematics): r^2, the
+// gradient factor F (grad_i W = F r, with the gradient's lattice normalisation) and 1/(r^2 + eta^2).
+// The Laplacian's normalisation is the gradient's times H.laplacian_scale (the kernels' gradient
+// factors are linear in the normalisation), so that the CPU computes the square root, the kernel
+// and the reciprocal once per pair for both. Branch-free, so that the CPU's pair loop vectorises:
+// beyond the support F is exactly 0 (kernels.hpp), and so is the term.
+SPATE_HD float conduction_term(const HeatParams& H, float r2, float F, float inv_r2_eta, float ti, float tj, float kij, float vj) {
+  return vj * kij * (ti - tj) * (H.laplacian_scale * F) * (r2 * inv_r2_eta);
+}
+
+// The volume a neighbour conducts with: a fluid's m / rho (as m times 1/rho, the fluid pair terms'
+// volume), a wall's or solid's dp^dim (HeatParams::wall_volume, passed by value so that the CPU's
+// pair loop reads it outside the loop: a load under the select does not vectorise).
+SPATE_HD float heat_volume(bool fluid, float mass, float rho, float wall_volume) {
+  return fluid ? mass * (1.0f / rho) : wall_volume;
 }
 
 // Boussinesq acceleration of a fluid particle at temperature t: -beta (t - T_ref) g.

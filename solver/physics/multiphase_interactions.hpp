@@ -71,10 +71,10 @@ SPATE_HD NeighbourFluid neighbour_fluid(const PhysicsParams& P, std::uint8_t mat
 // viscosity, vr_av). Riemann: as fluid_pair_terms.
 template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false, bool Riemann = true>
 SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
-                                               const ParticleState<Dim>& j, const NeighbourFluid& Nj, float mu_i) {
+                                               const ParticleState<Dim>& j, const NeighbourFluid& Nj, float mu_i,
+                                               const PairKinematics<Dim>& pk) {
   const bool j_is_fluid = P.is_fluid(j.material);
   const float j_fluid = j_is_fluid ? 1.0f : 0.0f;
-  const PairKinematics<Dim> pk = pair_kinematics<Kernel, Dim, MovingWalls>(P, i, j, j_fluid);
   const float r2 = pk.r2, F = pk.F, inv_r2_eta = pk.inv_r2_eta, vr = pk.vr;
   const float same_fluid = j.material == i.material ? 1.0f : 0.0f;  // walls never match a fluid
   // A wall stands in for a particle of i's fluid at the wall's normalised density (see above).
@@ -119,6 +119,12 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
   const float laminar = mu_pair / M.mass * (volume_i * volume_i + volume_j * volume_j) * (r2 * F) * inv_r2_eta;
 
   return pair_rates<Dim, Riemann>(pk, radial, laminar, drho, j_fluid, volume_j);
+}
+template <class Kernel, int Dim, bool Gamma7 = true, bool MovingWalls = false, bool Riemann = true>
+SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& i,
+                                               const ParticleState<Dim>& j, const NeighbourFluid& Nj, float mu_i) {
+  return multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, i, j, Nj, mu_i,
+                                                                          pair_kinematics<Kernel, Dim, MovingWalls>(P, i, j));
 }
 
 }  // namespace spate

@@ -8,6 +8,7 @@
 #include "case_errors.hpp"
 #include "case/case.hpp"
 #include "particles/particle_store.hpp"
+#include "physics/fluid_interactions.hpp"
 #include "physics/heat_transfer.hpp"
 #include "physics/integrator.hpp"
 #include "physics/timestep.hpp"
@@ -27,21 +28,31 @@ TEST(HeatTransfer, PairConductivityIsTwiceTheHarmonicMean) {
 // The pair exchanges heat, it does not make any: V_i x (i's term) = -V_j x (j's term), whatever the
 // conductivities and volumes; and the hotter particle cools.
 TEST(HeatTransfer, ConductionConservesHeatPairByPair) {
-  HeatParams H;
+  PhysicsParams P;
   const float h = 0.013f, dp = 0.01f;
-  H.laplacian_norm = WendlandC2::normalisation(2, h);
-  const float inv_h = 1.0f / h, eta2 = 0.01f * h * h;
+  P.h = h, P.inv_h = 1.0f / h, P.inv_h2 = P.inv_h * P.inv_h, P.eta2 = 0.01f * h * h;
+  P.gradient_norm = WendlandC2::normalisation(2, h);
+  P.heat.laplacian_scale = 1.1f;
   const Vec<2> xi{{0.0f, 0.0f}}, xj{{0.008f, 0.011f}};
   const float vi = dp * dp * 0.98f, vj = dp * dp * 1.03f, k = pair_conductivity(0.6f, 15.0f);
   const float ti = 350.0f, tj = 300.0f;
-  const float to_i = conduction_term<WendlandC2, 2>(H, inv_h, inv_h * inv_h, eta2, xi, ti, xj, tj, k, vj);
-  const float to_j = conduction_term<WendlandC2, 2>(H, inv_h, inv_h * inv_h, eta2, xj, tj, xi, ti, k, vi);
+  auto term = [&](const Vec<2>& a, float ta, const Vec<2>& b, float tb, float v) {
+    const PairKinematics<2> pk = radial_kinematics<WendlandC2, 2>(P, a, b);
+    return conduction_term(P.heat, pk.r2, pk.F, pk.inv_r2_eta, ta, tb, k, v);
+  };
+  const float to_i = term(xi, ti, xj, tj, vj);
+  const float to_j = term(xj, tj, xi, ti, vi);
   EXPECT_LT(to_i, 0.0f);
   EXPECT_GT(to_j, 0.0f);
   EXPECT_NEAR(vi * to_i, -vj * to_j, 1e-6 * std::fabs(vi * to_i));
+  // The Laplacian's normalisation: the gradient's times laplacian_scale.
+  const float r2 = 0.008f * 0.008f + 0.011f * 0.011f;
+  const float expected = vj * k * (ti - tj) * 1.1f * WendlandC2::gradient_factor(std::sqrt(r2) / h, P.gradient_norm, P.inv_h2) *
+                         r2 / (r2 + P.eta2);
+  EXPECT_NEAR(to_i, expected, 1e-5 * std::fabs(expected));
   // Beyond the support (2h = 0.026): nothing, without a test of the distance (the kernel is 0 there).
   const Vec<2> far{{0.03f, 0.0f}};
-  EXPECT_EQ((conduction_term<WendlandC2, 2>(H, inv_h, inv_h * inv_h, eta2, xi, ti, far, tj, k, vj)), 0.0f);
+  EXPECT_EQ(term(xi, ti, far, tj, vj), 0.0f);
 }
 
 // The fit recovers a linear temperature's gradient from scattered neighbours; the mirror value is

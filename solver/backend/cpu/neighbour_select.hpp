@@ -155,7 +155,7 @@ template <int Dim>
 }
 
 // out[f][n] = records[index[n]].f[f] for n in [0, count), f in [0, 8).
-inline void gather_records(const NeighbourRecord* __restrict records, const std::uint32_t* __restrict index, int count,
+[[gnu::always_inline]] inline void gather_records(const NeighbourRecord* __restrict records, const std::uint32_t* __restrict index, int count,
                            float* const out[8]) {
   int n = 0;
 #if defined(__AVX2__)
