@@ -20,10 +20,16 @@ SPATE_HD bool finite_value(float v) {
 }
 
 // Brings a position that left a periodic axis back by one period (the owner does it once per step).
+// A position a hair below the lower end rounds to the upper end itself once the period is added
+// (-1e-8 + 1 is 1.0f), which is outside [lower, upper): it goes to the lower end instead.
 SPATE_HD void wrap_periodic(const Lattice& L, float& x, int axis) {
   if (!L.periodic[axis]) return;
-  if (x >= L.upper(axis)) x -= L.period[axis];
-  else if (x < L.origin[axis]) x += L.period[axis];
+  if (x >= L.upper(axis)) {
+    x -= L.period[axis];
+  } else if (x < L.origin[axis]) {
+    x += L.period[axis];
+    if (x >= L.upper(axis)) x = L.origin[axis];
+  }
 }
 
 enum class PositionFault : std::uint8_t { None = 0, NonFinite = 1, Outside = 2 };

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 
+#include <limits>
 #include <mutex>
 #include <random>
 #include <set>
@@ -12,6 +13,7 @@
 
 #include "comm/in_process_transport.hpp"
 #include "domain/host_slab_arrays.hpp"
+#include "domain/particle_checks.hpp"
 #include "domain/slab_topology.hpp"
 #include "domain/slab_layout.hpp"
 #include "grid/cell_grid.hpp"
@@ -72,6 +74,22 @@ void on_three_slabs(bool periodic_x, Body body) {
     });
   for (auto& t : threads) t.join();
   for (auto& e : errors) EXPECT_TRUE(e.empty()) << e;
+}
+
+// A position a hair below the lower end of a periodic axis comes back inside [lower, upper): adding
+// the period rounds it to the upper end itself, whose cell does not exist (a particle of the
+// Rayleigh-Taylor case at dp = 0.01 was reported as having left the domain at x = 1 of [0, 1]).
+TEST(Wrap, EveryPeriodicPositionLandsInsideTheLattice) {
+  Lattice L = periodic_lattice(2);
+  L.origin[0] = 0.0f;
+  for (const float x0 : {-1e-9f, -1e-8f, -std::numeric_limits<float>::denorm_min(), -0.01f, L.upper(0), L.upper(0) + 0.01f}) {
+    float x = x0;
+    wrap_periodic(L, x, 0);
+    EXPECT_GE(x, L.origin[0]) << x0;
+    EXPECT_LT(x, L.upper(0)) << x0;
+    EXPECT_EQ(position_fault(L, x, 0), PositionFault::None) << x0;
+    EXPECT_LT(L.cell_of(x, 0), L.cells[0]) << x0;
+  }
 }
 
 TEST(Halo, RefreshBringsCurrentValuesToEveryGhost) {
