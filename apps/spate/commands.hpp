@@ -59,10 +59,16 @@ struct PostArgs {
 struct PlotArgs {
   std::string dir, out;
 };
+struct GrowthArgs {
+  std::string csv, column = "amplitude";
+  std::optional<double> until;
+  bool json = false;
+};
 
 int run_command(const RunArgs& a);
 int post_command(const PostArgs& a);
 int plot_command(const PlotArgs& a);
+int growth_command(const GrowthArgs& a);
 int info_command(const InfoArgs& a);
 int compare_command(const CompareArgs& a);
 int bench_command(const BenchArgs& a);

@@ -139,6 +139,13 @@ int main(int argc, char** argv) {
   plot_cmd->add_option("dir", plot.dir, "Run folder (or post output folder) with probes/*.csv")->required();
   plot_cmd->add_option("--out", plot.out, "Where the PNGs go (default DIR/plots)");
 
+  GrowthArgs growth;
+  auto* growth_cmd = app.add_subcommand("growth", "Growth rate of an instability: fit C e^(n t) + D e^(-n t) to a probe's amplitude in its linear range");
+  growth_cmd->add_option("csv", growth.csv, "Probe CSV (probes/<name>.csv of a run)")->required();
+  growth_cmd->add_option("--column", growth.column, "Column name, without its unit (default: amplitude)");
+  growth_cmd->add_option("--until", growth.until, "The linear range ends where the amplitude first exceeds this (default: 5 times its first value)");
+  growth_cmd->add_flag("--json", growth.json, "Print one JSON object");
+
   BenchArgs bench;
   auto* bench_cmd = app.add_subcommand("bench", "Measure particle-steps and neighbour interactions per second");
   bench_cmd->add_option("case", bench.case_file, "Case file (YAML)")->required();
@@ -166,6 +173,7 @@ int main(int argc, char** argv) {
     if (*cmp_cmd) return finish(compare_command(cmp));
     if (*post_cmd) return finish(post_command(post));
     if (*plot_cmd) return finish(plot_command(plot));
+    if (*growth_cmd) return finish(growth_command(growth));
     if (*bench_cmd) return finish(bench_command(bench));
   } catch (const BadInput& e) {
     spdlog::error("{}", e.what());

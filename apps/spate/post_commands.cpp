@@ -1,5 +1,6 @@
 // After the run: spate post (probes and Catalyst pipelines on saved snapshots or checkpoints) and
-// spate plot (PNG plots of the probes, by scripts/plot_probes.py).
+// spate plot (PNG plots of the probes, by scripts/plot_probes.py); spate growth (an instability's
+// growth rate from a probe's amplitude, sim/growth.hpp).
 #include <fmt/format.h>
 #include <fcntl.h>
 #include <spawn.h>
@@ -12,6 +13,7 @@
 #include <omp.h>
 
 #include "commands.hpp"
+#include "sim/growth.hpp"
 #include "sim/insitu.hpp"
 #include "sim/post.hpp"
 #ifdef SPATE_WITH_CATALYST
@@ -212,6 +214,40 @@ int plot_command(const PlotArgs& a) {
   const std::optional<Case> c = case_of(dir);
   const std::string title = c ? c->name : std::filesystem::absolute(dir).lexically_normal().filename().string();
   return plot_probes(dir, a.out.empty() ? dir / "plots" : std::filesystem::path(a.out), title, c ? &*c : nullptr);
+}
+
+int growth_command(const GrowthArgs& a) {
+  std::vector<std::pair<double, double>> samples;
+  try {
+    samples = read_probe_column(a.csv, a.column);
+  } catch (const std::runtime_error& e) {
+    throw BadInput(e.what());
+  }
+  // The linear range by default: up to five times the first amplitude.
+  double until = a.until.value_or(0.0);
+  if (!a.until) {
+    for (auto [t, v] : samples)
+      if (v > 0) {
+        until = 5.0 * v;
+        break;
+      }
+  }
+  if (!(until > 0)) throw BadInput(fmt::format("--until {}: must be > 0", until));
+  GrowthFit fit;
+  try {
+    fit = fit_growth(samples, until);
+  } catch (const std::invalid_argument& e) {
+    throw BadInput(fmt::format("{}: column '{}': {}", a.csv, a.column, e.what()));
+  }
+  if (a.json)
+    fmt::print("{{\"rate\": {:.9g}, \"growing\": {:.9g}, \"decaying\": {:.9g}, \"from\": {:.9g}, \"to\": {:.9g}, \"samples\": {}, "
+               "\"rms\": {:.6g}, \"until\": {:.9g}}}\n",
+               fit.rate, fit.growing, fit.decaying, fit.from, fit.to, fit.samples, fit.rms, until);
+  else
+    fmt::print("growth rate n = {:.6g} 1/s: {} = {:.4g} e^(n t) + {:.4g} e^(-n t) over t = {:.4g} to {:.4g} s ({} samples, "
+               "rms error {:.2g}%)\n",
+               fit.rate, a.column, fit.growing, fit.decaying, fit.from, fit.to, fit.samples, 100.0 * fit.rms);
+  return 0;
 }
 
 }  // namespace spate::app

@@ -202,7 +202,7 @@ SPATE_HD void update_shift(const PhysicsParams& P, const CellGridView& v, Fields
   ShiftingSums<Dim> sums;
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
     for (std::uint32_t j = jb; j < je; ++j)
-      accumulate_shifting_pair<Kernel, Dim>(P, M, w_dp, xi, ParticleState<Dim>{load_vec<Dim>(f.pos, j), zero_vec<Dim>(), f.density[j], 0.0f, f.material[j], zero_vec<Dim>(), zero_vec<Dim>()}, sums);
+      accumulate_shifting_pair<Kernel, Dim>(P, M, f.material[i], w_dp, xi, ParticleState<Dim>{load_vec<Dim>(f.pos, j), zero_vec<Dim>(), f.density[j], 0.0f, f.material[j], zero_vec<Dim>(), zero_vec<Dim>()}, sums);
   });
   const Vec<Dim> dr = shifting_displacement<Dim>(P, M, sums, dt);
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.shift[k][i] = dr[k];

@@ -65,6 +65,10 @@ struct FluidBlock : Box {
   // top_wave: the top face at max_v + amplitude sin(2 pi (x - min_x) / wavelength) (0: flat).
   double wave_amplitude = 0.0;
   double wavelength = 0.0;
+  // top_wave.start: false (`cut`) the lattice is cut at the wavy face; true (`displace`) it is cut
+  // flat at max_v and every fluid particle is moved by the face's linear (potential-flow) mode,
+  // which places the interface to a fraction of dp (generator.cpp, displace_by_waves).
+  bool wave_displaces = false;
   std::optional<TemperatureField> temperature{};  // heat transfer: the block's (default: heat.initial_temperature)
 };
 
@@ -76,7 +80,7 @@ struct SolidSpec {
   ThermalSpec thermal{};
 };
 
-enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid, Temperature, HeatFlux };
+enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid, Temperature, HeatFlux, Interface };
 
 struct ProbeSpec {
   std::string name;
@@ -93,7 +97,8 @@ struct ProbeSpec {
   double min_depth = 0.0;   // front: only water at least this deep counts (a bore over a wet bed)
   int follow = -1;          // pressure, velocity, height: moves with this motion (Case::motions), -1: fixed
   // pressure, velocity, height, centroid: only this fluid's particles (index into Case::fluids;
-  // -1: every fluid); `phase_name` its name, for descriptions.
+  // -1: every fluid); interface: the fluid whose volume fraction marks the interface (required);
+  // `phase_name` its name, for descriptions.
   int phase = -1;
   std::string phase_name;
   // heat_flux: the Nusselt number q L / (k dT) beside the flux when length and temperature_difference
@@ -152,6 +157,7 @@ struct Case {
   double delta = 0.1;
   MomentumFlux flux = MomentumFlux::Central;
   double riemann_limiter = 3.0;
+  bool pressure_difference = false;  // momentum.pressure_gradient: difference (several fluids)
   // Particle shifting (delta-plus-SPH; physics/shifting.hpp), key `shifting`.
   bool shifting = false;
   double shifting_coefficient = 1.0;

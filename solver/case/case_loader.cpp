@@ -451,6 +451,11 @@ FluidBlock read_fluid_block(Section& f, const Case& c) {
       if (!(b.wavelength > 0)) w->fail(w->raw("wavelength"), "wavelength", "must be > 0");
       if (!(std::fabs(b.wave_amplitude) < b.max[d - 1] - b.min[d - 1]))
         w->fail(w->raw("amplitude"), "amplitude", "its magnitude must be below the block's height");
+      const std::string start = w->text("start", std::string("cut"));
+      if (start != "cut" && start != "displace") w->fail(w->raw("start"), "start", "must be 'cut' or 'displace'");
+      b.wave_displaces = start == "displace";
+      if (b.wave_displaces && !(std::fabs(b.wave_amplitude) <= 0.05 * b.wavelength))
+        w->fail(w->raw("amplitude"), "amplitude", "start 'displace' is a linear mode: the amplitude must be at most 0.05 wavelengths");
       w->finish();
     }
   }
@@ -816,6 +821,9 @@ Case read(Section& root, const std::string& file) {
     c.flux = m.choice<MomentumFlux>("flux", MomentumFlux::Central, {{"central", MomentumFlux::Central}, {"riemann", MomentumFlux::Riemann}});
     c.riemann_limiter = m.number("riemann_limiter", 3.0);
     if (!(c.riemann_limiter >= 0)) m.fail(m.raw("riemann_limiter"), "riemann_limiter", "must be >= 0");
+    c.pressure_difference = m.choice<bool>("pressure_gradient", false, {{"symmetric", false}, {"difference", true}});
+    if (c.pressure_difference && c.fluids.size() < 2)
+      m.fail(m.raw("pressure_gradient"), "pressure_gradient", "'difference' is for several fluids (their interfaces); one fluid keeps 'symmetric'");
     m.finish();
   }
   {
@@ -826,8 +834,6 @@ Case read(Section& root, const std::string& file) {
       s.fail(s.raw("coefficient"), "coefficient", "must be between 0 and 10");
     c.shifting_mach = s.number("mach", 0.1);
     if (!(c.shifting_mach > 0 && c.shifting_mach <= 1)) s.fail(s.raw("mach"), "mach", "must be in (0, 1]");
-    if (c.shifting && c.fluids.size() > 1)
-      s.fail(s.raw("enabled"), "enabled", "particle shifting is for one fluid (it would mix the fluids at an interface)");
     s.finish();
   }
   if (auto t = root.child("time")) {
@@ -992,15 +998,19 @@ Case read(Section& root, const std::string& file) {
                                      {{"pressure", ProbeType::Pressure}, {"velocity", ProbeType::Velocity}, {"height", ProbeType::Height},
                                       {"force", ProbeType::Force}, {"front", ProbeType::Front}, {"wall_pressure", ProbeType::WallPressure},
                                       {"centroid", ProbeType::Centroid}, {"temperature", ProbeType::Temperature},
-                                      {"heat_flux", ProbeType::HeatFlux}});
+                                      {"heat_flux", ProbeType::HeatFlux}, {"interface", ProbeType::Interface}});
     if ((probe.type == ProbeType::Temperature || probe.type == ProbeType::HeatFlux) && !c.heat)
       p.fail(p.raw("type"), "type", "a " + p.text("type") + " probe needs heat transfer (a `heat:` section)");
     // A phase (fluid) to measure: required by a centroid, optional for a point, a gauge or a front.
     const bool phased = probe.type == ProbeType::Pressure || probe.type == ProbeType::Velocity || probe.type == ProbeType::Temperature ||
-                        probe.type == ProbeType::Height || probe.type == ProbeType::Centroid || probe.type == ProbeType::Front;
-    if (probe.type == ProbeType::Centroid && !p.has("phase")) p.text("phase");  // reports it as required
+                        probe.type == ProbeType::Height || probe.type == ProbeType::Centroid || probe.type == ProbeType::Front ||
+                        probe.type == ProbeType::Interface;
+    const bool needs_phase = probe.type == ProbeType::Centroid || probe.type == ProbeType::Interface;
+    if (needs_phase && !p.has("phase")) p.text("phase");  // reports it as required
+    if (probe.type == ProbeType::Interface && c.fluids.size() < 2)
+      p.fail(p.raw("type"), "type", "an interface probe needs two fluids or more (`fluids:`)");
     if (p.has("phase")) {
-      if (!phased) p.fail(p.raw("phase"), "phase", "only pressure, velocity, temperature, height, front and centroid probes take a phase");
+      if (!phased) p.fail(p.raw("phase"), "phase", "only pressure, velocity, temperature, height, front, centroid and interface probes take a phase");
       probe.phase = fluid_index(p, "phase", c);
       probe.phase_name = c.fluids[probe.phase].name;
     }
@@ -1056,7 +1066,8 @@ Case read(Section& root, const std::string& file) {
         if (on_moving_body(probe.position, c))
           p.fail(p.raw("position"), "position", "a wall_pressure sensor on a moving wall is not supported (it stays where it is)");
         break;
-      case ProbeType::Centroid: break;
+      case ProbeType::Centroid:
+      case ProbeType::Interface: break;
       case ProbeType::Front: {
         const std::string axis = p.text("axis", std::string("x"));
         probe.axis = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;
@@ -1304,6 +1315,7 @@ PhysicsParams physics_params(const Case& c) {
   P.delta = static_cast<float>(c.delta);
   P.diffusion = c.diffusion;
   P.flux = c.flux;
+  P.pressure_difference = c.pressure_difference ? 1.0f : 0.0f;
   P.riemann_limiter = static_cast<float>(c.riemann_limiter);
   P.density_mode = c.density_mode;
   P.shifting.enabled = c.shifting;

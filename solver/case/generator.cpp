@@ -49,7 +49,7 @@ bool in_block(const FluidBlock& b, const double x[3], int dim) {
     for (int a = 0; a < dim; ++a) r2 += (x[a] - b.centre[a]) * (x[a] - b.centre[a]);
     return r2 <= b.radius * b.radius;
   }
-  if (b.wave_amplitude == 0.0) return in_box(b, x, dim);
+  if (b.wave_amplitude == 0.0 || b.wave_displaces) return in_box(b, x, dim);
   const int v = dim - 1;
   for (int a = 0; a < v; ++a)
     if (x[a] < b.min[a] || x[a] > b.max[a]) return false;
@@ -395,6 +395,30 @@ void layered_hydrostatic_density(const Case& c, const PhysicsParams& P, Particle
 }
 }  // namespace
 
+namespace {
+// top_wave with start `displace`: the lattice was cut flat at y0 = max_v; every fluid particle now
+// moves by the incompressible (potential-flow) displacement of the face's linear mode,
+//   xi = grad phi,  phi = -(a/k) sin(k s) e^{-k (y - y0)} above y0,  +(a/k) sin(k s) e^{k (y - y0)} below,
+// s = x - min_x, k = 2 pi / wavelength: the face goes to y0 + a sin(k s) (xi_y = a sin(k s) at y0
+// from either side), the field is divergence-free (no density change) and decays over a wavelength
+// away from the face. A lattice row can only hold a face cut at multiples of dp; this places it to
+// a fraction of dp, so that a linear-regime instability starts from its own mode.
+void displace_by_waves(const Case& c, const PhysicsParams& P, ParticleStore& p) {
+  const int v = c.dim - 1;
+  for (const FluidBlock& b : c.fluid_blocks) {
+    if (!b.wave_displaces || b.wave_amplitude == 0.0) continue;
+    const double k = 2.0 * M_PI / b.wavelength, a = b.wave_amplitude, y0 = b.max[v];
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (!P.is_fluid(p.material[i])) continue;
+      const double s = k * (p.pos[0][i] - b.min[0]), dy = p.pos[v][i] - y0;
+      const double decay = std::exp(-k * std::fabs(dy)), side = dy >= 0 ? -1.0 : 1.0;
+      p.pos[0][i] = static_cast<float>(p.pos[0][i] + side * a * std::cos(s) * decay);
+      p.pos[v][i] = static_cast<float>(p.pos[v][i] + a * std::sin(s) * decay);
+    }
+  }
+}
+}  // namespace
+
 double initial_temperature(const Case& c, const MaterialTable& M, std::uint8_t kind, const double x[3]) {
   if (M.is_fluid(kind)) {
     for (const FluidBlock& b : c.fluid_blocks) {
@@ -450,6 +474,7 @@ ParticleStore generate_particles(const Case& c) {
   });
   if (i != p.size()) throw std::logic_error("generate_particles: the site loop disagrees with count_particles");
   if (P.materials.multiphase()) layered_hydrostatic_density(c, P, p);
+  displace_by_waves(c, P, p);  // after the column sums, which need the lattice
   p.set_owned(p.size());
   return p;
 }

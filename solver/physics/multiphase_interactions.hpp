@@ -27,6 +27,15 @@
 //    and air the air's pressure governs, so that pressure noise of the water does not kick the
 //    light phase. Antisymmetric in i, j (V_i V_j p*_ij), so momentum is conserved. This is the
 //    interface pressure a Riemann-solver scheme (Rezavand et al. 2020) starts from.
+//    With momentum.pressure_gradient `difference`, 2 p*_ij - 2 p_i = 2 Z_i (p_j - p_i)/(Z_i + Z_j)
+//    instead: zero for a uniform pressure on any arrangement of particles. The symmetric form's
+//    sum_j V_j (p_i + p_j) grad W_ij holds 2 p_i sum_j V_j grad W_ij, which vanishes only on the
+//    start lattice: under the absolute pressure (background plus hydrostatic, about 2-4 in the
+//    Rayleigh-Taylor case) the lattice resists being sheared like an elastic solid, with a
+//    stiffness that dwarfs the pressure differences (rho_h - rho_l) g a that drive a small
+//    interface wave. It held the Rayleigh-Taylor instability to a fraction of its linear growth
+//    (docs/studies/rayleigh-taylor.md). The price: pairs no longer conserve momentum exactly, and
+//    nothing in the pressure term keeps particles from clumping (no cure for the tensile instability).
 //  - Laminar viscosity, eq. 8 with the harmonic mean 2 mu_i mu_j / (mu_i + mu_j) of the two
 //    phases' viscosities (Hu & Adams 2006), and the particles' own volumes.
 //  - Density diffusion (delta-SPH, or the Riemann solver's pressure diffusion) and the Riemann
@@ -106,9 +115,10 @@ SPATE_HD FluidRates<Dim> multiphase_pair_terms(const PhysicsParams& P, const Flu
   }
 
   // Eq. 7 with the acoustic interface pressure: p_i + p_j -> 2 p*_ij (plus, with momentum.flux
-  // riemann, the limiter's dissipation between particles of one fluid).
+  // riemann, the limiter's dissipation between particles of one fluid); with
+  // momentum.pressure_gradient difference, 2 p*_ij - 2 p_i (see above).
   const float p_interface = 2.0f * (z_j * i.p + z_i * j.p) * inv_z_sum;
-  const float p_pair = Riemann ? p_interface + riemann.p_dissipation : p_interface;
+  const float p_pair = (Riemann ? p_interface + riemann.p_dissipation : p_interface) - P.pressure_difference * 2.0f * i.p;
   // Monaghan (1992) artificial viscosity with the pair's mean sound speed and density.
   const float mu_ij = P.h * (pk.vr_av < 0.0f ? pk.vr_av : 0.0f) * inv_r2_eta;
   const float pi_ij = -artificial_alpha(P, j_fluid) * (M.c0 + c_j) * mu_ij / (i.rho + rho_j);

@@ -61,6 +61,10 @@ struct PhysicsParams {
   DensityDiffusion diffusion = DensityDiffusion::Fourtakas;
   MomentumFlux flux = MomentumFlux::Central;
   float riemann_limiter = 3.0f;  // eta of the Riemann solver's limiter beta = min(eta dU, c0)
+  // momentum.pressure_gradient (several fluids): 0 `symmetric`, eq. 7's p_i + p_j; 1 `difference`,
+  // p_j - p_i, which vanishes for a uniform pressure on any particle arrangement
+  // (multiphase_interactions.hpp; docs/physics.md, "Several fluids").
+  float pressure_difference = 0.0f;
   // false: fluid pressures are clipped at 0 and continuity densities at rho0 (fluid.tension;
   // eos.hpp fluid_pressure, integrator.hpp correct_density).
   bool tension = true;

@@ -20,11 +20,19 @@
 //                                 component of dr_i along the outward normal n_i = -sum V_j grad W
 //                                 / |.| is removed when it points out of the fluid (n . dr > 0);
 //   otherwise:                    dr_i unchanged.
+// Several fluids (Lind et al.'s free-surface rule applied at an interface, as multiphase shifting
+// schemes do; cf. Mokos, Rogers & Stansby 2017, J. Hydraul. Res. 55:143): next to particles of
+// another fluid the component of dr_i along the interface normal
+// n_i = sum_{j of another fluid} V_j grad W_ij / |.| is removed, so particles slide along the
+// interface and never across it (a shift across it would mix the fluids, or squeeze one into the
+// other).
 // As in the 2017 model the shift is not an ALE transport: velocity and density are not corrected
 // for it. The consistent terms of Sun et al. (2019) (the shifting velocity's divergence in the
 // continuity equation) need the neighbours' shifts, i.e. a halo refresh of `shift`, and are not
 // implemented; without them the shifting perturbs the pressure (docs/studies/impact-pressures.md
 // measures it).
+#include <cstdint>
+
 #include "fluid_interactions.hpp"
 #include "kernels.hpp"
 #include "params.hpp"
@@ -42,17 +50,18 @@ struct ShiftingSums {
   Vec<Dim> concentration = zero_vec<Dim>();  // sum V_j [1 + R (W_ij / W(dp))^4] grad_i W_ij
   Vec<Dim> gradient = zero_vec<Dim>();       // sum V_j grad_i W_ij (points into the fluid)
   float divergence = 0.0f;                   // -sum V_j r_ij . grad_i W_ij (Dim inside the fluid)
+  Vec<Dim> interface = zero_vec<Dim>();      // sum V_j grad_i W_ij over fluids other than i's
 };
 
-// Neighbour j (fluid or wall) of fluid particle i of material M; w_dp = W(dp). Adds exactly 0 for
+// Neighbour j (fluid or wall) of fluid particle i of material M (index material_i); w_dp = W(dp). Adds exactly 0 for
 // j = i and beyond the support. Every neighbour takes the volume m / rho0 (the wall lattice's, and
 // the fluid's at rest): with V_j = m / rho_j (the paper's) a compressed fluid next to a wall, whose
 // Adami density is a pressure boundary condition and not a packing, is drawn into the wall; in the
 // hydrostatic tank that variant lost 7% of the bottom pressure instead of 3%
 // (docs/studies/impact-pressures.md).
 template <class Kernel, int Dim>
-SPATE_HD void accumulate_shifting_pair(const PhysicsParams& P, const FluidMaterial& M, float w_dp, const Vec<Dim>& xi,
-                                       const ParticleState<Dim>& j, ShiftingSums<Dim>& s) {
+SPATE_HD void accumulate_shifting_pair(const PhysicsParams& P, const FluidMaterial& M, std::uint8_t material_i, float w_dp,
+                                       const Vec<Dim>& xi, const ParticleState<Dim>& j, ShiftingSums<Dim>& s) {
   const Vec<Dim> r = xi - j.x;
   const float r2 = dot(r, r);
   if (r2 >= P.support2) return;
@@ -63,9 +72,11 @@ SPATE_HD void accumulate_shifting_pair(const PhysicsParams& P, const FluidMateri
   const float ratio2 = ratio * ratio;
   const float weight = volume * F;
   const float tensile = 1.0f + kShiftingR * ratio2 * ratio2;
+  const float other = P.is_fluid(j.material) && j.material != material_i ? weight : 0.0f;
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
     s.concentration[k] += tensile * weight * r[k];
     s.gradient[k] += weight * r[k];
+    s.interface[k] += other * r[k];
   }
   s.divergence -= weight * r2;
 }
@@ -84,6 +95,12 @@ SPATE_HD Vec<Dim> shifting_displacement(const PhysicsParams& P, const FluidMater
     const float inv_g = 1.0f / sqrtf(g2);
     const float outward = -dot(s.gradient, dr) * inv_g;
     if (outward > 0.0f) SPATE_UNROLL for (int k = 0; k < Dim; ++k) dr[k] += outward * s.gradient[k] * inv_g;
+  }
+  const float i2 = dot(s.interface, s.interface);
+  if (i2 > 0.0f) {
+    // Along the interface only: remove n (n . dr), n = interface / |interface|.
+    const float along_n = dot(s.interface, dr) / i2;
+    SPATE_UNROLL for (int k = 0; k < Dim; ++k) dr[k] -= along_n * s.interface[k];
   }
   const float limit = kMaxShiftFraction * P.dp;
   const float len2 = dot(dr, dr);

@@ -242,6 +242,45 @@ double front_level(const ProbeSpec& front, const Case& c) {
   return c.tank_origin[c.dim - 1] + front.min_depth - 0.5 * c.dp;
 }
 
+std::pair<double, double> local_interface_extent(SlabWorker& w, const Case& c, int phase) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::pair<double, double> extent{kInf, -kInf};
+  const int d = c.dim, v = d - 1;
+  const double spacing = d == 2 ? c.dp / 2 : c.dp;  // between lines
+  const double step = c.dp / 4;                    // up a line
+  const double floor = c.tank_origin[v];
+  const double top = w.lattice().upper(v) - 1e-6;
+  const int last = static_cast<int>(std::ceil((top - floor) / step));
+  int lines[2] = {1, 1};
+  for (int a = 0; a < v; ++a) lines[a] = std::max(1, static_cast<int>(std::lround(c.tank_size[a] / spacing)));
+  dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
+    for (int i = 0; i < lines[0]; ++i)
+      for (int j = 0; j < lines[1]; ++j) {
+        Vec3d at{0, 0, 0};
+        at[0] = c.tank_origin[0] + (i + 0.5) * c.tank_size[0] / lines[0];
+        if (d == 3) at[1] = c.tank_origin[1] + (j + 0.5) * c.tank_size[1] / lines[1];
+        if (!owns_point(w, at)) continue;
+        // The phase's fraction at sample k, NaN where there is no fluid.
+        auto fraction = [&](int k) {
+          at[v] = std::min(floor + k * step, top);
+          const double all = shepard<Kernel, Dim>(w, at, nullptr, -1).weight;
+          return all >= 0.5 ? shepard<Kernel, Dim>(w, at, nullptr, phase).weight / all : kNaN;
+        };
+        double below = fraction(0);
+        for (int k = 0; k < last; ++k) {
+          const double above = fraction(k + 1);
+          if (!std::isnan(below) && !std::isnan(above) && (below - 0.5) * (above - 0.5) <= 0 && below != above) {
+            const double y = floor + (k + (below - 0.5) / (below - above)) * step;
+            extent.first = std::min(extent.first, y);
+            extent.second = std::max(extent.second, y);
+          }
+          below = above;
+        }
+      }
+  });
+  return extent;
+}
+
 double local_front(SlabWorker& w, int axis, double lowest, int phase) {
   const ParticleStore& p = w.particles();
   const int v = p.dim() - 1;
@@ -451,6 +490,11 @@ std::vector<std::string> probe_columns(const ProbeSpec& p, int dim) {
       for (int k = 0; k < dim; ++k) columns.push_back(std::string(axes[k]) + "[m]");
       components("v", "m/s");
       break;
+    case ProbeType::Interface:
+      columns.push_back("amplitude[m]");  // half the vertical extent
+      columns.push_back("top[m]");
+      columns.push_back("bottom[m]");
+      break;
   }
   return columns;
 }
@@ -479,6 +523,7 @@ std::string probe_description(const ProbeSpec& p, int dim) {
              (dim == 2 ? fmt::format(" height at x = {:g} m", p.position[0]) : " height at (x, y) = " + point(2)) +
              (p.connected ? " (connected column)" : "");
     case ProbeType::Centroid: return "centroid and mean velocity of " + p.phase_name;
+    case ProbeType::Interface: return "interface of " + p.phase_name + ": half its vertical extent, its top and bottom";
     case ProbeType::Force:
       return "pressure force on solid '" + p.solid + "'" + (p.face >= 0 ? fmt::format(" face {}{}", p.face % 2 ? "+" : "-", axes[p.face / 2]) : "");
     case ProbeType::Front:
@@ -618,6 +663,13 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
       }
       case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis, front_level(p, case_), p.phase))); break;
       case ProbeType::Centroid: row = sample_centroid(w, p.phase); break;
+      case ProbeType::Interface: {
+        const auto [low, high] = local_interface_extent(w, case_, p.phase);
+        const double bottom = -t.max(-low), top = t.max(high);
+        if (top >= bottom) row = {0.5 * (top - bottom), top, bottom};
+        else row = {kNaN, kNaN, kNaN};
+        break;
+      }
     }
     rows.push_back(row);
   }

@@ -2,8 +2,10 @@
 // Probes written as CSV time series (probes/<name>.csv): pressure at a point (Shepard average of the
 // fluid, or of one phase), wall pressure on a sensor disc, water height at a gauge, pressure force
 // on a named solid or one of its faces, surge-front position, centroid and mean velocity of a
-// phase. Sampling is collective; every value is independent of the split (owner-computed or
-// exact). What each probe measures: docs/cases.md, "probes".
+// phase; interface of one fluid with the others. Sampling is collective; every value is independent
+// of the split (owner-computed or exact), except that a kernel-weighted probe within a support of
+// a slab face sums ghosts at the step's predicted positions (positions are not refreshed:
+// docs/cases.md, "probes"). What each probe measures: docs/cases.md, "probes".
 // The same code samples a run's saved snapshots and checkpoints afterwards (spate post).
 //
 // CSV format (docs/cases.md, scripts parse it): a header line `time[s],step,<column>[<unit>],...`,
@@ -15,6 +17,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../case/case.hpp"
@@ -84,6 +87,13 @@ Vec3d followed_position(const ProbeSpec& gauge, const Case& c, const MotionSet& 
 // Collective: the centroid (dim coordinates) and mean velocity (dim components) of the particles of
 // fluid `phase` on all slabs (equal masses within a phase); NaN when it has none.
 std::vector<double> sample_centroid(SlabWorker& w, int phase);
+// Interface probe: where the volume fraction of fluid `phase` among all fluids (Shepard weights)
+// crosses 1/2, on vertical lines every dp/2 across the tank (every dp along both horizontal axes in
+// 3D), sampled every dp/4 up each line where fluid is (weight sum >= 1/2) and placed by linear
+// interpolation between the two samples around a crossing, so that it resolves an interface
+// displaced by a fraction of dp. The lowest and highest crossing on this slab's lines
+// ({+inf, -inf} when none).
+std::pair<double, double> local_interface_extent(SlabWorker& w, const Case& c, int phase);
 // Furthest particle of fluid `phase` (-1: any fluid) along `axis` whose vertical coordinate is at
 // least `lowest`; -infinity when there is none on this slab.
 double local_front(SlabWorker& w, int axis, double lowest = -std::numeric_limits<double>::infinity(), int phase = -1);

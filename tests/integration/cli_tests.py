@@ -10,12 +10,14 @@ must still not exist afterwards.
 """
 import argparse
 import json
+import math
 import os
 import platform
 import re
 import shutil
 import subprocess
 import sys
+import tempfile
 import time
 
 TESTS = {}
@@ -397,6 +399,28 @@ def compare_split_independent(env):
         paths.append(final_checkpoint(env, out, 10))
     p = env.run("compare", *paths)
     check(p.returncode == 0, "1 and 2 devices must give bit-identical results")
+
+
+@test
+def growth_fits_a_probe_and_refuses_bad_input(env):
+    # spate growth: a growing and a decaying mode, 0.004 e^(1.2 t) + 0.0035 e^(-1.2 t), written as an
+    # interface probe's CSV, fitted back (docs/cli.md); a missing column or file is bad input.
+    folder = tempfile.mkdtemp()  # outside the working folder, which bad input must leave untouched
+    csv = os.path.join(folder, "amplitude.csv")
+    with open(csv, "w") as f:
+        f.write("time[s],step,amplitude[m],top[m],bottom[m]\n")
+        for k in range(80):
+            t = 0.02 * k
+            a = 0.004 * math.exp(1.2 * t) + 0.0035 * math.exp(-1.2 * t)
+            f.write(f"{t},{k},{a!r},{0.5 + a!r},{0.5 - a!r}\n")
+    p = env.run("growth", csv, "--until", "0.03", "--json")
+    check(p.returncode == 0, f"exit {p.returncode}")
+    fit = json.loads(p.stdout)
+    check(abs(fit["rate"] - 1.2) < 1e-5, f"rate {fit['rate']}, expected 1.2")
+    check(fit["to"] < 1.6, f"the fit ran past the amplitude limit: to {fit['to']}")
+    expect_bad_input(env, [csv, "--column", "height"], "no column 'height'", "columns: amplitude, top, bottom", command="growth")
+    expect_bad_input(env, [os.path.join(folder, "missing.csv")], "missing.csv", "cannot be read", command="growth")
+    shutil.rmtree(folder)
 
 
 @test

@@ -223,12 +223,17 @@ TEST(Validation, LobovskyImpactPressures) {
                 {{"p1", "lobovsky_2014_p1.csv", p1}, {"p3", "lobovsky_2014_p3.csv", p3}, {"p4", "lobovsky_2014_p4.csv", p4}}, 1.0);
 }
 
-// Buchner's sensor at 0.2 H: peak -4%, plateau -8%, but the arrival +69 ms late, as at Lobovsky's
-// p4; Buchner's records come with no level gauges to check their clock by.
+// Buchner's sensor where the experiment had it, centred at 160 mm (0.267 H), 90 mm across
+// (docs/studies/buchner-sensor-height.md): the pressure climbs over 0.7 tau where the record jumps,
+// so the arrival is +159 ms late, the first peak -27% and the plateau -17% (at the 0.2 H of some
+// codes the sensor read +69 ms, -4% and -8%). The late run-up up the end wall is issue 33's;
+// Buchner's records come with no level gauges to check their clock by.
 TEST(Validation, BuchnerImpactPressure) {
   Tolerance p1;
-  p1.arrival_s = 0.085;  // +69 ms
-  check_impacts("dam_break_buchner_2d.yaml", 0.6, {{"p1", "buchner_2002_pressure.csv", p1}}, 1.25);
+  p1.arrival_s = 0.17;  // +159 ms
+  p1.peak = 0.30;       // -27%
+  p1.plateau = 0.20;    // -17%
+  check_impacts("dam_break_buchner_2d.yaml", 0.6, {{"p1", "buchner_2002_pressure.csv", p1}}, 1.35);
 }
 
 // Lobovsky et al. (2014, Fig. 16, H = 300 mm): the water-level gauges H2-H4, where they stand [m]

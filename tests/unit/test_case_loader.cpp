@@ -257,6 +257,18 @@ TEST(CaseLoader, SeveralFluidsAndTheBlocksThatNameThem) {
   EXPECT_TRUE(P.materials.multiphase());
   EXPECT_EQ(P.materials.reference, 0) << "the stiffest fluid (water) gives the walls their density";
   EXPECT_FLOAT_EQ(P.materials.of(1).rho0, 800.0f);
+  EXPECT_FALSE(c.fluid_blocks[1].wave_displaces) << "a wavy block is cut from the lattice by default";
+  EXPECT_FLOAT_EQ(P.pressure_difference, 0.0f) << "eq. 7's symmetric pressure gradient by default";
+}
+
+// Issue 35: the difference form of the pressure gradient and a wave started by its own mode.
+TEST(CaseLoader, PressureGradientAndDisplacedWaveAreRead) {
+  const Case c = parse_case(kMinimal2D, "case.yaml",
+                            {"fluids=[{name: water}, {name: oil, density: 800}]", "momentum.pressure_gradient=difference",
+                             "fluid_blocks=[{min: [0, 0], max: [0.2, 0.06], top_wave: {amplitude: 0.01, wavelength: 0.2, start: displace}}]"});
+  EXPECT_TRUE(c.pressure_difference);
+  EXPECT_FLOAT_EQ(physics_params(c).pressure_difference, 1.0f);
+  EXPECT_TRUE(c.fluid_blocks[0].wave_displaces);
 }
 
 TEST(CaseLoader, LoadCaseReadsShippedCases) {
@@ -390,6 +402,17 @@ TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
        {"surface_tension[0].coefficient", ">= 0"}},
       {"negative Riemann limiter", {"momentum.riemann_limiter=-1"}, {"'momentum.riemann_limiter'", ">= 0"}},
       {"tension not a boolean", {"fluid.tension=maybe"}, {"'fluid.tension'"}},
+      {"unknown pressure gradient", {"momentum.pressure_gradient=upwind"}, {"'momentum.pressure_gradient'", "symmetric", "difference"}},
+      {"difference pressure gradient with one fluid", {"momentum.pressure_gradient=difference"},
+       {"'momentum.pressure_gradient'", "several fluids"}},
+      {"interface probe with one fluid", {"probes=[{name: a, type: interface, phase: water}]"}, {"probes[0].type", "two fluids"}},
+      {"interface probe without a phase", {"fluids=[{name: a}, {name: b}]", "probes=[{name: a, type: interface}]"},
+       {"probes[0].phase", "required"}},
+      {"unknown wave start", {"fluid_blocks=[{min: [0, 0], max: [0.2, 0.06], top_wave: {amplitude: 0.01, wavelength: 0.2, start: bend}}]"},
+       {"top_wave.start", "'cut' or 'displace'"}},
+      {"displaced wave beyond the linear range",
+       {"fluid_blocks=[{min: [0, 0], max: [0.2, 0.06], top_wave: {amplitude: 0.02, wavelength: 0.2, start: displace}}]"},
+       {"top_wave.amplitude", "0.05 wavelengths"}},
   };
   for (const BadCase& b : cases) {
     const std::string message = error_of(kMinimal2D, b.overrides);

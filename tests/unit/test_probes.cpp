@@ -7,6 +7,7 @@
 #include <limits>
 #include <thread>
 
+#include "../source_dir.hpp"
 #include "case/case.hpp"
 #include "case/generator.hpp"
 #include "comm/in_process_transport.hpp"
@@ -208,6 +209,30 @@ TEST(SensorPoints, CoverTheDiscEvenly) {
   EXPECT_NEAR(centre[2], 0.02, 1e-12);
   s.diameter = 0;
   EXPECT_EQ(sensor_points(s, 3, 0.01).size(), 1u);
+}
+
+// The interface probe (issue 35) on the linear Rayleigh-Taylor start: the light fluid below
+// y = 0.5 - a0 sin(2 pi x), a0 = 0.0075, less than half of dp = 0.02, placed by the mode's
+// displacement (top_wave start: displace). The probe finds the interface to a fraction of dp:
+// half its extent is a0 (the rows next to the face move by a0 e^{-k dp/2} = 0.94 a0, and the
+// fraction's crossing lies between them and the face), its middle at 0.5. Cut from the lattice
+// instead (start: cut), the wave vanishes: every row lies more than a0 from y = 0.5.
+TEST(InterfaceProbe, ResolvesAWaveSmallerThanTheSpacing) {
+  const std::string file = test::source_dir() + "/cases/rayleigh_taylor_linear_2d.yaml";
+  for (const bool displaced : {true, false}) {
+    const std::string cut = "fluid_blocks=[{fluid: light, min: [0, 0], max: [1, 0.5], top_wave: {amplitude: -0.0075, wavelength: 1}}, "
+                            "{fluid: heavy, min: [0, 0], max: [1, 1]}]";
+    const Case c = load_case(file, {displaced ? "output.interval=0" : cut});
+    const ParticleStore particles = generate_particles(c);
+    Slab s(c, particles);
+    const auto [bottom, top] = local_interface_extent(s.w, c, 1);
+    if (displaced) {
+      EXPECT_NEAR(0.5 * (top - bottom), 0.0075, 0.0075 * 0.1);
+      EXPECT_NEAR(0.5 * (top + bottom), 0.5, 0.001);
+    } else {
+      EXPECT_LT(0.5 * (top - bottom), 0.001);
+    }
+  }
 }
 
 }  // namespace

@@ -23,10 +23,10 @@ struct Lattice2D {
       for (int j = -12; j <= top; ++j) out.push_back(ParticleState<2>{{i * P.dp, j * P.dp}, {0, 0}, M.rho0, 0.0f, 0, {0, 0}, {0, 0}});
     return out;
   }
-  Vec<2> shift_of(const Vec<2>& xi, const std::vector<ParticleState<2>>& all) const {
+  Vec<2> shift_of(const Vec<2>& xi, const std::vector<ParticleState<2>>& all, std::uint8_t material_i = 0) const {
     ShiftingSums<2> s;
     const float w_dp = WendlandC2::value(P.dp * P.inv_h, P.kernel_norm);
-    for (const auto& j : all) accumulate_shifting_pair<WendlandC2, 2>(P, M, w_dp, xi, j, s);
+    for (const auto& j : all) accumulate_shifting_pair<WendlandC2, 2>(P, M, material_i, w_dp, xi, j, s);
     return shifting_displacement<2>(P, M, s, dt);
   }
 };
@@ -60,6 +60,28 @@ TEST(Shifting, AFreeSurfaceParticleIsNotPushedOutOfTheFluid) {
   // Deep inside, nothing to correct.
   const Vec<2> deep = L.shift_of(Vec<2>{0, -5 * L.P.dp}, all);
   EXPECT_LT(std::hypot(deep[0], deep[1]), 1e-6f * L.P.dp);
+}
+
+// Several fluids: fluid 1 above y = 0.5 dp, fluid 0 below. A particle of fluid 0 on the interface
+// row, displaced diagonally, is shifted along the interface (its normal leaning with the offset),
+// while the same particle with every neighbour of its own fluid is pushed back diagonally.
+TEST(Shifting, AtAnInterfaceParticlesSlideAlongIt) {
+  Lattice2D L;
+  L.P.materials.fluids = 2;
+  L.P.materials.fluid[1] = L.M;
+  auto all = L.sites(6);
+  const Vec<2> xi{0.3f * L.P.dp, -0.2f * L.P.dp};
+  for (auto& p : all)
+    if (p.x[0] == 0.0f && p.x[1] == 0.0f) p.x = xi;
+  const Vec<2> one_fluid = L.shift_of(xi, all);
+  EXPECT_LT(one_fluid[0], 0.0f);
+  EXPECT_GT(std::fabs(one_fluid[1]), 1e-3f * std::fabs(one_fluid[0])) << "the lone fluid's shift has a vertical part";
+  for (auto& p : all) p.material = p.x[1] > 0.5f * L.P.dp ? 1 : 0;
+  const Vec<2> two_fluids = L.shift_of(xi, all, 0);
+  EXPECT_LT(two_fluids[0], 0.0f) << "back towards its site along the interface";
+  // The interface normal leans a little with the particle's offset: its vertical part is what
+  // remains, a tenth of the lone fluid's at most.
+  EXPECT_LT(std::fabs(two_fluids[1]), 0.1f * std::fabs(one_fluid[1])) << "next to nothing across the (horizontal) interface";
 }
 
 TEST(Shifting, ASplashedParticleIsLeftAlone) {
