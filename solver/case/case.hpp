@@ -158,6 +158,11 @@ struct Case {
   MomentumFlux flux = MomentumFlux::Central;
   double riemann_limiter = 3.0;
   bool pressure_difference = false;  // momentum.pressure_gradient: difference (several fluids)
+  // Relaxation before t = 0 (sim/relax.hpp), key `relax`: iterations (0: none), the random offset
+  // of the start lattice [dp] and the rate kappa of dr = -kappa h^2 sum (...) grad W V per iteration.
+  int relax_steps = 0;
+  double relax_perturbation = 0.2;
+  double relax_rate = 0.1;
   // Particle shifting (delta-plus-SPH; physics/shifting.hpp), key `shifting`.
   bool shifting = false;
   double shifting_coefficient = 1.0;

@@ -827,6 +827,17 @@ Case read(Section& root, const std::string& file) {
     m.finish();
   }
   {
+    auto r = root.optional_child("relax");
+    c.relax_steps = r.integer("steps", 0);
+    if (!(c.relax_steps >= 0 && c.relax_steps <= 100000)) r.fail(r.raw("steps"), "steps", "must be between 0 and 100000 (0: no relaxation)");
+    c.relax_perturbation = r.number("perturbation", 0.2);
+    if (!(c.relax_perturbation >= 0 && c.relax_perturbation <= 0.5))
+      r.fail(r.raw("perturbation"), "perturbation", "must be between 0 and 0.5 (a fraction of dp)");
+    c.relax_rate = r.number("rate", 0.1);
+    if (!(c.relax_rate > 0 && c.relax_rate <= 1)) r.fail(r.raw("rate"), "rate", "must be in (0, 1]");
+    r.finish();
+  }
+  {
     auto s = root.optional_child("shifting");
     c.shifting = s.boolean("enabled", false);
     c.shifting_coefficient = s.number("coefficient", 1.0);

@@ -39,6 +39,7 @@ struct ShiftingParams {
   bool enabled = false;
   float coefficient = 1.0f;  // C of shifting.hpp (Sun et al. 2017: 1)
   float mach = 0.1f;         // Ma = U / c0 of the flow's reference speed U
+  float tensile = 0.2f;      // R of the tensile-instability term (Sun et al. 2017: 0.2; relaxation: 0)
 };
 
 struct PhysicsParams {

@@ -9,6 +9,8 @@
 // usual c0 = 10 U), so dr_i = -4 C h U dt sum_j (...). The R term (the tensile-instability
 // correction) repels particles closer than dp. The displacement is capped at `kMaxShiftFraction` dp
 // per step, a safeguard only: in the bulk dr is a small fraction of that.
+// R is P.shifting.tensile (0.2; the relaxation before t = 0, sim/relax.hpp, takes 0, so that it
+// settles where sum_j V_j grad W_ij vanishes: where eq. 7's pressure term exerts no force).
 // Free surface (Sun et al. 2017, eq. 14, with the divergence of position of Lind et al. 2012,
 // J. Comput. Phys. 231:1499, in place of the eigenvalue of the renormalisation matrix):
 //   s_i = -(1/Dim) sum_j V_j r_ij . grad_i W_ij  is 1 inside the fluid (exactly, with the lattice
@@ -40,7 +42,6 @@
 
 namespace spate {
 
-constexpr float kShiftingR = 0.2f;           // Sun et al. 2017: R = 0.2, n = 4
 constexpr float kMaxShiftFraction = 0.25f;   // cap of |dr| per step, in dp
 constexpr float kSurfaceSplash = 0.4f;       // s_i below: no shifting
 constexpr float kSurfaceVicinity = 0.975f;    // s_i below: the normal component is removed
@@ -71,7 +72,7 @@ SPATE_HD void accumulate_shifting_pair(const PhysicsParams& P, const FluidMateri
   const float ratio = Kernel::value(q, P.kernel_norm) / w_dp;
   const float ratio2 = ratio * ratio;
   const float weight = volume * F;
-  const float tensile = 1.0f + kShiftingR * ratio2 * ratio2;
+  const float tensile = 1.0f + P.shifting.tensile * ratio2 * ratio2;
   const float other = P.is_fluid(j.material) && j.material != material_i ? weight : 0.0f;
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
     s.concentration[k] += tensile * weight * r[k];

@@ -35,6 +35,7 @@
 #include "../io/vtk_snapshot.hpp"
 #include "../particles/particle_pack.hpp"
 #include "probes.hpp"
+#include "relax.hpp"
 #include "slab_worker.hpp"
 
 namespace spate {
@@ -682,7 +683,7 @@ RunResult Simulation::run() {
     s.restarted = true;
     s.steering_history = s.start.steering_history;  // checked by read_checkpoint
   } else {
-    s.initial = generate_particles(case_);
+    s.initial = relax_particles(case_, generate_particles(case_));  // as generated unless `relax:` asks
   }
   s.result.particles = expected;
   if (slabs > 1 && case_.balanced_start)

@@ -150,6 +150,19 @@ void SlabWorker::prepare(bool rates) {
   }
 }
 
+void SlabWorker::relax_step(float dt) {
+  rebuild();
+  kernels_->shifting(particles_, grid_, params_, dt);
+  sync_host();
+  for (std::size_t i = 0; i < particles_.owned(); ++i) {
+    if (!params_.is_fluid(particles_.material[i])) continue;
+    for (int a = 0; a < lattice_.dim; ++a) {
+      particles_.pos[a][i] += particles_.shift[a][i];
+      wrap_periodic(lattice_, particles_.pos[a][i], a);
+    }
+  }
+}
+
 void SlabWorker::refresh_ghosts() {
   refresh_halo();
   host_stale_ = true;  // the arrays' ghosts changed; a device backend's host mirror follows on demand

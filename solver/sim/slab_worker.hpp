@@ -49,6 +49,9 @@ class SlabWorker {
   // One full step of size dt. Fluid that left through an open side (set_open_sides) is removed
   // first (removed_ids()); returns a fault if a particle left the domain otherwise (before rates).
   std::optional<ParticleFault> step(float dt);
+  // One iteration of the relaxation before t = 0 (sim/relax.hpp): sort and halos, then every owned
+  // fluid particle moves by its particle-shifting displacement for `dt` (params' shifting scale).
+  void relax_step(float dt);
   // Where fluid may leave the domain for good (default: nowhere; every exit is a fault).
   void set_open_sides(const OpenSides& open) { open_ = open; }
   // The ids this slab removed in the last step, increasing.

@@ -269,6 +269,11 @@ TEST(CaseLoader, PressureGradientAndDisplacedWaveAreRead) {
   EXPECT_TRUE(c.pressure_difference);
   EXPECT_FLOAT_EQ(physics_params(c).pressure_difference, 1.0f);
   EXPECT_TRUE(c.fluid_blocks[0].wave_displaces);
+  EXPECT_EQ(c.relax_steps, 0) << "no relaxation by default";
+  const Case r = parse_case(kMinimal2D, "case.yaml", {"relax={steps: 50, perturbation: 0.1, rate: 0.2}"});
+  EXPECT_EQ(r.relax_steps, 50);
+  EXPECT_DOUBLE_EQ(r.relax_perturbation, 0.1);
+  EXPECT_DOUBLE_EQ(r.relax_rate, 0.2);
 }
 
 TEST(CaseLoader, LoadCaseReadsShippedCases) {
@@ -402,6 +407,9 @@ TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
        {"surface_tension[0].coefficient", ">= 0"}},
       {"negative Riemann limiter", {"momentum.riemann_limiter=-1"}, {"'momentum.riemann_limiter'", ">= 0"}},
       {"tension not a boolean", {"fluid.tension=maybe"}, {"'fluid.tension'"}},
+      {"negative relaxation", {"relax.steps=-1"}, {"'relax.steps'", "between 0 and 100000"}},
+      {"relaxation perturbation too large", {"relax.perturbation=0.8"}, {"'relax.perturbation'", "between 0 and 0.5"}},
+      {"relaxation rate zero", {"relax.rate=0"}, {"'relax.rate'", "(0, 1]"}},
       {"unknown pressure gradient", {"momentum.pressure_gradient=upwind"}, {"'momentum.pressure_gradient'", "symmetric", "difference"}},
       {"difference pressure gradient with one fluid", {"momentum.pressure_gradient=difference"},
        {"'momentum.pressure_gradient'", "several fluids"}},
