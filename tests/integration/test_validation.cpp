@@ -421,5 +421,37 @@ TEST(Validation, BubbleRiseAgainstHysing) {
   EXPECT_GT(circ, 0.85) << "circularity at t = 3";
 }
 
+// The demo's load (issue 33): the pressure force of the surge on the column of
+// cases/dam_break_column_3d.yaml at the demo's dp = 2 cm. The water takes no tension there
+// (`fluid.tension: false`), so the acoustic rebound off the column face cannot pull on it: with
+// tension the force swung to -13% of its first peak (-19% at dp = 1.4 cm). No experiment records
+// this load; the first peak and the 0.35-0.45 s mean are held to what dp = 1.4 cm gives
+// (92 N and 34 N against 120 N and 32 N here; docs/validation.md, "Loads on the column").
+TEST(Validation, ColumnLoadHasNoPullAfterTheImpact) {
+  const Case c = load_case(test::case_path("dam_break_column_3d.yaml"),
+                           {"dp=0.02", "wet_bed=0", "time.dt=auto", "time.end=0.45", "output.interval=0"});
+  const auto out = test::scratch("column-load");
+  ASSERT_EQ(test::run_case(c, out).exit_code, 0);
+  const auto fx = test::read_probe(out / "probes" / "column_force.csv", 2);
+  std::size_t onset = 0;
+  while (onset < fx.size() && fx[onset].second < 5.0) ++onset;
+  ASSERT_LT(onset, fx.size()) << "the surge never reached the column";
+  EXPECT_NEAR(fx[onset].first, 0.26, 0.02) << "arrival at the column";
+  double peak = 0.0, peak_t = 0.0;
+  for (std::size_t k = onset; k < fx.size() && fx[k].first <= fx[onset].first + 0.03; ++k)
+    if (fx[k].second > peak) peak = fx[k].second, peak_t = fx[k].first;
+  double lowest = peak, mean = 0.0;
+  int n = 0;
+  for (const auto& [t, f] : fx) {
+    if (t >= peak_t && t <= peak_t + 0.15) lowest = std::min(lowest, f);
+    if (t >= 0.35 && t <= 0.45) mean += f, ++n;
+  }
+  ASSERT_GT(n, 0);
+  mean /= n;
+  EXPECT_GT(lowest, -0.05 * peak) << "the force pulls on the column after its first peak " << peak << " N";
+  EXPECT_NEAR(peak, 100.0, 35.0) << "first peak";
+  EXPECT_NEAR(mean, 33.0, 6.0) << "mean load 0.35-0.45 s";
+}
+
 }  // namespace
 }  // namespace spate
