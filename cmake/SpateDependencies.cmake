@@ -78,6 +78,7 @@ set(SPATE_WITH_CATALYST OFF)
 if(SPATE_ENABLE_CATALYST)
   include(cmake/SpateParaView.cmake)
 endif()
+include(cmake/SpateMesh.cmake)
 
 if(SPATE_BUILD_TESTS)
   find_package(GTest REQUIRED)

@@ -370,6 +370,15 @@ int run_command(const RunArgs& a) {
   }
 }
 
+// Every shaped solid and fluid block of the case, named as its key ("solids[0] 'column'").
+template <class Visit>
+void for_each_shape(const Case& c, Visit&& visit) {
+  for (std::size_t k = 0; k < c.solids.size(); ++k)
+    if (c.solids[k].shape) visit(fmt::format("solids[{}] '{}'", k, c.solids[k].name), *c.solids[k].shape);
+  for (std::size_t k = 0; k < c.fluid_blocks.size(); ++k)
+    if (c.fluid_blocks[k].shape) visit(fmt::format("fluid_blocks[{}]", k), *c.fluid_blocks[k].shape);
+}
+
 int info_command(const InfoArgs& a) {
   Case c = load(a.case_file, a.overrides);
   if (a.backend != "cpu" && a.backend != "cuda") throw BadInput(fmt::format("--backend {}: expected 'cpu' or 'cuda'", a.backend));
@@ -419,6 +428,16 @@ int info_command(const InfoArgs& a) {
       materials.push_back(e);
     }
     j["materials"] = materials;
+    nlohmann::ordered_json shapes = nlohmann::ordered_json::array();
+    for_each_shape(c, [&](const std::string& owner, const Shape& s) {
+      shapes.push_back({{"owner", owner},
+                        {"description", s.description},
+                        {"triangles", s.triangles},
+                        {"bounds_min", std::vector<double>(s.lo.begin(), s.lo.begin() + c.dim)},
+                        {"bounds_max", std::vector<double>(s.hi.begin(), s.hi.begin() + c.dim)},
+                        {c.dim == 2 ? "perimeter" : "surface_area", s.area}});
+    });
+    j["shapes"] = shapes;
     nlohmann::ordered_json motions = nlohmann::ordered_json::array();
     for (std::size_t k = 0; k < c.motions.size(); ++k) {
       const MotionSpec& ms = c.motions[k];
@@ -483,6 +502,10 @@ int info_command(const InfoArgs& a) {
                     motion > 0 ? fmt::format(", moving (motion {})", motion - 1).c_str() : "");
       }
     }
+    for_each_shape(c, [&](const std::string& owner, const Shape& s) {
+      std::printf("shape           %s: %s; %s %g m%s\n", owner.c_str(), s.description.c_str(), c.dim == 2 ? "perimeter" : "surface",
+                  s.area, c.dim == 2 ? "" : "2");
+    });
     if (P.heat.on) {
       // Heat transfer: each material's thermal properties, the tank faces' conditions, the limit.
       std::printf("heat transfer   on: conduction limit dt <= %g s; buoyancy gravity (%g, %g, %g) m/s2\n",

@@ -9,6 +9,7 @@
 
 #include "../physics/params.hpp"
 #include "motion.hpp"
+#include "shape.hpp"
 
 namespace spate {
 
@@ -70,14 +71,20 @@ struct FluidBlock : Box {
   // which places the interface to a fraction of dp (generator.cpp, displace_by_waves).
   bool wave_displaces = false;
   std::optional<TemperatureField> temperature{};  // heat transfer: the block's (default: heat.initial_temperature)
+  // A region of any shape (mesh, polygon, polyhedron, cylinder; shape.hpp): the sites inside it,
+  // less those under or within dp/2 of a shaped solid; min and max its bounding box.
+  ShapePtr shape{};
 };
 
 struct SolidSpec {
   std::string name;
-  Box box;
+  Box box;  // the solid, or the bounding box of its shape
   bool hollow = true;  // only `wall_layers` layers under its surface are particles
   int motion = -1;     // index into Case::motions, or -1: static
   ThermalSpec thermal{};
+  // A solid of any shape (mesh, cylinder, sphere/disc, polygon, polyhedron; shape.hpp), null for
+  // the box: the lattice sites under its surface (generator.cpp).
+  ShapePtr shape{};
 };
 
 enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid, Temperature, HeatFlux, Interface };

@@ -14,6 +14,8 @@
 #include <sstream>
 #include <tuple>
 
+#include <fmt/format.h>
+
 #include "case.hpp"
 #include "../io/input_file.hpp"
 
@@ -276,6 +278,120 @@ Box read_box(Section& s, int dim) {
   return b;
 }
 
+// A list of points of `width` numbers each (polygon and polyhedron vertices).
+template <std::size_t N>
+std::vector<std::array<double, N>> read_points(Section& s, const std::string& key) {
+  const YAML::Node n = s.raw(key);
+  const std::string what = "expected a list of points, each a list of " + std::to_string(N) + " numbers";
+  if (!n.IsSequence()) s.fail(n, key, what);
+  std::vector<std::array<double, N>> out(n.size());
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    if (!n[i].IsSequence() || n[i].size() != N) s.fail(n[i], key, what);
+    for (std::size_t k = 0; k < N; ++k) out[i][k] = s.to_number(n[i][k], key);
+  }
+  return out;
+}
+
+// The shape of a solid or a fluid block beyond a box (shape.hpp; docs/cases.md "Shapes and
+// meshes"), or null when it has none: `mesh` (with scale, rotate, translate), `cylinder`,
+// `sphere` (3D), `disc` (2D), `polygon` (2D), `polyhedron` (3D). A mesh path is taken relative to
+// the case file's folder and stored absolute in the case the run keeps (checkpoints, restarts).
+ShapePtr read_shape(Section& s, const Case& c) {
+  const int d = c.dim;
+  const char* kinds[] = {"mesh", "cylinder", "sphere", "disc", "polygon", "polyhedron"};
+  const char* given = nullptr;
+  for (const char* k : kinds)
+    if (s.has(k)) {
+      if (given) s.fail(s.raw(k), k, std::string("give one shape: '") + given + "' or '" + k + "'");
+      given = k;
+    }
+  for (const char* k : {"scale", "rotate", "translate"})
+    if (s.has(k) && (!given || std::string(given) != "mesh")) s.fail(s.raw(k), k, "places a mesh: it needs 'mesh'");
+  if (!given) return nullptr;
+  const std::string key = given;
+  for (const char* k : {"min", "max", "centre", "radius"})
+    if (s.has(k)) s.fail(s.raw(k), k, "a shape ('" + key + "') gives the extent: no '" + k + "' beside it");
+  auto want_dim = [&](int dim) {
+    if (d != dim) s.fail(s.raw(key), key, "'" + key + "' is a shape of " + std::to_string(dim) + "D cases (this case is " + std::to_string(d) + "D)");
+  };
+  try {
+    if (key == "mesh") {
+      const std::string name = s.text("mesh");
+      std::filesystem::path path(name);
+      if (!path.is_absolute()) path = std::filesystem::path(c.file).parent_path() / path;
+      path = path.lexically_normal();
+      if (!path.is_absolute()) path = std::filesystem::absolute(path).lexically_normal();
+      MeshPlacement at;
+      if (s.has("scale")) {
+        if (s.raw("scale").IsScalar()) at.scale.fill(s.number("scale"));
+        else at.scale = s.vector("scale", 3);
+        for (double v : at.scale)
+          if (!(v != 0)) s.fail(s.raw("scale"), "scale", "must not be 0");
+      }
+      if (s.has("rotate")) at.rotate = s.vector("rotate", 3);
+      if (s.has("translate")) at.translate = s.vector("translate", 3);
+      ShapePtr shape = load_mesh(path.string(), at, d);
+      YAML::Node node = s.node();  // a handle on the same YAML map
+      node["mesh"] = path.string();  // the stored case names the file wherever it is read
+      return shape;
+    }
+    if (key == "polygon") {
+      want_dim(2);
+      return make_polygon(read_points<2>(s, key));
+    }
+    if (key == "polyhedron") {
+      want_dim(3);
+      return make_polyhedron(read_points<3>(s, key));
+    }
+    auto m = s.child(key);
+    if (!m) s.fail(s.raw(key), key, "expected a map of keys");
+    const Vec3d centre = m->vector("centre", d);
+    const double radius = m->number("radius");
+    ShapePtr shape;
+    if (key == "sphere") want_dim(3);
+    if (key == "disc") want_dim(2);
+    if (key == "cylinder" && d == 3) {
+      Vec3d axis{0, 0, 1};
+      const YAML::Node a = m->raw("axis");
+      if (a.IsScalar()) {
+        const int k = a.Scalar() == "x" ? 0 : a.Scalar() == "y" ? 1 : a.Scalar() == "z" ? 2 : -1;
+        if (k < 0) m->fail(a, "axis", "expected x, y, z or a vector");
+        axis = {0, 0, 0};
+        axis[k] = 1;
+      } else if (a.IsDefined() && !a.IsNull()) {
+        axis = m->vector("axis", 3);
+      }
+      shape = make_cylinder(centre, axis, radius, m->number("length"));
+    } else {
+      shape = make_ball(centre, radius, d);  // a 2D cylinder is its disc
+    }
+    m->finish();
+    return shape;
+  } catch (const ShapeError& e) {
+    s.fail(s.raw(key), key, e.what());
+  }
+}
+
+// A shaped solid or block outside the tank: the message says how far, and suggests a unit
+// mistake when the shape is a hundred times the tank or more.
+void check_shape_in_tank(Section& s, const ShapePtr& shape, const Case& c, const Vec3d& tank_hi, const std::string& what) {
+  const int d = c.dim;
+  bool in = true;
+  double ratio = 0.0;
+  for (int k = 0; k < d; ++k) {
+    in = in && shape->lo[k] >= c.tank_origin[k] - 1e-9 && shape->hi[k] <= tank_hi[k] + 1e-9;
+    ratio = std::max(ratio, (shape->hi[k] - shape->lo[k]) / c.tank_size[k]);
+  }
+  if (in) return;
+  const char* key = s.has("mesh") ? "mesh" : nullptr;
+  for (const char* k : {"cylinder", "sphere", "disc", "polygon", "polyhedron"})
+    if (!key && s.has(k)) key = k;
+  std::string m = fmt::format("{} lies (partly) outside the tank: its bounding box is [{:g}, {:g}, {:g}] to [{:g}, {:g}, {:g}]", what,
+                              shape->lo[0], shape->lo[1], shape->lo[2], shape->hi[0], shape->hi[1], shape->hi[2]);
+  if (ratio >= 100) m += fmt::format(" ({:.0f} times the tank: is the mesh in millimetres? 'scale: 0.001' converts it)", ratio);
+  s.fail(s.raw(key), key, m);
+}
+
 bool inside(const Box& inner, const Vec3d& lo, const Vec3d& hi, int dim, double tol) {
   for (int k = 0; k < dim; ++k)
     if (inner.min[k] < lo[k] - tol || inner.max[k] > hi[k] + tol) return false;
@@ -436,7 +552,10 @@ int fluid_index(Section& s, const std::string& key, const Case& c) {
 FluidBlock read_fluid_block(Section& f, const Case& c) {
   const int d = c.dim;
   FluidBlock b;
-  if (f.has("radius") || f.has("centre")) {
+  if ((b.shape = read_shape(f, c))) {
+    if (f.has("top_wave")) f.fail(f.raw("top_wave"), "top_wave", "a shaped block has no top wave");
+    for (int k = 0; k < 3; ++k) b.min[k] = b.shape->lo[k], b.max[k] = b.shape->hi[k];
+  } else if (f.has("radius") || f.has("centre")) {
     for (const char* key : {"min", "max", "top_wave"})
       if (f.has(key)) f.fail(f.raw(key), key, "a disc/sphere block has 'centre' and 'radius' only");
     b.centre = f.vector("centre", d);
@@ -622,11 +741,21 @@ void read_wall_sensor(Section& p, const Case& c, ProbeSpec& probe) {
     consider(c.tank_origin, tank_hi, a, c.tank_origin[a], 1.0);
     if (!(a == d - 1 && c.open_top)) consider(c.tank_origin, tank_hi, a, tank_hi[a], -1.0);
   }
-  for (auto& s : c.solids)
+  for (auto& s : c.solids) {
+    if (s.shape) {  // on its surface: the normal is the shape's, the sensor moved onto the surface
+      double n[3] = {0, 0, 0};
+      const double dist = s.shape->distance(probe.position.data(), n);
+      if (std::fabs(dist) > tol) continue;
+      Vec3d normal{0, 0, 0}, at = probe.position;
+      for (int k = 0; k < d; ++k) normal[k] = n[k], at[k] -= dist * n[k];
+      found.emplace_back(normal, at);
+      continue;
+    }
     for (int a = 0; a < d; ++a) {
       consider(s.box.min, s.box.max, a, s.box.min[a], -1.0);
       consider(s.box.min, s.box.max, a, s.box.max[a], 1.0);
     }
+  }
   if (found.empty())
     p.fail(p.raw("position"), "position",
            "a wall_pressure sensor must lie on a face of the tank interior or of a solid (within dp/2)");
@@ -666,8 +795,11 @@ bool on_moving_body(const Vec3d& x, const Case& c) {
     }
     return inside && on_face;
   };
-  for (const SolidSpec& s : c.solids)
-    if (s.motion >= 0 && on_box(s.box.min, s.box.max)) return true;
+  for (const SolidSpec& s : c.solids) {
+    if (s.motion < 0) continue;
+    double n[3];
+    if (s.shape ? std::fabs(s.shape->distance(x.data(), n)) <= 1e-6 : on_box(s.box.min, s.box.max)) return true;
+  }
   if (c.tank_motion < 0) return false;
   return on_box(c.tank_origin, particle_tank_max(c));
 }
@@ -950,6 +1082,7 @@ Case read(Section& root, const std::string& file) {
   for (auto& f : root.list("fluid_blocks")) {
     const FluidBlock b = read_fluid_block(f, c);
     f.finish();
+    if (b.shape) check_shape_in_tank(f, b.shape, c, tank_hi, "the fluid block");
     if (!inside(b, c.tank_origin, tank_hi, d, tol))
       f.fail(f.node(), b.radius > 0 ? "radius" : "max", "fluid block lies (partly) outside the tank");
     c.fluid_blocks.push_back(b);
@@ -969,7 +1102,13 @@ Case read(Section& root, const std::string& file) {
   for (auto& s : root.list("solids")) {
     SolidSpec spec;
     spec.name = s.text("name");
-    spec.box = read_box(s, d);
+    spec.shape = read_shape(s, c);
+    if (spec.shape) {
+      check_shape_in_tank(s, spec.shape, c, tank_hi, "solid '" + spec.name + "'");
+      for (int k = 0; k < 3; ++k) spec.box.min[k] = spec.shape->lo[k], spec.box.max[k] = spec.shape->hi[k];
+    } else {
+      spec.box = read_box(s, d);
+    }
     spec.hollow = s.boolean("hollow", true);
     if (auto t = thermal_section(s, c)) {
       spec.thermal = read_thermal(*t, c, /*wall=*/true, /*solid=*/true);
@@ -982,8 +1121,10 @@ Case read(Section& root, const std::string& file) {
     s.finish();
     if (!solid_names.insert(spec.name).second) s.fail(s.raw("name"), "name", "solid '" + spec.name + "' is defined twice");
     if (!inside(spec.box, c.tank_origin, tank_hi, d, tol)) s.fail(s.node(), "max", "solid lies (partly) outside the tank");
+    // A shaped solid or block: the fluid is the block less the solid (the generator leaves dp/2 clear).
     for (auto& b : c.fluid_blocks)
-      if (overlap(b, spec.box, d, tol)) s.fail(s.node(), "min", "solid '" + spec.name + "' overlaps a fluid block");
+      if (!spec.shape && !b.shape && overlap(b, spec.box, d, tol))
+        s.fail(s.node(), "min", "solid '" + spec.name + "' overlaps a fluid block");
     c.solids.push_back(spec);
   }
   if (c.solids.size() > 200) root.fail(root.raw("solids"), "solids", "at most 200 solids");
@@ -998,6 +1139,11 @@ Case read(Section& root, const std::string& file) {
     root.fail(root.raw("momentum"), "momentum.flux", "'riemann' assumes static walls; it cannot be combined with a motion (use 'central')");
   if (c.fluid_blocks.empty() && c.wet_bed <= 0) root.fail(root.node(), "fluid_blocks", "the case has no fluid (no fluid_blocks and no wet_bed)");
 
+  auto shaped_solid = [&](const std::string& name) {
+    for (const SolidSpec& s : c.solids)
+      if (s.name == name) return s.shape != nullptr;
+    return false;
+  };
   for (auto& p : root.list("probes")) {
     ProbeSpec probe;
     probe.name = p.text("name");
@@ -1043,6 +1189,7 @@ Case read(Section& root, const std::string& file) {
           if (probe.face < 0) p.fail(p.raw("face"), "face", "'" + face + "' is not a face of this " + std::to_string(d) + "D case (x-, x+, y-, ...)");
           if (probe.solid.empty())
             if (auto why = tank_wall_missing(c, probe.face)) p.fail(p.raw("face"), "face", *why);
+          if (shaped_solid(probe.solid)) p.fail(p.raw("face"), "face", "solid '" + probe.solid + "' is not a box: its heat flux is over its whole surface");
         }
         if (p.has("length") != p.has("temperature_difference"))
           p.fail(p.node(), p.has("length") ? "temperature_difference" : "length", "the Nusselt number needs both length and temperature_difference");
@@ -1069,6 +1216,7 @@ Case read(Section& root, const std::string& file) {
           if (probe.face < 0)
             p.fail(p.raw("face"), "face", "'" + face + "' is not a face of a " + std::to_string(d) + "D box (x-, x+, " +
                                               (d == 3 ? "y-, y+, z-, z+)" : "y-, y+)"));
+          if (shaped_solid(probe.solid)) p.fail(p.raw("face"), "face", "solid '" + probe.solid + "' is not a box: its force is the whole solid's");
         }
         break;
       case ProbeType::WallPressure:

@@ -31,7 +31,10 @@ double face_depth(const Box& b, const double x[3], int face);
 // Heat transfer: the starting temperature of a particle of material `kind` at x: its fluid block's
 // (the first of its fluid that holds x), the tank's or its solid's, else heat.initial_temperature.
 double initial_temperature(const Case& c, const MaterialTable& M, std::uint8_t kind, const double x[3]);
-// Counts without allocating, in closed form (spate info answers at once at any dp).
+// Whether a solid or fluid block has a shape other than a box (shape.hpp).
+bool has_shapes(const Case& c);
+// Counts without allocating: in closed form for boxes (spate info answers at once at any dp), by
+// visiting every site when a solid or fluid block has a shape.
 ParticleCounts count_particles(const Case& c);
 // All particles, ids 0..n-1 in generation order, all owned.
 ParticleStore generate_particles(const Case& c);

@@ -412,8 +412,10 @@ Bytes heat_flux_records(SlabWorker& w, const ProbeSpec& probe, const Case& c) {
 double heat_flux_area(const ProbeSpec& probe, const Case& c) {
   Vec3d size = c.tank_size;
   for (const SolidSpec& s : c.solids)
-    if (s.name == probe.solid)
+    if (s.name == probe.solid) {
+      if (s.shape) return s.shape->area;  // shapes take no face (the loader says so)
       for (int a = 0; a < 3; ++a) size[a] = s.box.max[a] - s.box.min[a];
+    }
   auto face_area = [&](int axis) {
     double a = 1.0;
     for (int k = 0; k < c.dim; ++k)

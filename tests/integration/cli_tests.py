@@ -141,6 +141,41 @@ def bad_yaml_syntax(env):
 
 
 @test
+def bad_meshes(env):
+    # A solid from a mesh that is missing, empty, open, inside out, inconsistently oriented, with a
+    # degenerate triangle, or in millimetres: exit 2, the file, the key and the reason, nothing written.
+    # (Skipped where spate was built without VTK: the case is then refused for that reason.)
+    meshes = os.path.join(env.shipped, "..", "tests", "data", "meshes")
+    probe = env.run("info", env.tiny, "--set", "solids=[{name: s, mesh: " + os.path.join(meshes, "empty.stl") + "}]")
+    if "reads no meshes" in probe.stderr:
+        print("  (built without mesh support: skipped)")
+        return
+    for name, reason in [("missing.stl", "no such mesh file"), ("empty.stl", "has no triangles"), ("open.stl", "is not closed"),
+                         ("inverted.stl", "inside out"), ("inconsistent.stl", "inconsistent normals"),
+                         ("degenerate.stl", "degenerate triangles"), ("cube_mm.stl", "in millimetres")]:
+        path = os.path.normpath(os.path.join(meshes, name))
+        setting = "solids=[{name: s, mesh: " + path + "}]"
+        for command in ("run", "info"):
+            expect_bad_input(env, [env.tiny, "--set", setting], path, "'solids[0].mesh'", reason, command=command)
+
+
+@test
+def info_reports_meshes(env):
+    p = env.run("info", os.path.join(env.shipped, "dam_break_wedge_2d.yaml"), "--json")
+    if p.returncode == 2 and "reads no meshes" in p.stderr:
+        print("  (built without mesh support: skipped)")
+        return
+    check(p.returncode == 0, f"exit {p.returncode}")
+    shapes = json.loads(p.stdout)["shapes"]
+    check(len(shapes) == 1 and shapes[0]["owner"] == "solids[0] 'ramp'" and shapes[0]["triangles"] == 12,
+          f"shapes: {shapes}")
+    check(abs(shapes[0]["bounds_max"][0] - 1.3) < 1e-6 and abs(shapes[0]["perimeter"] - (0.6 + 0.1 ** 0.5)) < 1e-6,
+          f"bounds or perimeter: {shapes[0]}")
+    p = env.run("info", os.path.join(env.shipped, "dam_break_wedge_2d.yaml"))
+    check(re.search(r"shape +solids\[0\] 'ramp': mesh '.*wedge.stl': 12 triangles", p.stdout), "no shape line in spate info")
+
+
+@test
 def bad_yaml_not_a_map(env):
     path = env.write_case("list.yaml", "- 1\n- 2\n")
     expect_bad_input(env, [path], path, "map")

@@ -1,5 +1,6 @@
 #include "run_helpers.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -17,6 +18,14 @@ std::vector<std::pair<double, double>> read_probe(const std::filesystem::path& c
     if (static_cast<int>(v.size()) > col) out.emplace_back(v[0], v[col]);
   }
   return out;
+}
+
+double mean_after(const std::filesystem::path& csv, int col, double from) {
+  double sum = 0.0;
+  int n = 0;
+  for (auto [t, v] : read_probe(csv, col))
+    if (t > from) sum += v, ++n;
+  return n ? sum / n : NAN;
 }
 
 }  // namespace spate::test

@@ -57,5 +57,7 @@ inline bool identical_checkpoints(const std::filesystem::path& a, const std::fil
 
 // Column `col` of a probe CSV (header line, then time,step,values...) as (time, value) pairs.
 std::vector<std::pair<double, double>> read_probe(const std::filesystem::path& csv, int col);
+// Mean of column `col` of a probe CSV over the rows with time > from (NaN when there are none).
+double mean_after(const std::filesystem::path& csv, int col, double from);
 
 }  // namespace spate::test

@@ -87,15 +87,6 @@ TEST(Hydrostatic, Pressure3DWithinThreePercent) {
   expect_hydrostatic(r, load_case(test::case_path("hydrostatic_3d.yaml")));
 }
 
-// Mean of column `col` of a probe CSV over the rows with time > from.
-double mean_after(const std::filesystem::path& csv, int col, double from) {
-  double sum = 0.0;
-  int n = 0;
-  for (auto [t, v] : test::read_probe(csv, col))
-    if (t > from) sum += v, ++n;
-  return n ? sum / n : NAN;
-}
-
 // Still water 0.5 m deep around a 0.4 x 0.3 m block on the floor: the wall-pressure sensors read
 // rho g d on the tank's side wall, its floor and the block's side (each sensor 4 cm across, one
 // with a moving average), and the pressure force on each face of the block is rho g times the
@@ -116,17 +107,17 @@ TEST(Hydrostatic, WallSensorsAndFaceForces2D) {
   const double rho_g = c.fluids[0].density * std::fabs(c.gravity[1]);
   const auto dir = out / "probes";
   const double settled = 0.7;
-  EXPECT_NEAR(mean_after(dir / "side.csv", 2, settled), rho_g * 0.25, 0.03 * rho_g * 0.25);
-  EXPECT_NEAR(mean_after(dir / "floor.csv", 2, settled), rho_g * 0.5, 0.03 * rho_g * 0.5);
-  EXPECT_NEAR(mean_after(dir / "floor.csv", 3, settled), rho_g * 0.5, 0.03 * rho_g * 0.5);  // instantaneous
-  EXPECT_NEAR(mean_after(dir / "block_side.csv", 2, settled), rho_g * 0.4, 0.03 * rho_g * 0.4);
+  EXPECT_NEAR(test::mean_after(dir / "side.csv", 2, settled), rho_g * 0.25, 0.03 * rho_g * 0.25);
+  EXPECT_NEAR(test::mean_after(dir / "floor.csv", 2, settled), rho_g * 0.5, 0.03 * rho_g * 0.5);
+  EXPECT_NEAR(test::mean_after(dir / "floor.csv", 3, settled), rho_g * 0.5, 0.03 * rho_g * 0.5);  // instantaneous
+  EXPECT_NEAR(test::mean_after(dir / "block_side.csv", 2, settled), rho_g * 0.4, 0.03 * rho_g * 0.4);
   // Per unit width: the sides carry rho g (0.5 - y) over 0 < y < 0.3, the top rho g 0.2 over 0.4 m.
   const double side = rho_g * (0.5 * 0.3 - 0.5 * 0.3 * 0.3), top = rho_g * 0.2 * 0.4;
-  EXPECT_NEAR(mean_after(dir / "west.csv", 2, settled), side, 0.05 * side);
-  EXPECT_NEAR(mean_after(dir / "east.csv", 2, settled), -side, 0.05 * side);
-  EXPECT_NEAR(mean_after(dir / "top.csv", 3, settled), -top, 0.05 * top);
-  EXPECT_NEAR(mean_after(dir / "all.csv", 2, settled), 0.0, 0.02 * side);
-  EXPECT_NEAR(mean_after(dir / "all.csv", 3, settled), -top, 0.05 * top);
+  EXPECT_NEAR(test::mean_after(dir / "west.csv", 2, settled), side, 0.05 * side);
+  EXPECT_NEAR(test::mean_after(dir / "east.csv", 2, settled), -side, 0.05 * side);
+  EXPECT_NEAR(test::mean_after(dir / "top.csv", 3, settled), -top, 0.05 * top);
+  EXPECT_NEAR(test::mean_after(dir / "all.csv", 2, settled), 0.0, 0.02 * side);
+  EXPECT_NEAR(test::mean_after(dir / "all.csv", 3, settled), -top, 0.05 * top);
 }
 
 // Plane Poiseuille flow: u(y) = F / (2 nu) y (L - y); centreline F L^2 / (8 nu).

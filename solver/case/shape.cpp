@@ -1,0 +1,196 @@
+#include "shape.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace spate {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Any unit vector perpendicular to the unit vector u.
+void perpendicular(const double u[3], double out[3]) {
+  const int k = std::fabs(u[0]) < 0.9 ? 0 : 1;  // the axis least aligned with u
+  double e[3] = {0, 0, 0};
+  e[k] = 1.0;
+  const double dot = e[0] * u[0] + e[1] * u[1] + e[2] * u[2];
+  double len = 0;
+  for (int a = 0; a < 3; ++a) out[a] = e[a] - dot * u[a], len += out[a] * out[a];
+  for (int a = 0; a < 3; ++a) out[a] /= std::sqrt(len);
+}
+
+std::string vec_text(const std::array<double, 3>& v, int dim) {
+  std::string s = "[";
+  for (int a = 0; a < dim; ++a) s += fmt::format("{}{:.17g}", a ? ", " : "", v[a]);
+  return s + "]";
+}
+
+class Ball final : public Shape {
+ public:
+  Ball(const std::array<double, 3>& centre, double radius, int dim) : c_(centre), r_(radius), dim_(dim) {
+    for (int a = 0; a < 3; ++a) lo[a] = a < dim ? c_[a] - r_ : 0.0, hi[a] = a < dim ? c_[a] + r_ : 0.0;
+    area = dim == 2 ? 2.0 * kPi * r_ : 4.0 * kPi * r_ * r_;
+    signature = fmt::format("{} centre {} radius {:.17g}", dim == 2 ? "disc" : "sphere", vec_text(c_, dim), r_);
+    description = fmt::format("{} of radius {:g} m at {}", dim == 2 ? "disc" : "sphere", r_, vec_text(c_, dim));
+  }
+  double distance(const double x[3], double normal[3]) const override {
+    double w[3] = {0, 0, 0}, s = 0;
+    for (int a = 0; a < dim_; ++a) w[a] = x[a] - c_[a], s += w[a] * w[a];
+    s = std::sqrt(s);
+    for (int a = 0; a < dim_; ++a) normal[a] = s > 0 ? w[a] / s : (a == dim_ - 1 ? 1.0 : 0.0);
+    return s - r_;
+  }
+
+ private:
+  std::array<double, 3> c_;
+  double r_;
+  int dim_;
+};
+
+class Cylinder final : public Shape {
+ public:
+  Cylinder(const std::array<double, 3>& centre, const std::array<double, 3>& axis, double radius, double length)
+      : c_(centre), u_(axis), r_(radius), half_(0.5 * length) {
+    for (int a = 0; a < 3; ++a) {
+      const double reach = std::fabs(u_[a]) * half_ + r_ * std::sqrt(std::max(0.0, 1.0 - u_[a] * u_[a]));
+      lo[a] = c_[a] - reach, hi[a] = c_[a] + reach;
+    }
+    area = 2.0 * kPi * r_ * length + 2.0 * kPi * r_ * r_;
+    signature = fmt::format("cylinder centre {} axis {} radius {:.17g} length {:.17g}", vec_text(c_, 3), vec_text(u_, 3), r_, length);
+    description = fmt::format("cylinder of radius {:g} m and length {:g} m at {} along {}", r_, length, vec_text(c_, 3), vec_text(u_, 3));
+  }
+  // The capped cylinder's exact distance: radial excess qr = s - r, axial excess qa = |t| - L/2.
+  double distance(const double x[3], double normal[3]) const override {
+    double w[3], t = 0;
+    for (int a = 0; a < 3; ++a) w[a] = x[a] - c_[a], t += w[a] * u_[a];
+    double e[3], s = 0;
+    for (int a = 0; a < 3; ++a) e[a] = w[a] - t * u_[a], s += e[a] * e[a];
+    s = std::sqrt(s);
+    if (s > 0) {
+      for (double& v : e) v /= s;
+    } else {
+      perpendicular(u_.data(), e);
+    }
+    const double side = t >= 0 ? 1.0 : -1.0;
+    const double qr = s - r_, qa = std::fabs(t) - half_;
+    double d, nr = 0, na = 0;
+    if (qr <= 0 && qa <= 0) {  // inside: the nearer of the mantle and the caps
+      d = std::max(qr, qa);
+      (qr > qa ? nr : na) = 1.0;
+    } else if (qr > 0 && qa > 0) {  // beyond a rim: the distance to the circle
+      d = std::hypot(qr, qa);
+      nr = qr / d, na = qa / d;
+    } else {
+      d = std::max(qr, qa);
+      (qr > 0 ? nr : na) = 1.0;
+    }
+    for (int a = 0; a < 3; ++a) normal[a] = nr * e[a] + na * side * u_[a];
+    return d;
+  }
+
+ private:
+  std::array<double, 3> c_, u_;
+  double r_, half_;
+};
+
+class Polygon final : public Shape {
+ public:
+  explicit Polygon(std::vector<std::array<double, 2>> v) : v_(std::move(v)) {
+    double twice_area = 0;
+    for (std::size_t k = 0; k < v_.size(); ++k) {
+      const auto& a = v_[k];
+      const auto& b = v_[(k + 1) % v_.size()];
+      twice_area += a[0] * b[1] - b[0] * a[1];
+      area += std::hypot(b[0] - a[0], b[1] - a[1]);
+    }
+    if (twice_area < 0) std::reverse(v_.begin(), v_.end());  // counter-clockwise from here on
+    lo = {v_[0][0], v_[0][1], 0}, hi = lo;
+    for (auto& p : v_)
+      for (int a = 0; a < 2; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+    signature = "polygon";
+    for (auto& p : v_) signature += fmt::format(" [{:.17g}, {:.17g}]", p[0], p[1]);
+    description = fmt::format("polygon of {} vertices", v_.size());
+  }
+  double distance(const double x[3], double normal[3]) const override {
+    double best = INFINITY, best_t = 0;
+    std::size_t best_edge = 0;
+    bool inside = false;
+    for (std::size_t k = 0; k < v_.size(); ++k) {
+      const auto& a = v_[k];
+      const auto& b = v_[(k + 1) % v_.size()];
+      const double ex = b[0] - a[0], ey = b[1] - a[1];
+      const double t = std::clamp(((x[0] - a[0]) * ex + (x[1] - a[1]) * ey) / (ex * ex + ey * ey), 0.0, 1.0);
+      const double dx = x[0] - (a[0] + t * ex), dy = x[1] - (a[1] + t * ey);
+      const double d2 = dx * dx + dy * dy;
+      if (d2 < best) best = d2, best_edge = k, best_t = t;
+      // Crossing number along +x (half-open in y, so a vertex counts once).
+      if ((a[1] > x[1]) != (b[1] > x[1]) && x[0] < a[0] + (x[1] - a[1]) * ex / ey) inside = !inside;
+    }
+    const auto& a = v_[best_edge];
+    const auto& b = v_[(best_edge + 1) % v_.size()];
+    const double d = std::sqrt(best);
+    const double px = a[0] + best_t * (b[0] - a[0]), py = a[1] + best_t * (b[1] - a[1]);
+    if (d > 1e-12 * (hi[0] - lo[0] + hi[1] - lo[1])) {
+      const double s = inside ? -1.0 : 1.0;
+      normal[0] = s * (x[0] - px) / d, normal[1] = s * (x[1] - py) / d;
+    } else {  // on the edge: its outward normal (counter-clockwise: the right-hand side)
+      const double len = std::hypot(b[0] - a[0], b[1] - a[1]);
+      normal[0] = (b[1] - a[1]) / len, normal[1] = -(b[0] - a[0]) / len;
+    }
+    return inside ? -d : d;
+  }
+
+ private:
+  std::vector<std::array<double, 2>> v_;
+};
+
+}  // namespace
+
+ShapePtr make_ball(const std::array<double, 3>& centre, double radius, int dim) {
+  if (!(radius > 0)) throw ShapeError("the radius must be > 0");
+  return std::make_shared<Ball>(centre, radius, dim);
+}
+
+ShapePtr make_cylinder(const std::array<double, 3>& centre, const std::array<double, 3>& axis, double radius, double length) {
+  if (!(radius > 0)) throw ShapeError("the radius must be > 0");
+  if (!(length > 0)) throw ShapeError("the length must be > 0");
+  const double n = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+  if (!(n > 0)) throw ShapeError("the axis must be a non-zero vector");
+  return std::make_shared<Cylinder>(centre, std::array<double, 3>{axis[0] / n, axis[1] / n, axis[2] / n}, radius, length);
+}
+
+ShapePtr make_polygon(const std::vector<std::array<double, 2>>& vertices) {
+  if (vertices.size() < 3) throw ShapeError("a polygon needs at least 3 vertices");
+  // Simple: no two edges that do not share a vertex may cross (or touch).
+  const std::size_t n = vertices.size();
+  auto orient = [](const std::array<double, 2>& a, const std::array<double, 2>& b, const std::array<double, 2>& c) {
+    const double v = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    return (v > 0) - (v < 0);
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto &a = vertices[i], &b = vertices[(i + 1) % n];
+    if (a == b) throw ShapeError(fmt::format("vertices {} and {} coincide", i, (i + 1) % n));
+    for (std::size_t j = i + 2; j < n; ++j) {
+      if ((j + 1) % n == i) continue;  // adjacent through the closing edge
+      const auto &c = vertices[j], &d = vertices[(j + 1) % n];
+      if (orient(a, b, c) * orient(a, b, d) <= 0 && orient(c, d, a) * orient(c, d, b) <= 0)
+        throw ShapeError(fmt::format("edges {} and {} cross: the polygon must be simple", i, j));
+    }
+  }
+  return std::make_shared<Polygon>(vertices);
+}
+
+#ifndef SPATE_WITH_MESH
+bool mesh_support() { return false; }
+ShapePtr load_mesh(const std::string&, const MeshPlacement&, int) {
+  throw ShapeError("this build of spate reads no meshes (VTK was not found when it was configured; see docs/building.md)");
+}
+ShapePtr make_polyhedron(const std::vector<std::array<double, 3>>&) {
+  throw ShapeError("this build of spate makes no polyhedra (VTK was not found when it was configured; see docs/building.md)");
+}
+#endif
+
+}  // namespace spate
