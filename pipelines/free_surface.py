@@ -7,7 +7,9 @@
 # contour. It is coloured by the Shepard-normalised field, sum_j f_j W_ij dp^d / S (the SPH
 # estimate of f; without the division a field reads half its value on the 0.5 contour), by default
 # the speed |v|. The tank floor, its outline and every solid (the column) are drawn too, from a
-# three-quarter view like the paper's Figure 4, with the simulated time in a corner. In 2D the
+# three-quarter view like the paper's Figure 4, with the simulated time in a corner; a solid of any
+# shape (a mesh, a cylinder) from the surface spate wrote for it (<run output>/geometry/), drawn
+# where it starts (a moving solid's surface does not follow it yet). In 2D the
 # water is the region where the Shepard sum exceeds 0.5, seen from the front.
 # PNGs go to <run output>/insitu/free_surface_<step>.png.
 #
@@ -41,6 +43,7 @@ value_range = os.environ.get("SPATE_FREE_SURFACE_RANGE", "0,3" if coloured == "v
 value_range = [float(v) for v in value_range.split(",")] if value_range else None
 
 particles = TrivialProducer(registrationName="particles")
+run_dir = os.environ.get("SPATE_RUN_DIR", ".")  # the run's output folder (spate sets it)
 
 fluid = Threshold(registrationName="fluid", Input=particles)
 fluid.Scalars = ["POINTS", "kind"]
@@ -186,9 +189,15 @@ def _build_scene():
             sb = solid.GetDataInformation().GetBounds()
             if sb[0] > sb[1]:
                 continue
-            block = Box(registrationName="solid_box_%d" % kind)
-            block.XLength, block.YLength, block.ZLength = sb[1] - sb[0], sb[3] - sb[2], sb[5] - sb[4]
-            block.Center = [(sb[0] + sb[1]) / 2, (sb[2] + sb[3]) / 2, (sb[4] + sb[5]) / 2]
+            # A solid of any shape (a mesh, a cylinder, ...) is drawn from the surface spate wrote
+            # for it; a box solid as the box its particles fill.
+            surface_file = os.path.join(run_dir, "geometry", "solid_%d.vtp" % kind)
+            if os.path.exists(surface_file):
+                block = XMLPolyDataReader(registrationName="solid_surface_%d" % kind, FileName=[surface_file])
+            else:
+                block = Box(registrationName="solid_box_%d" % kind)
+                block.XLength, block.YLength, block.ZLength = sb[1] - sb[0], sb[3] - sb[2], sb[5] - sb[4]
+                block.Center = [(sb[0] + sb[1]) / 2, (sb[2] + sb[3]) / 2, (sb[4] + sb[5]) / 2]
             block_shown = Show(block, view)
             block_shown.AmbientColor = block_shown.DiffuseColor = [0.75, 0.72, 0.66]
         # Three-quarter view from the downstream corner, a little above, like the paper's figure.

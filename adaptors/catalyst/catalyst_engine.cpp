@@ -216,6 +216,9 @@ struct CatalystEngine::Impl {
     processor = vtkSmartPointer<vtkCPProcessor>::New();
     const std::string dir = options.working_dir.string();
     const char* working = dir.empty() ? nullptr : dir.c_str();
+    // The run's output folder, for pipelines that read what the run wrote there (the shaped solids'
+    // surfaces, geometry/solid_<material>.vtp).
+    if (working) setenv("SPATE_RUN_DIR", working, 1);
     int ok = 0;
 #ifdef SPATE_CATALYST_MPI
     if (options.mpi) {

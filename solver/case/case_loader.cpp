@@ -378,8 +378,9 @@ void check_shape_in_tank(Section& s, const ShapePtr& shape, const Case& c, const
   const int d = c.dim;
   bool in = true;
   double ratio = 0.0;
+  const double tol = 1e-4 * c.dp;  // a mesh stored in float32 (STL) is rounded to 1e-7 of its size
   for (int k = 0; k < d; ++k) {
-    in = in && shape->lo[k] >= c.tank_origin[k] - 1e-9 && shape->hi[k] <= tank_hi[k] + 1e-9;
+    in = in && shape->lo[k] >= c.tank_origin[k] - tol && shape->hi[k] <= tank_hi[k] + tol;
     ratio = std::max(ratio, (shape->hi[k] - shape->lo[k]) / c.tank_size[k]);
   }
   if (in) return;
@@ -1083,7 +1084,7 @@ Case read(Section& root, const std::string& file) {
     const FluidBlock b = read_fluid_block(f, c);
     f.finish();
     if (b.shape) check_shape_in_tank(f, b.shape, c, tank_hi, "the fluid block");
-    if (!inside(b, c.tank_origin, tank_hi, d, tol))
+    if (!b.shape && !inside(b, c.tank_origin, tank_hi, d, tol))
       f.fail(f.node(), b.radius > 0 ? "radius" : "max", "fluid block lies (partly) outside the tank");
     c.fluid_blocks.push_back(b);
   }
@@ -1120,7 +1121,7 @@ Case read(Section& root, const std::string& file) {
     }
     s.finish();
     if (!solid_names.insert(spec.name).second) s.fail(s.raw("name"), "name", "solid '" + spec.name + "' is defined twice");
-    if (!inside(spec.box, c.tank_origin, tank_hi, d, tol)) s.fail(s.node(), "max", "solid lies (partly) outside the tank");
+    if (!spec.shape && !inside(spec.box, c.tank_origin, tank_hi, d, tol)) s.fail(s.node(), "max", "solid lies (partly) outside the tank");
     // A shaped solid or block: the fluid is the block less the solid (the generator leaves dp/2 clear).
     for (auto& b : c.fluid_blocks)
       if (!spec.shape && !b.shape && overlap(b, spec.box, d, tol))

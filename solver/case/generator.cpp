@@ -159,17 +159,31 @@ bool classify(const Case& c, const MaterialTable& M, const Sites& s, const int i
   return false;
 }
 
+constexpr std::uint8_t kEmptySite = 0xff;  // no material has this index (at most 255 materials)
+
+// Visits every particle site in generation order (the vertical axis innermost) with its material.
+// `record`: the material of every site (kEmptySite for none) is appended there; `replay`: the
+// materials are read from such a record instead of classified again (a shaped case's sites cost
+// distance queries: generate_particles classifies them once, to count and then to fill).
 template <class Visit>
-void for_each_site(const Case& c, Visit&& visit) {
+void for_each_site(const Case& c, Visit&& visit, std::vector<std::uint8_t>* record = nullptr,
+                   const std::vector<std::uint8_t>* replay = nullptr) {
   const Sites s(c);
   const MaterialTable M = physics_params(c).materials;
   SiteMemo memo(c);
+  std::size_t site = 0;
   int idx[3];
   for (idx[0] = s.lo[0]; idx[0] < s.hi[0]; ++idx[0])
     for (idx[1] = s.lo[1]; idx[1] < s.hi[1]; ++idx[1])
       for (idx[2] = s.lo[2]; idx[2] < s.hi[2]; ++idx[2]) {
-        std::uint8_t kind;
-        if (classify(c, M, s, idx, kind, memo)) visit(s, idx, kind);
+        std::uint8_t kind = kEmptySite;
+        if (replay) {
+          kind = (*replay)[site++];
+        } else if (!classify(c, M, s, idx, kind, memo)) {
+          kind = kEmptySite;
+        }
+        if (record) record->push_back(kind);
+        if (kind != kEmptySite) visit(s, idx, kind);
       }
 }
 
@@ -364,14 +378,24 @@ bool has_shapes(const Case& c) {
   return false;
 }
 
-ParticleCounts count_particles(const Case& c) {
-  if (has_shapes(c)) {
-    // Shapes have no closed form: count the sites as the generator visits them.
-    ParticleCounts n;
-    const MaterialTable M = physics_params(c).materials;
-    for_each_site(c, [&](const Sites&, const int*, std::uint8_t kind) { (M.is_fluid(kind) ? n.fluid : n.wall) += 1; });
-    return n;
+namespace {
+// Shapes have no closed form: the sites counted as the generator visits them (and recorded).
+ParticleCounts count_sites(const Case& c, std::vector<std::uint8_t>* record) {
+  ParticleCounts n;
+  const MaterialTable M = physics_params(c).materials;
+  if (record) {
+    const Sites s(c);
+    std::size_t all = 1;
+    for (int a = 0; a < 3; ++a) all *= static_cast<std::size_t>(s.hi[a] - s.lo[a]);
+    record->reserve(all);
   }
+  for_each_site(c, [&](const Sites&, const int*, std::uint8_t kind) { (M.is_fluid(kind) ? n.fluid : n.wall) += 1; }, record);
+  return n;
+}
+}  // namespace
+
+ParticleCounts count_particles(const Case& c) {
+  if (has_shapes(c)) return count_sites(c, nullptr);
   const Sites s(c);
   const int d = c.dim;
   ParticleCounts n;
@@ -519,7 +543,9 @@ double initial_temperature(const Case& c, const MaterialTable& M, std::uint8_t k
 }
 
 ParticleStore generate_particles(const Case& c) {
-  const ParticleCounts n = count_particles(c);
+  std::vector<std::uint8_t> sites;  // shapes: every site's material, classified once
+  const bool shapes = has_shapes(c);
+  const ParticleCounts n = shapes ? count_sites(c, &sites) : count_particles(c);
   if (n.fluid == 0) throw CaseError(c.file + ": the case generates no fluid particles (check fluid_blocks, wet_bed and dp)");
   if (n.total() > 0xfffffff0LL) throw CaseError(c.file + ": key 'dp': more than 4e9 particles");
   ParticleStore p(c.dim);
@@ -555,7 +581,7 @@ ParticleStore generate_particles(const Case& c) {
       p.density[i] = tait_density(static_cast<float>(m.rho0 * g * depth), m);
     }
     ++i;
-  });
+  }, nullptr, shapes ? &sites : nullptr);
   if (i != p.size()) throw std::logic_error("generate_particles: the site loop disagrees with count_particles");
   if (P.materials.multiphase()) layered_hydrostatic_density(c, P, p);
   displace_by_waves(c, P, p);  // after the column sums, which need the lattice

@@ -1,5 +1,5 @@
 // Meshes as shapes (shape.hpp), read and queried with VTK: its readers for the file formats, its
-// implicit distance (a cell locator and angle-weighted pseudo-normals) for the signed distance.
+// static cell locator for the nearest point of the surface.
 // spate's own code here only merges coincident points and checks that the triangles close a
 // volume with outward normals, which no VTK filter reports as one verdict.
 #include <algorithm>
@@ -8,6 +8,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <unordered_map>
 
 #include <fmt/format.h>
 
@@ -15,7 +16,7 @@
 #include <vtkDataSetSurfaceFilter.h>
 #include <vtkDelaunay3D.h>
 #include <vtkIdList.h>
-#include <vtkImplicitPolyDataDistance.h>
+#include <vtkGenericCell.h>
 #include <vtkNew.h>
 #include <vtkOBJReader.h>
 #include <vtkObject.h>
@@ -25,6 +26,7 @@
 #include <vtkPolyDataReader.h>
 #include <vtkSTLReader.h>
 #include <vtkSmartPointer.h>
+#include <vtkStaticCellLocator.h>
 #include <vtkTriangleFilter.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPolyDataReader.h>
@@ -150,9 +152,14 @@ void check_closed(const TriangleMesh& m, const std::string& what) {
                                  volume));
 }
 
+// The signed distance to a closed triangle mesh: the nearest point from VTK's static cell locator,
+// the sign from the angle-weighted pseudo-normal of the feature it lies on (face, edge or vertex;
+// Baerentzen & Aanaes 2005), which is exact for a closed, consistently oriented surface: the
+// nearest point's face normal alone misjudges points near sharp edges.
 class MeshShape final : public Shape {
  public:
-  MeshShape(const TriangleMesh& m, int dim, const std::string& name, const std::string& definition) : dim_(dim) {
+  MeshShape(const TriangleMesh& m, int dim, const std::string& name, const std::string& definition)
+      : dim_(dim), points_(m.points), triangles_(m.triangles) {
     vtkNew<vtkPoints> pts;
     pts->SetDataTypeToDouble();
     for (const P3& p : m.points) pts->InsertNextPoint(p.data());
@@ -160,7 +167,28 @@ class MeshShape final : public Shape {
     for (const Tri& t : m.triangles) cells->InsertNextCell(3, t.data());
     poly_->SetPoints(pts);
     poly_->SetPolys(cells);
-    distance_->SetInput(poly_);
+    locator_->SetDataSet(poly_);
+    locator_->BuildLocator();
+    // Pseudo-normals: faces' unit normals; an edge's, the sum of its two faces'; a vertex's, its
+    // faces' weighted by their angles at it.
+    face_normal_.resize(m.triangles.size());
+    vertex_normal_.assign(m.points.size(), P3{0, 0, 0});
+    for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+      const Tri& t = m.triangles[f];
+      P3 n = cross(sub(m.points[t[1]], m.points[t[0]]), sub(m.points[t[2]], m.points[t[0]]));
+      const double len = norm(n);
+      for (double& v : n) v /= len;
+      face_normal_[f] = n;
+      for (int k = 0; k < 3; ++k) {
+        const P3 u = sub(m.points[t[(k + 1) % 3]], m.points[t[k]]), w = sub(m.points[t[(k + 2) % 3]], m.points[t[k]]);
+        const double angle = std::acos(std::clamp(dot(u, w) / (norm(u) * norm(w)), -1.0, 1.0));
+        for (int a = 0; a < 3; ++a) vertex_normal_[t[k]][a] += angle * n[a];
+      }
+      for (int k = 0; k < 3; ++k) {
+        P3& e = edge_normal_[edge_key(t[k], t[(k + 1) % 3])];
+        for (int a = 0; a < 3; ++a) e[a] += n[a];
+      }
+    }
     P3 l = m.points[0], h = l;
     for (const P3& p : m.points)
       for (int a = 0; a < 3; ++a) l[a] = std::min(l[a], p[a]), h[a] = std::max(h[a], p[a]);
@@ -183,23 +211,67 @@ class MeshShape final : public Shape {
   }
   double distance(const double x[3], double normal[3]) const override {
     const double at[3] = {x[0], x[1], dim_ == 2 ? mid_z_ : x[2]};
-    double g[3];
-    // vtkImplicitPolyDataDistance keeps scratch state in its locator: one query at a time.
-    std::lock_guard lock(mutex_);
-    const double d = distance_->EvaluateFunction(const_cast<double*>(at));
-    distance_->EvaluateGradient(const_cast<double*>(at), g);
-    if (dim_ == 2) g[2] = 0.0;
-    const double n = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-    for (int a = 0; a < dim_; ++a) normal[a] = n > 0 ? g[a] / n : 0.0;
-    return d;
+    P3 c{0, 0, 0};
+    vtkIdType cell = -1;
+    int sub_id = 0;
+    double d2 = 0;
+    {
+      // The locator's search keeps scratch state: one query at a time.
+      std::lock_guard lock(mutex_);
+      locator_->FindClosestPoint(at, c.data(), scratch_, cell, sub_id, d2);
+    }
+    const P3 r{at[0] - c[0], at[1] - c[1], at[2] - c[2]};
+    const P3 pseudo = pseudo_normal(static_cast<std::size_t>(cell), c);
+    const double d = std::sqrt(d2);
+    const double sign = dot(r, pseudo) < 0 ? -1.0 : 1.0;
+    P3 n = d > 1e-12 * (depth_ + norm(sub(hi, lo))) ? P3{sign * r[0] / d, sign * r[1] / d, sign * r[2] / d} : face_normal_[cell];
+    if (dim_ == 2) n[2] = 0.0;
+    const double len = norm(n);
+    for (int a = 0; a < dim_; ++a) normal[a] = len > 0 ? n[a] / len : 0.0;
+    return sign * d;
+  }
+  void surface(std::vector<std::array<double, 3>>& points, std::vector<std::vector<long long>>& polygons) const override {
+    const long long base = static_cast<long long>(points.size());
+    points.insert(points.end(), points_.begin(), points_.end());
+    for (const Tri& t : triangles_) polygons.push_back({base + t[0], base + t[1], base + t[2]});
   }
   double depth() const { return depth_; }
 
  private:
+  static std::uint64_t edge_key(vtkIdType a, vtkIdType b) {
+    if (a > b) std::swap(a, b);
+    return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint64_t>(b);
+  }
+  // The pseudo-normal of the feature of triangle f that holds point c: a vertex, an edge or the face,
+  // by c's barycentric coordinates.
+  P3 pseudo_normal(std::size_t f, const P3& c) const {
+    const Tri& t = triangles_[f];
+    const P3 &a = points_[t[0]], &b = points_[t[1]], &q = points_[t[2]];
+    const P3 e0 = sub(b, a), e1 = sub(q, a), e2 = sub(c, a);
+    const double d00 = dot(e0, e0), d01 = dot(e0, e1), d11 = dot(e1, e1), d20 = dot(e2, e0), d21 = dot(e2, e1);
+    const double den = d00 * d11 - d01 * d01;
+    const double v = (d11 * d20 - d01 * d21) / den, w = (d00 * d21 - d01 * d20) / den, u = 1.0 - v - w;
+    const double eps = 1e-9;
+    const double bary[3] = {u, v, w};
+    int zeros = 0, last_nonzero = -1, zero_at = -1;
+    for (int k = 0; k < 3; ++k) {
+      if (bary[k] <= eps) ++zeros, zero_at = k;
+      else last_nonzero = k;
+    }
+    if (zeros >= 2) return vertex_normal_[t[last_nonzero]];                                  // at a vertex
+    if (zeros == 1) return edge_normal_.at(edge_key(t[(zero_at + 1) % 3], t[(zero_at + 2) % 3]));  // on the edge opposite
+    return face_normal_[f];
+  }
+
   int dim_;
   double mid_z_ = 0.0, depth_ = 0.0;
+  std::vector<P3> points_;
+  std::vector<Tri> triangles_;
+  std::vector<P3> face_normal_, vertex_normal_;
+  std::unordered_map<std::uint64_t, P3> edge_normal_;
   vtkNew<vtkPolyData> poly_;
-  vtkNew<vtkImplicitPolyDataDistance> distance_;
+  vtkNew<vtkStaticCellLocator> locator_;
+  vtkNew<vtkGenericCell> scratch_;
   mutable std::mutex mutex_;
 };
 

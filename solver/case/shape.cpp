@@ -22,9 +22,10 @@ void perpendicular(const double u[3], double out[3]) {
   for (int a = 0; a < 3; ++a) out[a] /= std::sqrt(len);
 }
 
-std::string vec_text(const std::array<double, 3>& v, int dim) {
+// Exact (the signature) or short (the description).
+std::string vec_text(const std::array<double, 3>& v, int dim, bool exact = true) {
   std::string s = "[";
-  for (int a = 0; a < dim; ++a) s += fmt::format("{}{:.17g}", a ? ", " : "", v[a]);
+  for (int a = 0; a < dim; ++a) s += exact ? fmt::format("{}{:.17g}", a ? ", " : "", v[a]) : fmt::format("{}{:g}", a ? ", " : "", v[a]);
   return s + "]";
 }
 
@@ -34,7 +35,7 @@ class Ball final : public Shape {
     for (int a = 0; a < 3; ++a) lo[a] = a < dim ? c_[a] - r_ : 0.0, hi[a] = a < dim ? c_[a] + r_ : 0.0;
     area = dim == 2 ? 2.0 * kPi * r_ : 4.0 * kPi * r_ * r_;
     signature = fmt::format("{} centre {} radius {:.17g}", dim == 2 ? "disc" : "sphere", vec_text(c_, dim), r_);
-    description = fmt::format("{} of radius {:g} m at {}", dim == 2 ? "disc" : "sphere", r_, vec_text(c_, dim));
+    description = fmt::format("{} of radius {:g} m at {}", dim == 2 ? "disc" : "sphere", r_, vec_text(c_, dim, false));
   }
   double distance(const double x[3], double normal[3]) const override {
     double w[3] = {0, 0, 0}, s = 0;
@@ -42,6 +43,35 @@ class Ball final : public Shape {
     s = std::sqrt(s);
     for (int a = 0; a < dim_; ++a) normal[a] = s > 0 ? w[a] / s : (a == dim_ - 1 ? 1.0 : 0.0);
     return s - r_;
+  }
+  void surface(std::vector<std::array<double, 3>>& points, std::vector<std::vector<long long>>& polygons) const override {
+    constexpr int kAround = 96, kRings = 48;
+    if (dim_ == 2) {
+      polygons.emplace_back();
+      for (int k = 0; k < kAround; ++k) {
+        polygons.back().push_back(static_cast<long long>(points.size()));
+        points.push_back({c_[0] + r_ * std::cos(2 * kPi * k / kAround), c_[1] + r_ * std::sin(2 * kPi * k / kAround), 0.0});
+      }
+      return;
+    }
+    // Rings of latitude between the poles; quads between rings, triangles at the poles.
+    const long long base = static_cast<long long>(points.size());
+    points.push_back({c_[0], c_[1], c_[2] - r_});
+    for (int i = 1; i < kRings; ++i) {
+      const double theta = kPi * i / kRings;
+      for (int k = 0; k < kAround; ++k) {
+        const double phi = 2 * kPi * k / kAround;
+        points.push_back({c_[0] + r_ * std::sin(theta) * std::cos(phi), c_[1] + r_ * std::sin(theta) * std::sin(phi), c_[2] - r_ * std::cos(theta)});
+      }
+    }
+    points.push_back({c_[0], c_[1], c_[2] + r_});
+    auto at = [&](int ring, int k) { return base + 1 + static_cast<long long>(ring - 1) * kAround + (k % kAround); };
+    const long long top = static_cast<long long>(points.size()) - 1;
+    for (int k = 0; k < kAround; ++k) {
+      polygons.push_back({base, at(1, k + 1), at(1, k)});
+      for (int i = 1; i + 1 < kRings; ++i) polygons.push_back({at(i, k), at(i, k + 1), at(i + 1, k + 1), at(i + 1, k)});
+      polygons.push_back({at(kRings - 1, k), at(kRings - 1, k + 1), top});
+    }
   }
 
  private:
@@ -60,7 +90,8 @@ class Cylinder final : public Shape {
     }
     area = 2.0 * kPi * r_ * length + 2.0 * kPi * r_ * r_;
     signature = fmt::format("cylinder centre {} axis {} radius {:.17g} length {:.17g}", vec_text(c_, 3), vec_text(u_, 3), r_, length);
-    description = fmt::format("cylinder of radius {:g} m and length {:g} m at {} along {}", r_, length, vec_text(c_, 3), vec_text(u_, 3));
+    description = fmt::format("cylinder of radius {:g} m and length {:g} m at {} along {}", r_, length, vec_text(c_, 3, false),
+                              vec_text(u_, 3, false));
   }
   // The capped cylinder's exact distance: radial excess qr = s - r, axial excess qa = |t| - L/2.
   double distance(const double x[3], double normal[3]) const override {
@@ -89,6 +120,28 @@ class Cylinder final : public Shape {
     }
     for (int a = 0; a < 3; ++a) normal[a] = nr * e[a] + na * side * u_[a];
     return d;
+  }
+  void surface(std::vector<std::array<double, 3>>& points, std::vector<std::vector<long long>>& polygons) const override {
+    constexpr int kAround = 96;
+    double e1[3], e2[3];
+    perpendicular(u_.data(), e1);
+    e2[0] = u_[1] * e1[2] - u_[2] * e1[1], e2[1] = u_[2] * e1[0] - u_[0] * e1[2], e2[2] = u_[0] * e1[1] - u_[1] * e1[0];
+    const long long base = static_cast<long long>(points.size());
+    for (int end = 0; end < 2; ++end)
+      for (int k = 0; k < kAround; ++k) {
+        const double c = std::cos(2 * kPi * k / kAround), s = std::sin(2 * kPi * k / kAround), t = end ? half_ : -half_;
+        points.push_back({c_[0] + r_ * (c * e1[0] + s * e2[0]) + t * u_[0], c_[1] + r_ * (c * e1[1] + s * e2[1]) + t * u_[1],
+                          c_[2] + r_ * (c * e1[2] + s * e2[2]) + t * u_[2]});
+      }
+    std::vector<long long> bottom, top;
+    for (int k = 0; k < kAround; ++k) {
+      const long long a = base + k, b = base + (k + 1) % kAround;
+      polygons.push_back({a, b, b + kAround, a + kAround});
+      bottom.push_back(base + (kAround - k) % kAround);
+      top.push_back(base + kAround + k);
+    }
+    polygons.push_back(bottom);
+    polygons.push_back(top);
   }
 
  private:
@@ -142,12 +195,41 @@ class Polygon final : public Shape {
     }
     return inside ? -d : d;
   }
+  void surface(std::vector<std::array<double, 3>>& points, std::vector<std::vector<long long>>& polygons) const override {
+    polygons.emplace_back();
+    for (const auto& p : v_) {
+      polygons.back().push_back(static_cast<long long>(points.size()));
+      points.push_back({p[0], p[1], 0.0});
+    }
+  }
 
  private:
   std::vector<std::array<double, 2>> v_;
 };
 
 }  // namespace
+
+std::string surface_vtp(const Shape& shape) {
+  std::vector<std::array<double, 3>> points;
+  std::vector<std::vector<long long>> polygons;
+  shape.surface(points, polygons);
+  std::string s = fmt::format(
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+      "<PolyData>\n<Piece NumberOfPoints=\"{}\" NumberOfPolys=\"{}\">\n<Points>\n"
+      "<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n",
+      points.size(), polygons.size());
+  for (const auto& p : points) s += fmt::format("{:.9g} {:.9g} {:.9g}\n", p[0], p[1], p[2]);
+  s += "</DataArray>\n</Points>\n<Polys>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (const auto& poly : polygons) {
+    for (long long v : poly) s += fmt::format("{} ", v);
+    s += "\n";
+  }
+  s += "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+  long long offset = 0;
+  for (const auto& poly : polygons) s += fmt::format("{}\n", offset += static_cast<long long>(poly.size()));
+  s += "</DataArray>\n</Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+  return s;
+}
 
 ShapePtr make_ball(const std::array<double, 3>& centre, double radius, int dim) {
   if (!(radius > 0)) throw ShapeError("the radius must be > 0");

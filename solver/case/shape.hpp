@@ -25,6 +25,10 @@ class Shape {
   // Signed distance from x to the surface [m], negative inside; `normal`: the unit outward normal
   // of the nearest surface point (the distance's gradient). 2D shapes read and write (x, y) only.
   virtual double distance(const double x[3], double normal[3]) const = 0;
+  // The surface as polygons over points (a mesh's triangles; the primitives tessellated finely),
+  // for drawing it (in situ, in ParaView). 2D shapes: their outline as one polygon at z = 0, or a
+  // mesh's prism.
+  virtual void surface(std::vector<std::array<double, 3>>& points, std::vector<std::vector<long long>>& polygons) const = 0;
 
   std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};  // bounding box
   double area = 0.0;        // surface area [m2]; 2D: the perimeter [m] (per metre of depth)
@@ -33,6 +37,9 @@ class Shape {
   long long triangles = 0;  // a mesh's (or polyhedron's) triangles; 0 for the exact primitives
 };
 using ShapePtr = std::shared_ptr<const Shape>;
+
+// The surface of a shape as VTK XML polydata (a .vtp file's text; ASCII, readable by ParaView).
+std::string surface_vtp(const Shape& shape);
 
 // A disc (2D) or sphere (3D).
 ShapePtr make_ball(const std::array<double, 3>& centre, double radius, int dim);

@@ -559,7 +559,9 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
   }
   if (own.dim != dim) r.fail(fmt::format("attribute 'dimensions' is {}, its case is {}D", dim, own.dim));
   if (version >= kCheckedVersion && meta.geometry_hash != geometry_hash(own))
-    r.fail("attribute 'geometry_hash' does not belong to attribute 'case_yaml': the file is damaged");
+    r.fail(has_shapes(own) ? "attribute 'geometry_hash' does not belong to attribute 'case_yaml': a mesh file the case names has "
+                             "changed since the checkpoint was written (its hash is part of the geometry's), or the file is damaged"
+                           : "attribute 'geometry_hash' does not belong to attribute 'case_yaml': the file is damaged");
   if (run_case) {
     if (run_case->dim != dim) r.fail(fmt::format("the checkpoint holds a {}D case ('{}'), {} is {}D", dim, own.name, run_case->file, run_case->dim));
     if (version >= kCheckedVersion && meta.geometry_hash != geometry_hash(*run_case))

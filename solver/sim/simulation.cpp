@@ -704,6 +704,15 @@ RunResult Simulation::run() {
     if (group.rank == 0)
       write_file_atomically(options_.out_dir / "case.yaml", "# The effective case of the run in this folder (" + case_.file +
                                                                 " with --set applied), written by spate run.\n" + case_.source_yaml + "\n");
+    // The shaped solids' surfaces, geometry/solid_<material>.vtp, for drawing them: the in-situ
+    // free surface (pipelines/free_surface.py) and ParaView beside the snapshots.
+    if (group.rank == 0)
+      for (std::size_t k = 0; k < case_.solids.size(); ++k)
+        if (case_.solids[k].shape) {
+          const int material = physics_params(case_).materials.solid(static_cast<int>(k));
+          create_output_folder(options_.out_dir / "geometry");
+          write_file_atomically(options_.out_dir / "geometry" / fmt::format("solid_{}.vtp", material), surface_vtp(*case_.solids[k].shape));
+        }
   } catch (const OutputError& e) {
     throw InputError(fmt::format("--out {}: the output folder is not usable: {}", options_.out_dir.string(), e.what()));
   }

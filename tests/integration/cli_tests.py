@@ -495,6 +495,46 @@ def compare_restart_bit_identical(env):
     check_refused(env.path("wrong"), p.stderr)
 
 
+def write_box_stl(path, lo, hi):
+    """A closed box (12 triangles, outward normals) as ASCII STL."""
+    corner = lambda i: [hi[a] if (i >> a) & 1 else lo[a] for a in range(3)]
+    faces = [(0, 2, 6, 4), (1, 5, 7, 3), (0, 4, 5, 1), (2, 3, 7, 6), (0, 1, 3, 2), (4, 6, 7, 5)]
+    with open(path, "w") as f:
+        f.write("solid box\n")
+        for q in faces:
+            for tri in ((q[0], q[2], q[1]), (q[0], q[3], q[2])):
+                f.write("facet normal 0 0 0\nouter loop\n")
+                for v in tri:
+                    f.write("vertex {} {} {}\n".format(*corner(v)))
+                f.write("endloop\nendfacet\n")
+        f.write("endsolid box\n")
+
+
+@test
+def restart_with_changed_mesh(env):
+    # A case whose solid is a mesh next to it: a restart from its checkpoint works while the mesh is
+    # the same, and is refused (exit 2, the reason) once the mesh file has changed.
+    folder = env.path("case")
+    os.makedirs(folder)
+    mesh = os.path.join(folder, "block.stl")
+    write_box_stl(mesh, [0.07, 0.0, -0.01], [0.09, 0.02, 0.01])
+    case = os.path.join(folder, "tiny_mesh.yaml")
+    with open(case, "w") as f:
+        f.write(env.tiny_text() + "solids:\n  - {name: block, mesh: block.stl}\n")
+    p = env.run("run", case, "--steps", "4", "--out", env.path("first"), "--quiet")
+    if p.returncode == 2 and "reads no meshes" in p.stderr:
+        print("  (built without mesh support: skipped)")
+        return
+    check(p.returncode == 0, f"exit {p.returncode}")
+    half = final_checkpoint(env, env.path("first"), 4)
+    p = env.run("run", case, "--restart", half, "--steps", "2", "--out", env.path("second"), "--quiet")
+    check(p.returncode == 0, f"restart with the same mesh: exit {p.returncode}")
+    write_box_stl(mesh, [0.065, 0.0, -0.01], [0.09, 0.02, 0.01])
+    p = env.run("run", case, "--restart", half, "--steps", "2", "--out", env.path("third"), "--quiet")
+    check(p.returncode == 2 and "mesh file the case names has changed" in p.stderr, f"restart with a changed mesh: exit {p.returncode}")
+    check_refused(env.path("third"), p.stderr)
+
+
 # ---- instability --------------------------------------------------------------------------------
 
 @test
