@@ -79,6 +79,7 @@ if(SPATE_ENABLE_CATALYST)
   include(cmake/SpateParaView.cmake)
 endif()
 include(cmake/SpateMesh.cmake)
+include(cmake/SpateBodies.cmake)
 
 if(SPATE_BUILD_TESTS)
   find_package(GTest REQUIRED)

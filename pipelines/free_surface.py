@@ -8,8 +8,9 @@
 # estimate of f; without the division a field reads half its value on the 0.5 contour), by default
 # the speed |v|. The tank floor, its outline and every solid (the column) are drawn too, from a
 # three-quarter view like the paper's Figure 4, with the simulated time in a corner; a solid of any
-# shape (a mesh, a cylinder) from the surface spate wrote for it (<run output>/geometry/), drawn
-# where it starts (a moving solid's surface does not follow it yet). In 2D the
+# shape (a mesh, a cylinder) from the surface spate wrote for it (<run output>/geometry/); a moving
+# solid (prescribed or floating) has none and is drawn as the box its particles fill, where they
+# are now. In 2D the
 # water is the region where the Shepard sum exceeds 0.5, seen from the front.
 # PNGs go to <run output>/insitu/free_surface_<step>.png.
 #

@@ -72,22 +72,32 @@ def quantity(columns):
 def plot(path, out_dir, title, description=""):
     name = os.path.splitext(os.path.basename(path))[0]
     columns, time, values = read_probe(path)
-    fig, ax = plt.subplots(figsize=(8, 4.5), dpi=150)
-    units = {u for _, u in columns}
+    # One panel per unit, in the order the units first appear (a body probe: position, angle,
+    # velocities, force, torque), so that no quantity is flattened by another's scale.
+    groups = []
     for c in columns:
-        ys = values[c]
-        # A front with no water deep enough reads -inf: leave those samples out.
-        ax.plot(time, [y if math.isfinite(y) else math.nan for y in ys], lw=1.2, label=c[0])
-    label = quantity(columns)
-    unit = units.pop() if len(units) == 1 else ""
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel(f"{label} [{unit}]" if unit else label)
+        for g in groups:
+            if g[0][1] == c[1]:
+                g.append(c)
+                break
+        else:
+            groups.append([c])
+    fig, axes = plt.subplots(len(groups), 1, figsize=(8, 2.2 + 2.3 * len(groups)), dpi=150, sharex=True, squeeze=False)
+    for ax, group in zip(axes[:, 0], groups):
+        for c in group:
+            ys = values[c]
+            # A front with no water deep enough reads -inf: leave those samples out.
+            ax.plot(time, [y if math.isfinite(y) else math.nan for y in ys], lw=1.2, label=c[0])
+        label = quantity(group)
+        unit = group[0][1]
+        ax.set_ylabel(f"{label} [{unit}]" if unit else label)
+        ax.grid(True, color="0.85", lw=0.6)
+        ax.set_xlim(left=min(time) if time else 0)
+        if len(group) > 1 or len(groups) > 1:
+            ax.legend(frameon=False)
+    axes[-1, 0].set_xlabel("time [s]")
     heading = f"{name}, {description}" if description else name
-    ax.set_title("\n".join(textwrap.wrap(f"{title}: {heading}" if title else heading, 80)), fontsize=11)
-    ax.grid(True, color="0.85", lw=0.6)
-    ax.set_xlim(left=min(time) if time else 0)
-    if len(columns) > 1:
-        ax.legend(frameon=False)
+    axes[0, 0].set_title("\n".join(textwrap.wrap(f"{title}: {heading}" if title else heading, 80)), fontsize=11)
     fig.tight_layout()
     out = os.path.join(out_dir, name + ".png")
     fig.savefig(out)

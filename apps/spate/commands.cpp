@@ -441,7 +441,21 @@ int info_command(const InfoArgs& a) {
     nlohmann::ordered_json motions = nlohmann::ordered_json::array();
     for (std::size_t k = 0; k < c.motions.size(); ++k) {
       const MotionSpec& ms = c.motions[k];
-      nlohmann::ordered_json e{{"index", k}, {"body", ms.body}, {"type", ms.sinusoid() ? "sinusoid" : "time_series"}};
+      nlohmann::ordered_json e{{"index", k}, {"body", ms.body},
+                               {"type", ms.floating >= 0 ? "floating" : ms.sinusoid() ? "sinusoid" : "time_series"}};
+      if (ms.floating >= 0) {
+        const BodySpec& b = c.bodies[ms.floating];
+        const char* dofs[6] = {"x", "y", "z", "rx", "ry", "rz"};
+        std::vector<std::string> free;
+        for (int f = 0; f < 6; ++f)
+          if (b.free[f]) free.push_back(dofs[f]);
+        e["mass"] = b.mass;
+        e["centre_of_mass"] = std::vector<double>(b.centre_of_mass.begin(), b.centre_of_mass.begin() + c.dim);
+        e["inertia"] = c.dim == 2 ? nlohmann::ordered_json(b.inertia[2]) : nlohmann::ordered_json(b.inertia);
+        e["free"] = free;
+        motions.push_back(e);
+        continue;
+      }
       if (ms.sinusoid()) {
         e["period"] = 2.0 * std::numbers::pi / ms.omega;
         e["translation_amplitude"] = std::vector<double>(ms.translation.begin(), ms.translation.begin() + c.dim);
@@ -536,6 +550,20 @@ int info_command(const InfoArgs& a) {
     for (std::size_t k = 0; k < c.motions.size(); ++k) {
       const MotionSpec& ms = c.motions[k];
       std::string what;
+      if (ms.floating >= 0) {
+        const BodySpec& b = c.bodies[ms.floating];
+        const char* dofs[6] = {"x", "y", "z", "rx", "ry", "rz"};
+        std::string free;
+        for (int f = 0; f < 6; ++f)
+          if (b.free[f]) free += std::string(free.empty() ? "" : ", ") + dofs[f];
+        what = c.dim == 2 ? fmt::format("floating, mass {:g} kg/m, centre of mass [{:g}, {:g}], Izz {:g} kg m, free: {}", b.mass,
+                                        b.centre_of_mass[0], b.centre_of_mass[1], b.inertia[2], free)
+                          : fmt::format("floating, mass {:g} kg, centre of mass [{:g}, {:g}, {:g}], inertia [{:g}, {:g}, {:g}, {:g}, {:g}, {:g}] "
+                                        "kg m2, free: {}", b.mass, b.centre_of_mass[0], b.centre_of_mass[1], b.centre_of_mass[2],
+                                        b.inertia[0], b.inertia[1], b.inertia[2], b.inertia[3], b.inertia[4], b.inertia[5], free);
+        std::printf("  %-3zu %-12s %s\n", k, ms.body.c_str(), what.c_str());
+        continue;
+      }
       if (ms.sinusoid()) {
         what = fmt::format("sinusoid, period {:g} s", 2.0 * std::numbers::pi / ms.omega);
         if (ms.translation[0] != 0 || ms.translation[1] != 0 || ms.translation[2] != 0)

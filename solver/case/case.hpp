@@ -87,14 +87,27 @@ struct SolidSpec {
   ShapePtr shape{};
 };
 
-enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid, Temperature, HeatFlux, Interface };
+// A solid the water moves (`motion: floating`, issue 32; sim/rigid_bodies.*): a rigid
+// body of Simbody's whose load each step is the fluid's pressure force on its particles plus gravity.
+struct BodySpec {
+  int solid = -1;                  // index into Case::solids
+  double mass = 0.0;               // [kg] (2D: per metre of depth)
+  Vec3d centre_of_mass{0, 0, 0};   // at t = 0 [m]
+  // About the centre of mass, world axes at t = 0: Ixx, Iyy, Izz, Ixy, Ixz, Iyz [kg m2] (2D: Izz per metre).
+  std::array<double, 6> inertia{0, 0, 0, 0, 0, 0};
+  // The degrees of freedom left free: x, y, z, rx, ry, rz (2D: x, y and rz); a locked one holds its
+  // speed at zero (docs/cases.md, "Floating solids").
+  std::array<bool, 6> free{true, true, true, true, true, true};
+};
+
+enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid, Temperature, HeatFlux, Interface, Body };
 
 struct ProbeSpec {
   std::string name;
   ProbeType type = ProbeType::Pressure;
   Vec3d position{0, 0, 0};  // pressure/velocity: the point; height: the gauge (x, y) in 3D, (x) in 2D;
                             // wall_pressure: the centre of the sensing disc, on a wall or solid face
-  std::string solid;        // force: the solid's name
+  std::string solid;        // force, body: the solid's name
   int face = -1;            // force, heat_flux: -1 the whole solid, else one face: 2 axis + (0 lower, 1 upper side)
   int axis = 0;             // front: the axis along which the front advances
   Vec3d normal{0, 0, 0};    // wall_pressure: unit normal of the face, pointing into the fluid
@@ -196,8 +209,10 @@ struct Case {
   double max_removed_fraction = 0.05;
 
   int tank_motion = -1;  // index into `motions`, or -1: the tank stands still
-  // Prescribed wall motions (motion.hpp), of the tank and of solids; at most kMaxMotions.
+  // Prescribed wall motions (motion.hpp), of the tank and of solids; at most kMaxMotions. A
+  // floating solid takes a slot too (MotionSpec::floating), through which the kernels see it move.
   std::vector<MotionSpec> motions;
+  std::vector<BodySpec> bodies;  // the floating solids, in the order of their solids
 
   std::vector<FluidBlock> fluid_blocks;
   double wet_bed = 0.0;  // depth of still water on the rest of the floor

@@ -15,6 +15,7 @@
 #include <tuple>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "case.hpp"
 #include "../io/input_file.hpp"
@@ -292,15 +293,17 @@ std::vector<std::array<double, N>> read_points(Section& s, const std::string& ke
   return out;
 }
 
+// The keys that give a solid or a fluid block a shape (read_shape); exactly one may be given.
+constexpr const char* kShapeKeys[] = {"mesh", "cylinder", "sphere", "disc", "polygon", "polyhedron"};
+
 // The shape of a solid or a fluid block beyond a box (shape.hpp; docs/cases.md "Shapes and
 // meshes"), or null when it has none: `mesh` (with scale, rotate, translate), `cylinder`,
 // `sphere` (3D), `disc` (2D), `polygon` (2D), `polyhedron` (3D). A mesh path is taken relative to
 // the case file's folder and stored absolute in the case the run keeps (checkpoints, restarts).
 ShapePtr read_shape(Section& s, const Case& c) {
   const int d = c.dim;
-  const char* kinds[] = {"mesh", "cylinder", "sphere", "disc", "polygon", "polyhedron"};
   const char* given = nullptr;
-  for (const char* k : kinds)
+  for (const char* k : kShapeKeys)
     if (s.has(k)) {
       if (given) s.fail(s.raw(k), k, std::string("give one shape: '") + given + "' or '" + k + "'");
       given = k;
@@ -384,8 +387,8 @@ void check_shape_in_tank(Section& s, const ShapePtr& shape, const Case& c, const
     ratio = std::max(ratio, (shape->hi[k] - shape->lo[k]) / c.tank_size[k]);
   }
   if (in) return;
-  const char* key = s.has("mesh") ? "mesh" : nullptr;
-  for (const char* k : {"cylinder", "sphere", "disc", "polygon", "polyhedron"})
+  const char* key = nullptr;
+  for (const char* k : kShapeKeys)
     if (!key && s.has(k)) key = k;
   std::string m = fmt::format("{} lies (partly) outside the tank: its bounding box is [{:g}, {:g}, {:g}] to [{:g}, {:g}, {:g}]", what,
                               shape->lo[0], shape->lo[1], shape->lo[2], shape->hi[0], shape->hi[1], shape->hi[2]);
@@ -610,6 +613,20 @@ constexpr double kLargestCoordinate = 1.0e7;  // metres
 
 constexpr double kDegrees = 3.14159265358979323846 / 180.0;
 
+// The farthest corner of the box [lo, hi] from `centre`.
+double reach(const Vec3& centre, const Vec3d& lo, const Vec3d& hi, int d) {
+  double out = 0.0;
+  for (int corner = 0; corner < (1 << d); ++corner) {
+    double r2 = 0.0;
+    for (int k = 0; k < d; ++k) {
+      const double x = (corner >> k & 1) ? hi[k] : lo[k];
+      r2 += (x - centre[k]) * (x - centre[k]);
+    }
+    out = std::max(out, std::sqrt(r2));
+  }
+  return out;
+}
+
 // A `motion:` map of the tank or of a solid (docs/cases.md, Motions). `lo`, `hi`: the moving body's
 // extent (for its default centre and its reach).
 MotionSpec read_motion(Section& m, const Case& c, const std::string& body, const Vec3d& lo, const Vec3d& hi) {
@@ -673,16 +690,117 @@ MotionSpec read_motion(Section& m, const Case& c, const std::string& body, const
   spec.end_ramp = m.number("end_ramp", spec.ramp);
   if (spec.end_ramp < 0 || (spec.end && spec.end_ramp > *spec.end))
     m.fail(m.raw("end_ramp"), "end_ramp", "must be >= 0 and not longer than 'end'");
-  // The farthest corner of the body from the centre.
-  for (int corner = 0; corner < (1 << d); ++corner) {
-    double r2 = 0.0;
-    for (int k = 0; k < d; ++k) {
-      const double x = (corner >> k & 1) ? hi[k] : lo[k];
-      r2 += (x - spec.centre[k]) * (x - spec.centre[k]);
-    }
-    spec.reach = std::max(spec.reach, std::sqrt(r2));
-  }
+  spec.reach = reach(spec.centre, lo, hi, d);
   m.finish();
+  return spec;
+}
+
+// The mass, centre of mass and inertia matrix (about it) of a solid of uniform density: exact for a
+// box, else by the midpoint rule over a grid of its bounding box (dp/4 in 2D, dp/2 in 3D, coarser
+// beyond 4 million samples), the shape's signed distance saying what is inside.
+BodySpec uniform_body(const SolidSpec& solid, double density, const Case& c) {
+  const int d = c.dim;
+  BodySpec b;
+  const Vec3d &lo = solid.box.min, &hi = solid.box.max;
+  if (!solid.shape) {
+    double volume = 1.0, e[3] = {0, 0, 0};
+    for (int k = 0; k < d; ++k) e[k] = hi[k] - lo[k], volume *= e[k], b.centre_of_mass[k] = 0.5 * (lo[k] + hi[k]);
+    b.mass = density * volume;
+    b.inertia = {b.mass * (e[1] * e[1] + e[2] * e[2]) / 12.0, b.mass * (e[0] * e[0] + e[2] * e[2]) / 12.0,
+                 b.mass * (e[0] * e[0] + e[1] * e[1]) / 12.0, 0.0, 0.0, 0.0};
+    return b;
+  }
+  double step = c.dp / (d == 2 ? 4.0 : 2.0);
+  auto samples = [&](double h) {
+    double n = 1.0;
+    for (int k = 0; k < d; ++k) n *= std::ceil((hi[k] - lo[k]) / h);
+    return n;
+  };
+  while (samples(step) > 4.0e6) step *= 1.25;
+  int n[3] = {1, 1, 1};
+  for (int k = 0; k < d; ++k) n[k] = std::max(1, static_cast<int>(std::ceil((hi[k] - lo[k]) / step)));
+  double m = 0.0, first[3] = {0, 0, 0}, second[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  double cell = 1.0;
+  for (int k = 0; k < d; ++k) cell *= (hi[k] - lo[k]) / n[k];
+  for (int i = 0; i < n[0]; ++i)
+    for (int j = 0; j < n[1]; ++j)
+      for (int l = 0; l < n[2]; ++l) {
+        const int ijk[3] = {i, j, l};
+        double x[3] = {0, 0, 0}, normal[3];
+        for (int k = 0; k < d; ++k) x[k] = lo[k] + (ijk[k] + 0.5) * (hi[k] - lo[k]) / n[k];
+        if (!(solid.shape->distance(x, normal) < 0.0)) continue;
+        m += 1.0;
+        for (int a = 0; a < 3; ++a) {
+          first[a] += x[a];
+          for (int q = 0; q < 3; ++q) second[a][q] += x[a] * x[q];
+        }
+      }
+  if (m == 0.0) return b;
+  b.mass = density * m * cell;
+  for (int a = 0; a < d; ++a) b.centre_of_mass[a] = first[a] / m;
+  // Central second moments S_aq = sum x_a x_q / m - c_a c_q; I = (tr S) 1 - S, times the mass.
+  double S[3][3];
+  for (int a = 0; a < 3; ++a)
+    for (int q = 0; q < 3; ++q) S[a][q] = second[a][q] / m - b.centre_of_mass[a] * b.centre_of_mass[q];
+  const double trace = S[0][0] + S[1][1] + S[2][2];
+  b.inertia = {b.mass * (trace - S[0][0]), b.mass * (trace - S[1][1]), b.mass * (trace - S[2][2]),
+               -b.mass * S[0][1], -b.mass * S[0][2], -b.mass * S[1][2]};
+  return b;
+}
+
+// A floating solid's keys (`motion: floating` on solid number `index`; docs/cases.md, "Floating
+// solids"): its BodySpec (mass from `mass` or `density`, centre of mass and inertia computed unless
+// given, the free degrees of freedom) and the motion slot through which the kernels see it move.
+MotionSpec read_floating(Section& m, Case& c, const SolidSpec& solid, int index) {
+  const int d = c.dim;
+  if (!body_support())
+    m.fail(m.raw("motion"), "motion", "this spate was built without Simbody (libsimbody-dev), which floating solids need");
+  if (m.has("mass") == m.has("density"))
+    m.fail(m.node(), "density", "a floating solid needs its density [kg/m3] or its mass [kg" + std::string(d == 2 ? " per metre" : "") + "] (one of them)");
+  BodySpec b = uniform_body(solid, 1.0, c);
+  if (!(b.mass > 0)) m.fail(m.node(), "motion", "solid '" + solid.name + "' holds no volume to give a mass to");
+  const double density = m.has("density") ? m.number("density") : m.number("mass") / b.mass;
+  if (!(density > 0)) m.fail(m.raw(m.has("density") ? "density" : "mass"), m.has("density") ? "density" : "mass", "must be > 0");
+  b = uniform_body(solid, density, c);
+  b.solid = index;
+  b.centre_of_mass = m.vector("centre_of_mass", d, b.centre_of_mass);
+  if (m.has("inertia")) {
+    const YAML::Node n = m.raw("inertia");
+    if (d == 2) {
+      b.inertia = {0, 0, m.number("inertia"), 0, 0, 0};
+      if (!(b.inertia[2] > 0)) m.fail(n, "inertia", "must be > 0 [kg m2 per metre]: the moment about z through the centre of mass");
+    } else {
+      if (!n.IsSequence() || (n.size() != 3 && n.size() != 6))
+        m.fail(n, "inertia", "expected [Ixx, Iyy, Izz] or [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] [kg m2] about the centre of mass");
+      b.inertia = {0, 0, 0, 0, 0, 0};
+      for (std::size_t k = 0; k < n.size(); ++k) b.inertia[k] = m.to_number(n[k], "inertia");
+      const auto& I = b.inertia;
+      if (!(I[0] > 0 && I[1] > 0 && I[2] > 0) || I[0] + I[1] < I[2] || I[0] + I[2] < I[1] || I[1] + I[2] < I[0])
+        m.fail(n, "inertia", "is not the inertia of a body: the moments must be > 0 and each at most the sum of the other two");
+    }
+  }
+  if (m.has("free")) {
+    const YAML::Node n = m.raw("free");
+    const std::vector<std::string> names = d == 2 ? std::vector<std::string>{"x", "y", "rz"}
+                                                  : std::vector<std::string>{"x", "y", "z", "rx", "ry", "rz"};
+    if (!n.IsSequence() || n.size() == 0)
+      m.fail(n, "free", "expected a list of the degrees of freedom left free, of: " + fmt::format("{}", fmt::join(names, ", ")));
+    b.free = {false, false, false, false, false, false};
+    for (std::size_t k = 0; k < n.size(); ++k) {
+      const std::string name = n[k].IsScalar() ? n[k].Scalar() : "";
+      const auto at = std::find(names.begin(), names.end(), name);
+      if (at == names.end()) m.fail(n[k], "free", "'" + name + "' is not one of: " + fmt::format("{}", fmt::join(names, ", ")));
+      const int dof = name == "x" ? 0 : name == "y" ? 1 : name == "z" ? 2 : name == "rx" ? 3 : name == "ry" ? 4 : 5;
+      b.free[dof] = true;
+    }
+  }
+  if (d == 2) b.free[2] = b.free[3] = b.free[4] = false;
+  MotionSpec spec;
+  spec.body = solid.name;
+  spec.floating = static_cast<int>(c.bodies.size());
+  spec.centre = b.centre_of_mass;
+  spec.reach = reach(spec.centre, solid.box.min, solid.box.max, d);
+  c.bodies.push_back(b);
   return spec;
 }
 
@@ -1115,10 +1233,19 @@ Case read(Section& root, const std::string& file) {
       spec.thermal = read_thermal(*t, c, /*wall=*/true, /*solid=*/true);
       t->finish();
     }
-    if (auto m = s.child("motion")) {
+    if (s.has("motion") && s.raw("motion").IsScalar()) {
+      // `motion: floating`: the water moves it (its mass and the rest are keys of the solid).
+      if (s.raw("motion").Scalar() != "floating")
+        s.fail(s.raw("motion"), "motion", "'" + s.raw("motion").Scalar() + "' is not a motion: 'floating', or a map of a prescribed motion's keys");
+      spec.motion = static_cast<int>(c.motions.size());
+      c.motions.push_back(read_floating(s, c, spec, static_cast<int>(c.solids.size())));
+    } else if (auto m = s.child("motion")) {
       spec.motion = static_cast<int>(c.motions.size());
       c.motions.push_back(read_motion(*m, c, spec.name, spec.box.min, spec.box.max));
     }
+    if (spec.motion < 0 || c.motions[spec.motion].floating < 0)
+      for (const char* key : {"density", "mass", "centre_of_mass", "inertia", "free"})
+        if (s.has(key)) s.fail(s.raw(key), key, "only a floating solid (motion: floating) takes '" + std::string(key) + "'");
     s.finish();
     if (!solid_names.insert(spec.name).second) s.fail(s.raw("name"), "name", "solid '" + spec.name + "' is defined twice");
     if (!spec.shape && !inside(spec.box, c.tank_origin, tank_hi, d, tol)) s.fail(s.node(), "max", "solid lies (partly) outside the tank");
@@ -1156,7 +1283,8 @@ Case read(Section& root, const std::string& file) {
                                      {{"pressure", ProbeType::Pressure}, {"velocity", ProbeType::Velocity}, {"height", ProbeType::Height},
                                       {"force", ProbeType::Force}, {"front", ProbeType::Front}, {"wall_pressure", ProbeType::WallPressure},
                                       {"centroid", ProbeType::Centroid}, {"temperature", ProbeType::Temperature},
-                                      {"heat_flux", ProbeType::HeatFlux}, {"interface", ProbeType::Interface}});
+                                      {"heat_flux", ProbeType::HeatFlux}, {"interface", ProbeType::Interface},
+                                      {"body", ProbeType::Body}});
     if ((probe.type == ProbeType::Temperature || probe.type == ProbeType::HeatFlux) && !c.heat)
       p.fail(p.raw("type"), "type", "a " + p.text("type") + " probe needs heat transfer (a `heat:` section)");
     // A phase (fluid) to measure: required by a centroid, optional for a point, a gauge or a front.
@@ -1220,6 +1348,15 @@ Case read(Section& root, const std::string& file) {
           if (shaped_solid(probe.solid)) p.fail(p.raw("face"), "face", "solid '" + probe.solid + "' is not a box: its force is the whole solid's");
         }
         break;
+      case ProbeType::Body: {
+        probe.solid = p.text("solid");
+        if (!solid_names.count(probe.solid)) p.fail(p.raw("solid"), "solid", "no solid named '" + probe.solid + "'");
+        bool floating = false;
+        for (const SolidSpec& solid : c.solids)
+          if (solid.name == probe.solid && solid.motion >= 0) floating = c.motions[solid.motion].floating >= 0;
+        if (!floating) p.fail(p.raw("solid"), "solid", "solid '" + probe.solid + "' does not float (motion: floating)");
+        break;
+      }
       case ProbeType::WallPressure:
         read_wall_sensor(p, c, probe);
         // The sensor reads Adami's pressure with a static wall's (g - a_w) at a fixed point.
@@ -1249,6 +1386,7 @@ Case read(Section& root, const std::string& file) {
         if (solid.name == body) motion = solid.motion;
       if (body != "tank" && !solid_names.count(body)) p.fail(p.raw("follow"), "follow", "no solid named '" + body + "' (or 'tank')");
       if (motion < 0) p.fail(p.raw("follow"), "follow", "'" + body + "' does not move (it has no motion)");
+      if (c.motions[motion].floating >= 0) p.fail(p.raw("follow"), "follow", "'" + body + "' floats: probes follow prescribed motions only");
       probe.follow = motion;
     }
     p.finish();

@@ -80,6 +80,14 @@ void rotation_matrix(const Vec3& axis, double angle, double R[3][3]) {
 
 }  // namespace
 
+bool body_support() {
+#ifdef SPATE_WITH_BODIES
+  return true;
+#else
+  return false;
+#endif
+}
+
 MotionSet::MotionSet(std::vector<MotionSpec> specs, int dim) : dim_(dim), specs_(std::move(specs)) {
   for (const MotionSpec& s : specs_) {
     Segment first;
@@ -144,6 +152,10 @@ MotionSample MotionSet::sample(int k, double t) const {
 Vec3 MotionSet::bound() const {
   Vec3 b{0, 0, 0};
   for (const MotionSpec& s : specs_) {
+    if (s.floating >= 0) {  // a floating solid goes where the water takes it, inside the tank, turning in place
+      for (int a = 0; a < dim_; ++a) b[a] += s.reach;
+      continue;
+    }
     double translation[3] = {std::fabs(s.translation[0]), std::fabs(s.translation[1]), std::fabs(s.translation[2])};
     double angle = std::fabs(s.rotation);
     if (!s.sinusoid()) {
@@ -164,6 +176,7 @@ void MotionSet::set_step(PhysicsParams& P, double t0, double t1) const {
   P.motions = size();
   for (int k = 0; k < size(); ++k) {
     const MotionSpec& s = specs_[k];
+    if (s.floating >= 0) continue;  // RigidBodies::set_step
     const MotionSample a = sample(k, t0), b = sample(k, t1);
     MotionState& m = P.motion[k];
     MotionStep& step = P.motion_step[k];
@@ -182,6 +195,7 @@ void MotionSet::set_step(PhysicsParams& P, double t0, double t1) const {
 
 std::optional<std::string> MotionSet::check_amplitude(int k, double scale) const {
   if (k < 0 || k >= size()) return "the case has " + std::to_string(size()) + " motion(s); there is no motion " + std::to_string(k);
+  if (specs_[k].floating >= 0) return "motion " + std::to_string(k) + " (" + specs_[k].body + ") is a floating solid: the water moves it";
   if (!(scale >= 0.0 && scale <= kMaxMotionAmplitudeScale))
     return "amplitude scale " + std::to_string(scale) + " is outside [0, " + std::to_string(kMaxMotionAmplitudeScale) + "]";
   return std::nullopt;
@@ -189,6 +203,7 @@ std::optional<std::string> MotionSet::check_amplitude(int k, double scale) const
 
 std::optional<std::string> MotionSet::check_frequency(int k, double hertz) const {
   if (k < 0 || k >= size()) return "the case has " + std::to_string(size()) + " motion(s); there is no motion " + std::to_string(k);
+  if (specs_[k].floating >= 0) return "motion " + std::to_string(k) + " (" + specs_[k].body + ") is a floating solid: the water moves it";
   if (!specs_[k].sinusoid()) return "motion " + std::to_string(k) + " (" + specs_[k].body + ") is a time series; only a sinusoid has a frequency";
   if (!(hertz > 0.0 && hertz <= 100.0)) return "frequency " + std::to_string(hertz) + " Hz is outside (0, 100]";
   return std::nullopt;

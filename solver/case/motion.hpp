@@ -38,7 +38,10 @@ struct MotionSpec {
   std::optional<double> end;  // the motion stops here (smoothly, over end_ramp seconds before it)
   double end_ramp = 0.0;
   double reach = 0.0;      // the largest distance of a point of the body from `centre` [m]
-  bool sinusoid() const { return file.empty(); }
+  // A floating solid (index into Case::bodies): the water moves it (sim/rigid_bodies.*); its
+  // state each step comes from its dynamics, not from this spec, whose centre is its centre of mass.
+  int floating = -1;
+  bool sinusoid() const { return file.empty() && floating < 0; }
 };
 
 // The largest amplitude scale steering may set (the lattice leaves room for it).
@@ -95,6 +98,9 @@ class MotionSet {
   // derivatives at the samples.
   std::vector<std::array<std::vector<double>, 4>> columns_, moments_;
 };
+
+// Whether this build moves floating solids (Simbody found at configure time; sim/rigid_bodies.*).
+bool body_support();
 
 // Reads a motion time series: a CSV file with a header naming its columns, `time` [s] and any of
 // `x`, `y`, `z` [m] (displacements) and `angle` [degrees]. Throws std::runtime_error naming the

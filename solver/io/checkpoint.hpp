@@ -61,6 +61,9 @@ struct CheckpointMeta {
   // the case); what a restart replays. Not written (steering_log is the file's form).
   std::vector<SteeringChange> steering_history;
   std::int64_t removed = 0;  // fluid particles removed through open sides before this step
+  // The floating solids' state and last loads (RigidBodies::save; empty without them): attribute
+  // `bodies`, part of the header checksum when there is one.
+  std::string bodies;
   std::string geometry_hash;  // geometry_hash() of the case (generator.hpp); empty before version 3
   int format_version = kCheckpointFormatVersion;  // of the file read (writes use the current one)
   bool derived_saved = false;  // read: the file held the derived datasets (else they are zero)

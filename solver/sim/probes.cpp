@@ -314,13 +314,11 @@ std::vector<double> sample_centroid(SlabWorker& w, int phase) {
 
 namespace {
 
-// Pressure force of the fluid on every owned particle of material `kind` (a solid), as
-// (id, fx, fy, fz) records. For one face of its box (face >= 0): the component along the face's axis
-// of the force on the particles less than a kernel support below that face (the fluid beyond the
-// face is all they can reach through it); a particle near an edge gives each of its faces that
-// face's component.
-Bytes solid_force_records(SlabWorker& w, std::uint8_t kind, const Box& box, int face) {
-  Bytes out;
+// Calls fn(i, f) with the pressure force f[3] of the fluid on every owned particle i of material
+// `kind` (a solid). For one face of its box (face >= 0): only the particles less than a kernel
+// support below that face (the fluid beyond the face is all they can reach through it).
+template <class Fn>
+void for_each_solid_force(SlabWorker& w, std::uint8_t kind, const Box& box, int face, Fn&& fn) {
   ParticleStore& p = w.particles();
   const CellGrid& grid = w.grid();
   dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
@@ -340,12 +338,47 @@ Bytes solid_force_records(SlabWorker& w, std::uint8_t kind, const Box& box, int 
           for (std::uint32_t j = b; j < e; ++j)
             if (w.params().is_fluid(p.material[j])) f += wall_pressure_force<Kernel, Dim>(w.params(), wi, load_state<Dim>(p, j));
         });
-        float rec[4] = {0, 0, 0, 0};
-        std::memcpy(&rec[0], &p.id[i], sizeof(float));
-        for (int k = 0; k < Dim; ++k) rec[1 + k] = face < 0 || k == face / 2 ? f[k] : 0.0f;
-        out.insert(out.end(), reinterpret_cast<char*>(rec), reinterpret_cast<char*>(rec) + sizeof rec);
+        float out[3] = {0, 0, 0};
+        for (int k = 0; k < Dim; ++k) out[k] = f[k];
+        fn(i, out);
       }
     }
+  });
+}
+
+// The pressure force of the fluid on every owned particle of material `kind` (a solid), as
+// (id, fx, fy, fz) records; for one face of its box (face >= 0), the component along the face's
+// axis (a particle near an edge gives each of its faces that face's component).
+Bytes solid_force_records(SlabWorker& w, std::uint8_t kind, const Box& box, int face) {
+  Bytes out;
+  const ParticleStore& p = w.particles();
+  for_each_solid_force(w, kind, box, face, [&](std::uint32_t i, const float f[3]) {
+    float rec[4] = {0, 0, 0, 0};
+    std::memcpy(&rec[0], &p.id[i], sizeof(float));
+    for (int k = 0; k < 3; ++k) rec[1 + k] = face < 0 || k == face / 2 ? f[k] : 0.0f;
+    out.insert(out.end(), reinterpret_cast<char*>(rec), reinterpret_cast<char*>(rec) + sizeof rec);
+  });
+  return out;
+}
+
+// The force and the torque about `centre` of the fluid's pressure on every owned particle of a
+// floating solid, as (id, fx, fy, fz, tx, ty, tz) records, in double.
+struct LoadRecord {
+  std::uint32_t id;
+  double v[6];
+};
+Bytes body_load_records(SlabWorker& w, std::uint8_t kind, const std::array<double, 3>& centre) {
+  Bytes out;
+  const ParticleStore& p = w.particles();
+  const int d = w.lattice().dim;
+  for_each_solid_force(w, kind, Box{}, -1, [&](std::uint32_t i, const float f[3]) {
+    LoadRecord rec{p.id[i], {f[0], f[1], f[2], 0, 0, 0}};
+    double r[3] = {0, 0, 0};
+    for (int k = 0; k < d; ++k) r[k] = static_cast<double>(p.pos[k][i]) - centre[k];
+    rec.v[3] = r[1] * rec.v[2] - r[2] * rec.v[1];
+    rec.v[4] = r[2] * rec.v[0] - r[0] * rec.v[2];
+    rec.v[5] = r[0] * rec.v[1] - r[1] * rec.v[0];
+    out.insert(out.end(), reinterpret_cast<char*>(&rec), reinterpret_cast<char*>(&rec) + sizeof rec);
   });
   return out;
 }
@@ -466,6 +499,28 @@ std::vector<double> sum_by_id(const std::vector<Bytes>& parts) {
 
 }  // namespace
 
+std::vector<BodyLoad> body_loads(SlabWorker& w, const RigidBodies& bodies) {
+  std::vector<BodyLoad> loads(bodies.size());
+  if (bodies.empty()) return loads;
+  // The solid particles' sums reach across slab faces: the ghosts must hold their owners' state.
+  w.refresh_ghosts();
+  for (int b = 0; b < bodies.size(); ++b) {
+    const std::uint8_t kind = w.params().materials.solid(bodies.solid(b));
+    std::vector<LoadRecord> recs;
+    for (const Bytes& part : w.transport().allgather(body_load_records(w, kind, bodies.state(b).centre)))
+      for (std::size_t k = 0; k + sizeof(LoadRecord) <= part.size(); k += sizeof(LoadRecord)) {
+        LoadRecord r;
+        std::memcpy(&r, part.data() + k, sizeof r);
+        recs.push_back(r);
+      }
+    // Summed in id order: the same total however the body is split between slabs.
+    std::sort(recs.begin(), recs.end(), [](const LoadRecord& a, const LoadRecord& c) { return a.id < c.id; });
+    for (const LoadRecord& r : recs)
+      for (int k = 0; k < 3; ++k) loads[b].force[k] += r.v[k], loads[b].torque[k] += r.v[3 + k];
+  }
+  return loads;
+}
+
 std::vector<std::string> probe_columns(const ProbeSpec& p, int dim) {
   const char* axes[3] = {"x", "y", "z"};
   std::vector<std::string> columns;
@@ -488,6 +543,23 @@ std::vector<std::string> probe_columns(const ProbeSpec& p, int dim) {
     case ProbeType::Height: columns.push_back("height[m]"); break;
     case ProbeType::Force: components("f", dim == 2 ? "N/m" : "N"); break;  // 2D: per metre of depth
     case ProbeType::Front: columns.push_back("front[m]"); break;
+    case ProbeType::Body:
+      // Centre of mass, angles, velocities, the fluid's force and its torque about the centre of mass.
+      components("", "m");
+      if (dim == 2) {
+        columns.push_back("angle[deg]");
+        components("v", "m/s");
+        columns.push_back("omega[rad/s]");
+        components("f", "N/m");
+        columns.push_back("torque[N]");  // N m per metre of depth
+      } else {
+        components("r", "deg");
+        components("v", "m/s");
+        components("w", "rad/s");
+        components("f", "N");
+        components("t", "N m");
+      }
+      break;
     case ProbeType::Centroid:
       for (int k = 0; k < dim; ++k) columns.push_back(std::string(axes[k]) + "[m]");
       components("v", "m/s");
@@ -528,6 +600,7 @@ std::string probe_description(const ProbeSpec& p, int dim) {
     case ProbeType::Interface: return "interface of " + p.phase_name + ": half its vertical extent, its top and bottom";
     case ProbeType::Force:
       return "pressure force on solid '" + p.solid + "'" + (p.face >= 0 ? fmt::format(" face {}{}", p.face % 2 ? "+" : "-", axes[p.face / 2]) : "");
+    case ProbeType::Body: return "floating solid '" + p.solid + "': centre of mass, angles, velocities, the fluid's force and torque";
     case ProbeType::Front:
       return fmt::format("front{} along {}", of_phase, axes[p.axis]) + (p.min_depth > 0 ? fmt::format(" (water at least {:g} m deep)", p.min_depth) : "");
   }
@@ -611,7 +684,8 @@ ProbeSet::ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool wri
   }
 }
 
-std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step, SlabWorker& w, const MotionSet* motions) {
+std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step, SlabWorker& w, const MotionSet* motions,
+                                                  const RigidBodies* bodies) {
   std::vector<std::vector<double>> rows;
   // Near a slab face a probe sums over ghosts: they must hold the same values as their owners.
   w.refresh_ghosts();
@@ -661,6 +735,28 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
         const double q = sum_by_id(t.allgather(heat_flux_records(w, p, case_)))[0] / heat_flux_area(p, case_);
         row.push_back(q);
         if (p.length > 0) row.push_back(q * p.length / (p.conductivity * p.temperature_difference));
+        break;
+      }
+      case ProbeType::Body: {
+        int b = 0;
+        while (bodies && b < bodies->size() && case_.solids[bodies->solid(b)].name != p.solid) ++b;
+        if (!bodies || b == bodies->size()) {
+          row.assign(probe_columns(p, case_.dim).size(), kNaN);
+          break;
+        }
+        const BodyState& s = bodies->state(b);
+        const BodyLoad& l = bodies->load(b);
+        const double kDeg = 180.0 / 3.14159265358979323846;
+        const int d = case_.dim;
+        auto put = [&](const std::array<double, 3>& v, int from, int n, double scale = 1.0) {
+          for (int k = from; k < from + n; ++k) row.push_back(scale * v[k]);
+        };
+        put(s.centre, 0, d);
+        d == 2 ? put(s.angles, 2, 1, kDeg) : put(s.angles, 0, 3, kDeg);
+        put(s.velocity, 0, d);
+        d == 2 ? put(s.angular_velocity, 2, 1) : put(s.angular_velocity, 0, 3);
+        put(l.force, 0, d);
+        d == 2 ? put(l.torque, 2, 1) : put(l.torque, 0, 3);
         break;
       }
       case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis, front_level(p, case_), p.phase))); break;

@@ -22,6 +22,7 @@
 
 #include "../case/case.hpp"
 #include "../io/output_file.hpp"
+#include "rigid_bodies.hpp"
 #include "slab_worker.hpp"
 
 namespace spate {
@@ -49,8 +50,10 @@ class ProbeSet {
   // checkpoint, are dropped); none: start them afresh.
   ProbeSet(const Case& c, const std::filesystem::path& out_dir, bool writer, std::optional<std::int64_t> resume_step);
   // Collective over all slabs. Returns the sampled row values in probe order (for tests).
-  // `motions`: where probes that follow a moving body are at `time` (none: they stay put).
-  std::vector<std::vector<double>> sample(double time, std::int64_t step, SlabWorker& w, const MotionSet* motions = nullptr);
+  // `motions`: where probes that follow a moving body are at `time` (none: they stay put);
+  // `bodies`: the floating solids, for body probes (none: their rows are NaN).
+  std::vector<std::vector<double>> sample(double time, std::int64_t step, SlabWorker& w, const MotionSet* motions = nullptr,
+                                          const RigidBodies* bodies = nullptr);
   bool empty() const { return probes_.empty(); }
 
  private:
@@ -63,6 +66,10 @@ class ProbeSet {
   std::vector<Probe> probes_;
   std::vector<AppendFile> files_;
 };
+
+// The fluid's pressure load on each floating solid now: force and torque about its centre of mass,
+// summed in particle id order (the same on every slab, for any split). Collective over all slabs.
+std::vector<BodyLoad> body_loads(SlabWorker& w, const RigidBodies& bodies);
 
 // The probe's value columns with their units, as in its CSV header ("pressure[Pa]", "vx[m/s]", ...).
 std::vector<std::string> probe_columns(const ProbeSpec& p, int dim);

@@ -298,9 +298,16 @@ class Worker {
       if (change.name == "insitu_every" && s_.opts.insitu) s_.opts.insitu->set_interval(insitu_every);
     }
     steer.checkpoint_now = steer.stop = false;
+    // The floating solids (rigid_bodies.hpp): a restart continues from their saved state and loads
+    // (checked when the run was set up).
+    RigidBodies bodies(s_.c);
+    bodies_ = &bodies;
+    if (s_.restarted) bodies.restore(s_.start.bodies);
     motions.set_step(params, s_.start.time, s_.start.time);
+    bodies.set_step(params);
     w_.set_params(params);
     w_.prepare(!s_.restarted);
+    if (!bodies.empty() && !s_.restarted) bodies.set_loads(body_loads(w_, bodies));
 
     ProbeSet probes(s_.c, s_.opts.out_dir, writer, s_.restarted ? std::optional<std::int64_t>(s_.start.step) : std::nullopt);
     PvdIndex pvd(s_.opts.out_dir / "particles.pvd");
@@ -326,7 +333,7 @@ class Worker {
     // At most one probe row and one snapshot per step, whatever the intervals.
     auto output = [&](bool final_step) {
       if (!probes.empty() && (probe_dt <= 0 || time >= next_probe - 1e-9 * probe_dt || final_step)) {
-        probes.sample(time, step, w_, &motions);
+        probes.sample(time, step, w_, &motions, &bodies);
         if (probe_dt > 0) next_probe = next_on_grid(time, probe_dt);
       }
       if (out_dt > 0 && (time >= next_output - 1e-9 * out_dt || (final_step && last_snapshot != step))) {
@@ -396,6 +403,8 @@ class Worker {
         imbalance_log.push_back(w_.rebalance(kMinColumnsPerSlab));
       if (motions.size() > 0) {  // the walls' rigid map over this step and their state at its end
         motions.set_step(params, time, time + dt);
+        bodies.advance(time, time + dt);
+        bodies.set_step(params);
         w_.set_params(params);
       }
       if (auto fault = w_.step(static_cast<float>(dt))) {
@@ -438,6 +447,7 @@ class Worker {
         unstable = fmt::format("step {}, t = {:.17g} s: the time step {} s no longer advances the simulated time", step, time, dt);
         break;
       }
+      if (!bodies.empty()) bodies.set_loads(body_loads(w_, bodies));
       dt = next_time_step();
       if (!(dt > 0) || !std::isfinite(dt)) {
         unstable = fmt::format("step {}, t = {:.6g} s: the time step collapsed to {}", step, time, dt);
@@ -585,6 +595,7 @@ class Worker {
       meta.steering_log = history_text(s_.steering_history);
       meta.removed = removed;
       meta.geometry_hash = geometry_hash(s_.c);
+      if (bodies_) meta.bodies = bodies_->save();
       std::vector<std::vector<FieldRef>> fields;
       for (auto* slab : all.slabs) fields.push_back(slab->fields());
       write_checkpoint(path, meta, s_.c.dim, all.by_id.size(), [&](std::size_t k, char* out) {
@@ -629,6 +640,7 @@ class Worker {
   Shared& s_;
   SlabTransport& t_;
   SlabWorker w_;
+  const RigidBodies* bodies_ = nullptr;  // the run's floating solids (for checkpoints)
 };
 
 }  // namespace
@@ -682,6 +694,11 @@ RunResult Simulation::run() {
     }
     s.restarted = true;
     s.steering_history = s.start.steering_history;  // checked by read_checkpoint
+    try {
+      RigidBodies(case_).restore(s.start.bodies);
+    } catch (const std::exception& e) {
+      throw InputError(fmt::format("{}: attribute 'bodies': {}", options_.restart->string(), e.what()));
+    }
   } else {
     s.initial = relax_particles(case_, generate_particles(case_));  // as generated unless `relax:` asks
   }
@@ -705,10 +722,12 @@ RunResult Simulation::run() {
       write_file_atomically(options_.out_dir / "case.yaml", "# The effective case of the run in this folder (" + case_.file +
                                                                 " with --set applied), written by spate run.\n" + case_.source_yaml + "\n");
     // The shaped solids' surfaces, geometry/solid_<material>.vtp, for drawing them: the in-situ
-    // free surface (pipelines/free_surface.py) and ParaView beside the snapshots.
+    // free surface (pipelines/free_surface.py) and ParaView beside the snapshots. Not for a solid
+    // that moves (prescribed or floating): the surface would stay where it started, so the
+    // pipeline draws it from its particles instead.
     if (group.rank == 0)
       for (std::size_t k = 0; k < case_.solids.size(); ++k)
-        if (case_.solids[k].shape) {
+        if (case_.solids[k].shape && case_.solids[k].motion < 0) {
           const int material = physics_params(case_).materials.solid(static_cast<int>(k));
           create_output_folder(options_.out_dir / "geometry");
           write_file_atomically(options_.out_dir / "geometry" / fmt::format("solid_{}.vtp", material), surface_vtp(*case_.solids[k].shape));

@@ -1,0 +1,124 @@
+#include "multibody.hpp"
+
+#include <Simbody.h>
+
+#include <stdexcept>
+
+namespace spate::multibody {
+
+// One Simbody system for all bodies: each hangs from the ground by a Planar (2D: rotation about z,
+// translation in x and y) or a Free (3D) mobilizer whose frame on the ground sits at the body's
+// centre of mass at t = 0 with world axes, so that its coordinates are the displacement and
+// rotation since t = 0. A locked degree of freedom is a ConstantSpeed constraint at zero on the
+// mobilizer's speed for it (Planar: u = (wz, vx, vy); Free: u = (w, v), world axes).
+struct System::Impl {
+  int dim = 3;
+  SimTK::MultibodySystem system;
+  SimTK::SimbodyMatterSubsystem matter{system};
+  SimTK::GeneralForceSubsystem forces{system};
+  SimTK::Force::DiscreteForces fluid{forces, matter};
+  std::vector<SimTK::MobilizedBody> bodies;
+  SimTK::State state;
+};
+
+namespace {
+
+// The mobilizer speed of each degree of freedom x, y, z, rx, ry, rz (-1: the mobilizer has none).
+constexpr int kPlanarSpeed[6] = {1, 2, -1, -1, -1, 0};
+constexpr int kFreeSpeed[6] = {3, 4, 5, 0, 1, 2};
+
+std::array<double, 3> array_of(const SimTK::Vec3& v) { return {v[0], v[1], v[2]}; }
+
+}  // namespace
+
+System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyInput>& bodies) : impl_(new Impl) {
+  using namespace SimTK;
+  Impl& m = *impl_;
+  m.dim = dim;
+  Force::UniformGravity(m.forces, m.matter, Vec3(g[0], g[1], dim == 2 ? 0.0 : g[2]));
+  for (const BodyInput& b : bodies) {
+    const auto& I = b.inertia;
+    // 2D: only Izz acts (Planar turns about z); the other moments just make a valid inertia.
+    const Inertia inertia = dim == 2 ? Inertia(I[2], I[2], I[2]) : Inertia(I[0], I[1], I[2], I[3], I[4], I[5]);
+    const Body::Rigid info(MassProperties(b.mass, Vec3(0), inertia));
+    const Transform at(Vec3(b.centre[0], b.centre[1], dim == 2 ? 0.0 : b.centre[2]));
+    MobilizedBody mob = dim == 2 ? MobilizedBody(MobilizedBody::Planar(m.matter.Ground(), at, info, Transform()))
+                                 : MobilizedBody(MobilizedBody::Free(m.matter.Ground(), at, info, Transform()));
+    for (int dof = 0; dof < 6; ++dof) {
+      const int u = (dim == 2 ? kPlanarSpeed : kFreeSpeed)[dof];
+      if (u >= 0 && !b.free[dof]) Constraint::ConstantSpeed(mob, MobilizerUIndex(u), 0.0);
+    }
+    m.bodies.push_back(mob);
+  }
+  m.state = m.system.realizeTopology();
+  set_loads(std::vector<Load>(bodies.size(), Load{}));
+}
+
+System::~System() = default;
+
+void System::set_loads(const std::vector<Load>& loads) {
+  Impl& m = *impl_;
+  for (std::size_t b = 0; b < m.bodies.size(); ++b) {
+    const Load& l = loads[b];
+    m.fluid.setOneBodyForce(m.state, m.bodies[b], SimTK::SpatialVec(SimTK::Vec3(l[3], l[4], l[5]), SimTK::Vec3(l[0], l[1], l[2])));
+  }
+  m.system.realize(m.state, SimTK::Stage::Acceleration);
+}
+
+void System::advance(double t0, double t1) {
+  using namespace SimTK;
+  Impl& m = *impl_;
+  m.state.setTime(t0);
+  // One fixed step of a 4th-order Runge-Kutta (Merson) from a fresh start: the result depends on
+  // the state and the loads alone, so that a restart continues bit for bit.
+  RungeKuttaMersonIntegrator integrator(m.system);
+  integrator.setFixedStepSize(t1 - t0);
+  integrator.setConstraintTolerance(1e-12);
+  integrator.initialize(m.state);
+  // The first call after initialize() only reports the start of the interval (StartOfContinuousInterval).
+  for (int calls = 0; calls < 8 && integrator.getTime() < t1; ++calls)
+    if (integrator.stepTo(t1) == Integrator::ReachedReportTime) break;
+  if (integrator.getTime() != t1) throw std::runtime_error("the floating solids' integrator did not reach the step's end");
+  m.state = integrator.getState();
+  m.system.realize(m.state, Stage::Acceleration);
+}
+
+std::vector<BodyOutput> System::state() const {
+  const Impl& m = *impl_;
+  std::vector<BodyOutput> out(m.bodies.size());
+  for (std::size_t b = 0; b < m.bodies.size(); ++b) {
+    const SimTK::MobilizedBody& mob = m.bodies[b];
+    BodyOutput& s = out[b];
+    s.centre = array_of(mob.getBodyOriginLocation(m.state));
+    s.velocity = array_of(mob.getBodyOriginVelocity(m.state));
+    s.angular_velocity = array_of(mob.getBodyAngularVelocity(m.state));
+    s.acceleration = array_of(mob.getBodyOriginAcceleration(m.state));
+    s.angular_acceleration = array_of(mob.getBodyAngularAcceleration(m.state));
+    const SimTK::Rotation& R = mob.getBodyRotation(m.state);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) s.rotation[i][j] = R[i][j];
+    s.angles = m.dim == 2 ? std::array<double, 3>{0.0, 0.0, mob.getOneQ(m.state, 0)} : array_of(R.convertRotationToBodyFixedXYZ());
+  }
+  return out;
+}
+
+std::vector<double> System::q(int b) const {
+  const SimTK::Vector v = impl_->bodies[b].getQAsVector(impl_->state);
+  return std::vector<double>(&v[0], &v[0] + v.size());
+}
+
+std::vector<double> System::u(int b) const {
+  const SimTK::Vector v = impl_->bodies[b].getUAsVector(impl_->state);
+  return std::vector<double>(&v[0], &v[0] + v.size());
+}
+
+bool System::set(int b, const std::vector<double>& q, const std::vector<double>& u) {
+  Impl& m = *impl_;
+  SimTK::MobilizedBody& mob = m.bodies[b];
+  if (static_cast<int>(q.size()) != mob.getNumQ(m.state) || static_cast<int>(u.size()) != mob.getNumU(m.state)) return false;
+  for (int k = 0; k < static_cast<int>(q.size()); ++k) mob.setOneQ(m.state, k, q[k]);
+  for (int k = 0; k < static_cast<int>(u.size()); ++k) mob.setOneU(m.state, k, u[k]);
+  return true;
+}
+
+}  // namespace spate::multibody

@@ -1,0 +1,48 @@
+#pragma once
+// The multibody system behind the floating solids (sim/rigid_bodies.*): Simbody, behind an
+// interface of plain types. Its translation unit is compiled as C++17: Simbody 3.7's headers do
+// not compile as C++20 (their index types' operator== turns ambiguous under C++20's rewritten
+// comparisons), so nothing of Simbody may reach a spate header.
+#include <array>
+#include <memory>
+#include <vector>
+
+namespace spate::multibody {
+
+struct BodyInput {
+  double mass = 0.0;              // [kg] (2D: per metre)
+  std::array<double, 3> centre{};  // centre of mass at t = 0 [m]
+  std::array<double, 6> inertia{};  // Ixx, Iyy, Izz, Ixy, Ixz, Iyz about it (2D: Izz acts)
+  std::array<bool, 6> free{};      // x, y, z, rx, ry, rz
+};
+
+struct BodyOutput {
+  std::array<double, 3> centre{}, velocity{}, angular_velocity{}, acceleration{}, angular_acceleration{};
+  std::array<std::array<double, 3>, 3> rotation{};
+  std::array<double, 3> angles{};  // 2D: (0, 0, the turn about z); 3D: body-fixed x-y-z [rad]
+};
+
+// Force (0..2) and torque about the centre of mass (3..5), world axes.
+using Load = std::array<double, 6>;
+
+class System {
+ public:
+  System(int dim, const std::array<double, 3>& gravity, const std::vector<BodyInput>& bodies);
+  ~System();
+  // The loads now: the accelerations follow.
+  void set_loads(const std::vector<Load>& loads);
+  // One fixed step from t0 to t1 with the loads held.
+  void advance(double t0, double t1);
+  std::vector<BodyOutput> state() const;
+  // Body b's generalised coordinates and speeds (for checkpoints).
+  std::vector<double> q(int b) const;
+  std::vector<double> u(int b) const;
+  // Returns false when their counts do not fit body b.
+  bool set(int b, const std::vector<double>& q, const std::vector<double>& u);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace spate::multibody

@@ -1,0 +1,140 @@
+#include "rigid_bodies.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "multibody.hpp"
+
+namespace spate {
+
+struct RigidBodies::Impl {
+  multibody::System system;
+};
+
+RigidBodies::RigidBodies(const Case& c) : case_(c) {
+  slots_.assign(c.bodies.size(), -1);
+  for (std::size_t k = 0; k < c.motions.size(); ++k)
+    if (c.motions[k].floating >= 0) slots_[c.motions[k].floating] = static_cast<int>(k);
+  if (c.bodies.empty()) return;
+  std::vector<multibody::BodyInput> in;
+  for (const BodySpec& b : c.bodies) in.push_back({b.mass, b.centre_of_mass, b.inertia, b.free});
+  impl_.reset(new Impl{multibody::System(c.dim, c.gravity, in)});
+  loads_.assign(c.bodies.size(), BodyLoad{});
+  read_state();
+  previous_ = states_;
+}
+
+RigidBodies::~RigidBodies() = default;
+
+void RigidBodies::read_state() {
+  states_.clear();
+  for (const multibody::BodyOutput& o : impl_->system.state())
+    states_.push_back({o.centre, o.velocity, o.angular_velocity, o.acceleration, o.angular_acceleration, o.rotation, o.angles});
+}
+
+void RigidBodies::apply_loads() {
+  std::vector<multibody::Load> loads;
+  for (const BodyLoad& l : loads_) loads.push_back({l.force[0], l.force[1], l.force[2], l.torque[0], l.torque[1], l.torque[2]});
+  impl_->system.set_loads(loads);
+  loaded_ = true;
+  read_state();
+}
+
+void RigidBodies::set_loads(const std::vector<BodyLoad>& loads) {
+  if (!impl_) return;
+  loads_ = loads;
+  apply_loads();
+}
+
+void RigidBodies::advance(double t0, double t1) {
+  if (!impl_) return;
+  previous_ = states_;
+  impl_->system.advance(t0, t1);
+  read_state();
+}
+
+std::string RigidBodies::save() const {
+  std::string out;
+  for (int b = 0; b < size(); ++b) {
+    out += case_.solids[solid(b)].name;
+    auto put = [&](const char* tag, const auto& values) {
+      out += std::string(" ") + tag;
+      for (double v : values) out += fmt::format(" {:a}", v);
+    };
+    put("q", impl_->system.q(b));
+    put("u", impl_->system.u(b));
+    std::array<double, 6> load{};
+    for (int k = 0; k < 3; ++k) load[k] = loads_[b].force[k], load[3 + k] = loads_[b].torque[k];
+    put("load", load);
+    out += "\n";
+  }
+  return out;
+}
+
+void RigidBodies::restore(const std::string& text) {
+  if (!impl_) {
+    if (!text.empty()) throw std::runtime_error("it holds floating solids' states, and the case has none");
+    return;
+  }
+  std::istringstream in(text);
+  std::string line;
+  for (int b = 0; b < size(); ++b) {
+    const std::string name = case_.solids[solid(b)].name;
+    if (!std::getline(in, line)) throw std::runtime_error(fmt::format("it has no state for floating solid '{}'", name));
+    std::istringstream words(line);
+    std::string word;
+    words >> word;
+    if (word != name) throw std::runtime_error(fmt::format("line {} is the state of '{}', expected floating solid '{}'", b + 1, word, name));
+    // The numbers after `tag`, up to the next tag or the line's end.
+    std::vector<std::pair<std::string, std::vector<double>>> parts;
+    while (words >> word) {
+      if (word == "q" || word == "u" || word == "load") {
+        parts.push_back({word, {}});
+        continue;
+      }
+      char* end = nullptr;
+      const double x = std::strtod(word.c_str(), &end);
+      if (parts.empty() || *end != '\0' || !std::isfinite(x))
+        throw std::runtime_error(fmt::format("floating solid '{}': '{}' is not a finite number after q, u or load", name, word));
+      parts.back().second.push_back(x);
+    }
+    if (parts.size() != 3 || parts[0].first != "q" || parts[1].first != "u" || parts[2].first != "load" || parts[2].second.size() != 6 ||
+        !impl_->system.set(b, parts[0].second, parts[1].second))
+      throw std::runtime_error(fmt::format("floating solid '{}': expected 'q' and 'u' with this body's coordinates and speeds, "
+                                           "then 'load' with 6 numbers", name));
+    for (int k = 0; k < 3; ++k) loads_[b].force[k] = parts[2].second[k], loads_[b].torque[k] = parts[2].second[3 + k];
+  }
+  if (std::getline(in, line) && !line.empty()) throw std::runtime_error("it holds more floating solids than the case");
+  apply_loads();
+  previous_ = states_;
+}
+
+void RigidBodies::set_step(PhysicsParams& P) const {
+  for (int b = 0; b < size(); ++b) {
+    const BodyState &now = states_[b], &before = previous_[b];
+    MotionState& m = P.motion[slots_[b]];
+    MotionStep& step = P.motion_step[slots_[b]];
+    for (int c = 0; c < 3; ++c) {
+      m.velocity[c] = static_cast<float>(now.velocity[c]);
+      m.angular_velocity[c] = static_cast<float>(now.angular_velocity[c]);
+      m.centre[c] = static_cast<float>(now.centre[c]);
+      m.acceleration[c] = loaded_ ? static_cast<float>(now.acceleration[c]) : 0.0f;
+      m.angular_acceleration[c] = loaded_ ? static_cast<float>(now.angular_acceleration[c]) : 0.0f;
+      step.from[c] = before.centre[c];
+      step.to[c] = now.centre[c];
+    }
+    // R(t1) R(t0)^T: the turn over the step.
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        double v = 0.0;
+        for (int k = 0; k < 3; ++k) v += now.rotation[i][k] * before.rotation[j][k];
+        step.rotation[i][j] = v;
+      }
+  }
+}
+
+}  // namespace spate

@@ -1,0 +1,173 @@
+// Floating solids (sim/rigid_bodies.*, sim/multibody.*; issue 32): the rigid-body dynamics against
+// closed-form motions under constant loads, locked degrees of freedom, the rigid map the kernels
+// get, checkpoint round trips, mass properties, and what the case loader accepts.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "case/case.hpp"
+#include "case_errors.hpp"
+#include "physics/params.hpp"
+#include "sim/rigid_bodies.hpp"
+
+namespace spate {
+namespace {
+
+// A 2D tank with one floating box (0.2 x 0.1 m, centre (0.6, 0.29)) and `extra` lines in its motion.
+std::string case_2d(const std::string& keys = "density: 500", const std::string& solid_shape = "") {
+  return "name: t\ndimensions: 2\ndp: 0.01\ngravity: [0, -9.81]\ntime: {end: 1}\ntank: {origin: [0, 0], size: [1.2, 0.5]}\n"
+         "fluid_blocks: [{min: [0, 0], max: [0.4, 0.3]}]\n"
+         "solids:\n  - name: box\n    " +
+         (solid_shape.empty() ? std::string("min: [0.5, 0.24]\n    max: [0.7, 0.34]") : solid_shape) + "\n    motion: floating\n    " + keys + "\n";
+}
+
+std::string case_3d(const std::string& keys = "density: 500") {
+  return "name: t\ndimensions: 3\ndp: 0.02\ngravity: [0, 0, -9.81]\ntime: {end: 1}\ntank: {origin: [0, 0, 0], size: [1, 1, 1]}\n"
+         "fluid_blocks: [{min: [0, 0, 0], max: [0.3, 1, 0.3]}]\n"
+         "solids:\n  - name: box\n    min: [0.4, 0.4, 0.4]\n    max: [0.6, 0.5, 0.7]\n    motion: floating\n    " + keys + "\n";
+}
+
+void run_steps(RigidBodies& b, int steps, double dt) {
+  for (int k = 0; k < steps; ++k) b.advance(k * dt, (k + 1) * dt);
+}
+
+TEST(RigidBodies, ABoxGetsItsMassCentreAndInertiaFromItsDensity) {
+  const Case c = parse_case(case_2d(), "case.yaml");
+  ASSERT_EQ(c.bodies.size(), 1u);
+  const BodySpec& b = c.bodies[0];
+  EXPECT_DOUBLE_EQ(b.mass, 10.0);  // 500 kg/m3 x 0.02 m2
+  EXPECT_NEAR(b.centre_of_mass[0], 0.6, 1e-12);
+  EXPECT_NEAR(b.centre_of_mass[1], 0.29, 1e-12);
+  EXPECT_NEAR(b.inertia[2], 10.0 * (0.04 + 0.01) / 12.0, 1e-12);
+  EXPECT_EQ(c.motions[0].floating, 0);
+  EXPECT_FALSE(c.motions[0].sinusoid());
+  // The same rectangle as a polygon: the inertia by sampling, within 0.1%.
+  const Case p = parse_case(case_2d("mass: 10", "polygon: [[0.5, 0.24], [0.7, 0.24], [0.7, 0.34], [0.5, 0.34]]"), "c.yaml");
+  EXPECT_NEAR(p.bodies[0].mass, 10.0, 1e-9);
+  EXPECT_NEAR(p.bodies[0].centre_of_mass[1], 0.29, 1e-9);
+  EXPECT_NEAR(p.bodies[0].inertia[2], b.inertia[2], 1e-3 * b.inertia[2]);
+  // A 3D box: Ixx = m (b^2 + c^2) / 12.
+  const Case d = parse_case(case_3d(), "case.yaml");
+  EXPECT_NEAR(d.bodies[0].mass, 500.0 * 0.2 * 0.1 * 0.3, 1e-12);
+  EXPECT_NEAR(d.bodies[0].inertia[0], d.bodies[0].mass * (0.01 + 0.09) / 12.0, 1e-12);
+  EXPECT_NEAR(d.bodies[0].inertia[2], d.bodies[0].mass * (0.04 + 0.01) / 12.0, 1e-12);
+}
+
+TEST(RigidBodies, AFreeBodyFallsAndTurnsAsNewtonSays) {
+  const Case c = parse_case(case_2d(), "case.yaml");
+  RigidBodies b(c);
+  const double m = c.bodies[0].mass, I = c.bodies[0].inertia[2];
+  BodyLoad l;
+  l.force = {2.0, 50.0, 0.0};
+  l.torque = {0.0, 0.0, 0.01};
+  b.set_loads({l});
+  run_steps(b, 100, 0.01);  // to t = 1 s
+  const BodyState& s = b.state(0);
+  const double ax = 2.0 / m, ay = 50.0 / m - 9.81, alpha = 0.01 / I;
+  EXPECT_NEAR(s.centre[0], 0.6 + 0.5 * ax, 1e-9);
+  EXPECT_NEAR(s.centre[1], 0.29 + 0.5 * ay, 1e-9);
+  EXPECT_NEAR(s.velocity[1], ay, 1e-9);
+  EXPECT_NEAR(s.acceleration[1], ay, 1e-9);
+  EXPECT_NEAR(s.angles[2], 0.5 * alpha, 1e-9);
+  EXPECT_NEAR(s.angular_velocity[2], alpha, 1e-9);
+  EXPECT_NEAR(s.rotation[1][0], std::sin(0.5 * alpha), 1e-9);
+}
+
+TEST(RigidBodies, LockedDegreesOfFreedomStayPut) {
+  const Case c = parse_case(case_2d("density: 500\n    free: [y]"), "case.yaml");
+  EXPECT_FALSE(c.bodies[0].free[0]);
+  EXPECT_TRUE(c.bodies[0].free[1]);
+  EXPECT_FALSE(c.bodies[0].free[5]);
+  RigidBodies b(c);
+  BodyLoad l;
+  l.force = {5.0, 120.0, 0.0};
+  l.torque = {0.0, 0.0, 0.3};
+  b.set_loads({l});
+  run_steps(b, 50, 0.01);
+  const BodyState& s = b.state(0);
+  EXPECT_EQ(s.centre[0], 0.6);
+  EXPECT_EQ(s.angles[2], 0.0);
+  EXPECT_NEAR(s.centre[1], 0.29 + 0.5 * (120.0 / 10.0 - 9.81) * 0.25, 1e-9);
+}
+
+TEST(RigidBodies, TheKernelsGetTheStepsRigidMapAndTheStateAtItsEnd) {
+  const Case c = parse_case(case_3d(), "case.yaml");
+  RigidBodies b(c);
+  BodyLoad l;
+  l.force = {1.0, 0.0, 0.0};
+  l.torque = {0.0, 0.0, 0.05};
+  b.set_loads({l});
+  run_steps(b, 20, 0.01);
+  const BodyState before = b.state(0);
+  b.advance(0.2, 0.21);
+  const BodyState& now = b.state(0);
+  PhysicsParams P;
+  b.set_step(P);
+  const MotionStep& st = P.motion_step[b.slot(0)];
+  // A point fixed in the body: x(t) = c(t) + R(t) r. The map sends x(t0) to x(t1).
+  const double r[3] = {0.05, -0.02, 0.1};
+  double x0[3], x1[3], mapped[3];
+  for (int i = 0; i < 3; ++i) {
+    x0[i] = before.centre[i], x1[i] = now.centre[i];
+    for (int j = 0; j < 3; ++j) x0[i] += before.rotation[i][j] * r[j], x1[i] += now.rotation[i][j] * r[j];
+  }
+  for (int i = 0; i < 3; ++i) {
+    mapped[i] = st.to[i];
+    for (int j = 0; j < 3; ++j) mapped[i] += st.rotation[i][j] * (x0[j] - st.from[j]);
+    EXPECT_NEAR(mapped[i], x1[i], 1e-12);
+  }
+  EXPECT_FLOAT_EQ(P.motion[0].velocity[0], static_cast<float>(now.velocity[0]));
+  EXPECT_FLOAT_EQ(P.motion[0].angular_velocity[2], static_cast<float>(now.angular_velocity[2]));
+  EXPECT_GT(now.angular_velocity[2], 0.0);
+}
+
+TEST(RigidBodies, ARestoredStateContinuesBitForBit) {
+  const Case c = parse_case(case_3d(), "case.yaml");
+  RigidBodies a(c), b(c);
+  BodyLoad l;
+  l.force = {1.0, -3.0, 20.0};
+  l.torque = {0.01, 0.02, 0.03};
+  a.set_loads({l});
+  run_steps(a, 10, 0.003);
+  b.restore(a.save());
+  a.advance(0.03, 0.033);
+  b.advance(0.03, 0.033);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(a.state(0).centre[k], b.state(0).centre[k]);
+    EXPECT_EQ(a.state(0).angular_velocity[k], b.state(0).angular_velocity[k]);
+  }
+  EXPECT_EQ(a.save(), b.save());
+  EXPECT_THROW(b.restore(""), std::runtime_error);
+  EXPECT_THROW(b.restore("other q 1 u 2 load 0 0 0 0 0 0\n"), std::runtime_error);
+  EXPECT_THROW(b.restore("box q 1 2 u 3 load 0 0 0 0 0 0\n"), std::runtime_error);
+}
+
+std::string test_sinking() {
+  std::string c = case_2d();
+  c.replace(c.find("motion: floating"), 16, "motion: sinking");
+  return c;
+}
+
+TEST(RigidBodies, TheLoaderRefusesWhatCannotFloat) {
+  using test::error_of;
+  EXPECT_NE(error_of(case_2d("centre_of_mass: [0.6, 0.29]")).find("needs its density"), std::string::npos);
+  EXPECT_NE(error_of(case_2d("density: 500\n    mass: 3")).find("one of them"), std::string::npos);
+  EXPECT_NE(error_of(case_2d("density: -5")).find("must be > 0"), std::string::npos);
+  EXPECT_NE(error_of(case_2d("density: 500\n    free: [z]")).find("'z' is not one of: x, y, rz"), std::string::npos);
+  EXPECT_NE(error_of(case_2d("density: 500\n    free: []")).find("key 'solids[0].free'"), std::string::npos);
+  EXPECT_NE(error_of(test_sinking()).find("'sinking' is not a motion"), std::string::npos);
+  EXPECT_NE(error_of(case_3d("density: 500\n    inertia: [1, 1, 5]")).find("is not the inertia of a body"), std::string::npos);
+  std::string fixed = case_2d();
+  fixed.replace(fixed.find("motion: floating"), 16, "hollow: true");
+  EXPECT_NE(error_of(fixed).find("only a floating solid (motion: floating) takes 'density'"), std::string::npos);
+  const std::string probe_on_static =
+      "name: t\ndimensions: 2\ndp: 0.01\ntime: {end: 1}\ntank: {origin: [0, 0], size: [1, 0.5]}\nfluid_blocks: [{min: [0, 0], max: [0.3, 0.3]}]\n"
+      "solids: [{name: wall, min: [0.5, 0], max: [0.6, 0.1]}]\nprobes: [{name: b, type: body, solid: wall}]\n";
+  EXPECT_NE(error_of(probe_on_static).find("does not float"), std::string::npos);
+  EXPECT_NE(error_of(case_2d() + "probes: [{name: p, type: pressure, position: [0.6, 0.1], follow: box}]\n").find("floats"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace spate
