@@ -98,6 +98,22 @@ struct BodySpec {
   // The degrees of freedom left free: x, y, z, rx, ry, rz (2D: x, y and rz); a locked one holds its
   // speed at zero (docs/cases.md, "Floating solids").
   std::array<bool, 6> free{true, true, true, true, true, true};
+  // A hinge (`hinge:`): the body turns about `axis` (2D: z) through `point` and nothing else, held
+  // by a rotational spring and damper [N m/rad, N m s/rad] (2D: per metre) about its start angle.
+  struct Hinge {
+    bool on = false;
+    Vec3d point{0, 0, 0}, axis{0, 0, 1};
+    double stiffness = 0.0, damping = 0.0;
+  } hinge;
+  // Linear springs and mooring lines (`springs:`) from a point of the body (at t = 0) to a fixed
+  // anchor: tension k (L - length) + c dL/dt along the line [N/m, N s/m] (2D: per metre); a `slack`
+  // line (a mooring) only pulls, and only when longer than its length.
+  struct Spring {
+    Vec3d point{0, 0, 0}, anchor{0, 0, 0};
+    double stiffness = 0.0, damping = 0.0, length = 0.0;
+    bool slack = false;
+  };
+  std::vector<Spring> springs;
 };
 
 enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid, Temperature, HeatFlux, Interface, Body };

@@ -795,6 +795,60 @@ MotionSpec read_floating(Section& m, Case& c, const SolidSpec& solid, int index)
     }
   }
   if (d == 2) b.free[2] = b.free[3] = b.free[4] = false;
+  // Whether x lies in the solid or within dp of it.
+  auto on_body = [&](const Vec3d& x) {
+    if (solid.shape) {
+      double point[3] = {x[0], x[1], d == 3 ? x[2] : 0.0}, normal[3];
+      return solid.shape->distance(point, normal) <= c.dp;
+    }
+    for (int k = 0; k < d; ++k)
+      if (x[k] < solid.box.min[k] - c.dp || x[k] > solid.box.max[k] + c.dp) return false;
+    return true;
+  };
+  auto non_negative = [](Section& sec, const char* key) {
+    const double v = sec.number(key, 0.0);
+    if (v < 0) sec.fail(sec.raw(key), key, "must be >= 0");
+    return v;
+  };
+  if (auto h = m.child("hinge")) {
+    if (m.has("free")) m.fail(m.raw("free"), "free", "a hinged solid turns about its hinge only: give 'hinge' or 'free', not both");
+    b.hinge.on = true;
+    b.hinge.point = h->vector("point", d);
+    if (!on_body(b.hinge.point))
+      h->fail(h->raw("point"), "point", fmt::format("the hinge lies outside solid '{}' (more than dp from it): a hinge joins the body to the ground "
+                                                    "where the body is", solid.name));
+    if (d == 3) {
+      const Vec3d a = h->vector("axis", 3);
+      const double n = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+      if (!(n > 0)) h->fail(h->raw("axis"), "axis", "the hinge's axis must not be zero");
+      for (int k = 0; k < 3; ++k) b.hinge.axis[k] = a[k] / n;
+    } else if (h->has("axis")) {
+      h->fail(h->raw("axis"), "axis", "a 2D hinge turns about z; it takes no axis");
+    }
+    b.hinge.stiffness = non_negative(*h, "stiffness");
+    b.hinge.damping = non_negative(*h, "damping");
+    h->finish();
+  }
+  for (auto& sp : m.list("springs")) {
+    BodySpec::Spring line;
+    line.point = sp.vector("point", d);
+    line.anchor = sp.vector("anchor", d);
+    if (!on_body(line.point))
+      sp.fail(sp.raw("point"), "point", fmt::format("the spring's end lies outside solid '{}' (more than dp from it)", solid.name));
+    for (int k = 0; k < d; ++k)
+      if (line.anchor[k] < c.tank_origin[k] - c.dp || line.anchor[k] > c.tank_origin[k] + c.tank_size[k] + c.dp)
+        sp.fail(sp.raw("anchor"), "anchor", "the anchor lies outside the tank (a mooring to nowhere): tie a spring or mooring line to a point of the tank");
+    line.stiffness = sp.number("stiffness");
+    if (!(line.stiffness > 0)) sp.fail(sp.raw("stiffness"), "stiffness", "must be > 0 [N/m" + std::string(d == 2 ? " per metre" : "") + "]");
+    line.damping = non_negative(sp, "damping");
+    double distance = 0.0;
+    for (int k = 0; k < d; ++k) distance += (line.anchor[k] - line.point[k]) * (line.anchor[k] - line.point[k]);
+    line.length = sp.number("length", std::sqrt(distance));
+    if (line.length < 0) sp.fail(sp.raw("length"), "length", "must be >= 0 [m]");
+    line.slack = sp.boolean("slack", false);
+    sp.finish();
+    b.springs.push_back(line);
+  }
   MotionSpec spec;
   spec.body = solid.name;
   spec.floating = static_cast<int>(c.bodies.size());
@@ -1244,7 +1298,7 @@ Case read(Section& root, const std::string& file) {
       c.motions.push_back(read_motion(*m, c, spec.name, spec.box.min, spec.box.max));
     }
     if (spec.motion < 0 || c.motions[spec.motion].floating < 0)
-      for (const char* key : {"density", "mass", "centre_of_mass", "inertia", "free"})
+      for (const char* key : {"density", "mass", "centre_of_mass", "inertia", "free", "hinge", "springs"})
         if (s.has(key)) s.fail(s.raw(key), key, "only a floating solid (motion: floating) takes '" + std::string(key) + "'");
     s.finish();
     if (!solid_names.insert(spec.name).second) s.fail(s.raw("name"), "name", "solid '" + spec.name + "' is defined twice");

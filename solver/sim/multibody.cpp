@@ -18,6 +18,7 @@ struct System::Impl {
   SimTK::GeneralForceSubsystem forces{system};
   SimTK::Force::DiscreteForces fluid{forces, matter};
   std::vector<SimTK::MobilizedBody> bodies;
+  std::vector<bool> hinged;  // a Pin (q: the angle about the hinge) rather than a Planar or Free
   SimTK::State state;
 };
 
@@ -28,6 +29,55 @@ constexpr int kPlanarSpeed[6] = {1, 2, -1, -1, -1, 0};
 constexpr int kFreeSpeed[6] = {3, 4, 5, 0, 1, 2};
 
 std::array<double, 3> array_of(const SimTK::Vec3& v) { return {v[0], v[1], v[2]}; }
+SimTK::Vec3 vec_of(const std::array<double, 3>& a, int dim) { return SimTK::Vec3(a[0], a[1], dim == 2 ? 0.0 : a[2]); }
+
+// The springs and mooring lines of every body, one Simbody custom force: tension
+// T = k (L - L0) + c dL/dt along the line from the body point to its anchor, none for a slack line
+// that is not taut (nor one that would push).
+class Springs : public SimTK::Force::Custom::Implementation {
+ public:
+  struct Line {
+    SimTK::MobilizedBody body;
+    SimTK::Vec3 point;   // on the body, from its origin (the centre of mass), body frame
+    SimTK::Vec3 anchor;  // world
+    double stiffness, damping, length;
+    bool slack;
+  };
+  explicit Springs(std::vector<Line> lines) : lines_(std::move(lines)) {}
+
+  void calcForce(const SimTK::State& state, SimTK::Vector_<SimTK::SpatialVec>& body_forces, SimTK::Vector_<SimTK::Vec3>&,
+                 SimTK::Vector&) const override {
+    for (const Line& l : lines_) {
+      double T = 0.0;
+      SimTK::Vec3 e;
+      if (!tension(state, l, T, e)) continue;
+      l.body.applyForceToBodyPoint(state, l.point, T * e, body_forces);
+    }
+  }
+  SimTK::Real calcPotentialEnergy(const SimTK::State& state) const override {
+    double energy = 0.0;
+    for (const Line& l : lines_) {
+      const double stretch = (l.anchor - l.body.findStationLocationInGround(state, l.point)).norm() - l.length;
+      if (!l.slack || stretch > 0) energy += 0.5 * l.stiffness * stretch * stretch;
+    }
+    return energy;
+  }
+  bool dependsOnlyOnPositions() const override { return false; }
+
+ private:
+  // The line's tension and its unit direction from the body point to the anchor; false: no force.
+  static bool tension(const SimTK::State& state, const Line& l, double& T, SimTK::Vec3& e) {
+    const SimTK::Vec3 d = l.anchor - l.body.findStationLocationInGround(state, l.point);
+    const double L = d.norm();
+    if (!(L > 0)) return false;
+    e = d / L;
+    const double rate = -SimTK::dot(l.body.findStationVelocityInGround(state, l.point), e);  // dL/dt
+    T = l.stiffness * (L - l.length) + l.damping * rate;
+    if (l.slack && (L <= l.length || T < 0)) return false;
+    return true;
+  }
+  std::vector<Line> lines_;
+};
 
 }  // namespace
 
@@ -36,20 +86,38 @@ System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyIn
   Impl& m = *impl_;
   m.dim = dim;
   Force::UniformGravity(m.forces, m.matter, Vec3(g[0], g[1], dim == 2 ? 0.0 : g[2]));
+  std::vector<Springs::Line> lines;
   for (const BodyInput& b : bodies) {
     const auto& I = b.inertia;
     // 2D: only Izz acts (Planar turns about z); the other moments just make a valid inertia.
     const Inertia inertia = dim == 2 ? Inertia(I[2], I[2], I[2]) : Inertia(I[0], I[1], I[2], I[3], I[4], I[5]);
     const Body::Rigid info(MassProperties(b.mass, Vec3(0), inertia));
-    const Transform at(Vec3(b.centre[0], b.centre[1], dim == 2 ? 0.0 : b.centre[2]));
-    MobilizedBody mob = dim == 2 ? MobilizedBody(MobilizedBody::Planar(m.matter.Ground(), at, info, Transform()))
-                                 : MobilizedBody(MobilizedBody::Free(m.matter.Ground(), at, info, Transform()));
-    for (int dof = 0; dof < 6; ++dof) {
-      const int u = (dim == 2 ? kPlanarSpeed : kFreeSpeed)[dof];
-      if (u >= 0 && !b.free[dof]) Constraint::ConstantSpeed(mob, MobilizerUIndex(u), 0.0);
+    const Vec3 centre = vec_of(b.centre, dim);
+    MobilizedBody mob;
+    if (b.hinge.on) {
+      // A Pin turns about the z axis of its frames: both sit at the hinge with z along its axis,
+      // so that the body's frame is the world's at q = 0.
+      const Rotation R = dim == 2 ? Rotation() : Rotation(UnitVec3(vec_of(b.hinge.axis, 3)), ZAxis);
+      const Vec3 hinge = vec_of(b.hinge.point, dim);
+      MobilizedBody::Pin pin(m.matter.Ground(), Transform(R, hinge), info, Transform(R, hinge - centre));
+      if (b.hinge.stiffness > 0) Force::MobilityLinearSpring(m.forces, pin, MobilizerQIndex(0), b.hinge.stiffness, 0.0);
+      if (b.hinge.damping > 0) Force::MobilityLinearDamper(m.forces, pin, MobilizerUIndex(0), b.hinge.damping);
+      mob = pin;
+    } else {
+      const Transform at(centre);
+      mob = dim == 2 ? MobilizedBody(MobilizedBody::Planar(m.matter.Ground(), at, info, Transform()))
+                     : MobilizedBody(MobilizedBody::Free(m.matter.Ground(), at, info, Transform()));
+      for (int dof = 0; dof < 6; ++dof) {
+        const int u = (dim == 2 ? kPlanarSpeed : kFreeSpeed)[dof];
+        if (u >= 0 && !b.free[dof]) Constraint::ConstantSpeed(mob, MobilizerUIndex(u), 0.0);
+      }
     }
+    for (const SpringInput& s : b.springs)
+      lines.push_back({mob, vec_of(s.point, dim) - centre, vec_of(s.anchor, dim), s.stiffness, s.damping, s.length, s.slack});
     m.bodies.push_back(mob);
+    m.hinged.push_back(b.hinge.on);
   }
+  if (!lines.empty()) Force::Custom(m.forces, new Springs(std::move(lines)));
   m.state = m.system.realizeTopology();
   set_loads(std::vector<Load>(bodies.size(), Load{}));
 }

@@ -9,11 +9,28 @@
 
 namespace spate::multibody {
 
+// A hinge: the body turns about `axis` (2D: z) through `point` only, with a rotational spring and
+// damper about its start angle.
+struct HingeInput {
+  bool on = false;
+  std::array<double, 3> point{}, axis{0, 0, 1};
+  double stiffness = 0.0, damping = 0.0;
+};
+
+// A spring or mooring line from a body point (at t = 0) to a fixed anchor (world).
+struct SpringInput {
+  std::array<double, 3> point{}, anchor{};
+  double stiffness = 0.0, damping = 0.0, length = 0.0;
+  bool slack = false;  // pulls only, when longer than `length`
+};
+
 struct BodyInput {
   double mass = 0.0;              // [kg] (2D: per metre)
   std::array<double, 3> centre{};  // centre of mass at t = 0 [m]
   std::array<double, 6> inertia{};  // Ixx, Iyy, Izz, Ixy, Ixz, Iyz about it (2D: Izz acts)
-  std::array<bool, 6> free{};      // x, y, z, rx, ry, rz
+  std::array<bool, 6> free{};      // x, y, z, rx, ry, rz (without a hinge)
+  HingeInput hinge;
+  std::vector<SpringInput> springs;
 };
 
 struct BodyOutput {

@@ -21,7 +21,12 @@ RigidBodies::RigidBodies(const Case& c) : case_(c) {
     if (c.motions[k].floating >= 0) slots_[c.motions[k].floating] = static_cast<int>(k);
   if (c.bodies.empty()) return;
   std::vector<multibody::BodyInput> in;
-  for (const BodySpec& b : c.bodies) in.push_back({b.mass, b.centre_of_mass, b.inertia, b.free});
+  for (const BodySpec& b : c.bodies) {
+    multibody::BodyInput body{b.mass, b.centre_of_mass, b.inertia, b.free, {}, {}};
+    body.hinge = {b.hinge.on, b.hinge.point, b.hinge.axis, b.hinge.stiffness, b.hinge.damping};
+    for (const BodySpec::Spring& s : b.springs) body.springs.push_back({s.point, s.anchor, s.stiffness, s.damping, s.length, s.slack});
+    in.push_back(body);
+  }
   impl_.reset(new Impl{multibody::System(c.dim, c.gravity, in)});
   loads_.assign(c.bodies.size(), BodyLoad{});
   read_state();

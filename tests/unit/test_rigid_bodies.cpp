@@ -143,6 +143,63 @@ TEST(RigidBodies, ARestoredStateContinuesBitForBit) {
   EXPECT_THROW(b.restore("box q 1 2 u 3 load 0 0 0 0 0 0\n"), std::runtime_error);
 }
 
+// A hinge at the centre of mass with a rotational spring k: under a constant torque tau the angle
+// goes (tau / k)(1 - cos(w t)), w = sqrt(k / I); at half a period it is 2 tau / k.
+TEST(RigidBodies, AHingedBodyWithASpringSwingsAtItsNaturalFrequency) {
+  const Case c = parse_case(case_2d("density: 500\n    hinge: {point: [0.6, 0.29], stiffness: 2.0, damping: 0}"), "case.yaml");
+  ASSERT_TRUE(c.bodies[0].hinge.on);
+  RigidBodies b(c);
+  const double I = c.bodies[0].inertia[2], k = 2.0, tau = 0.05, w = std::sqrt(k / I);
+  BodyLoad l;
+  l.force = {30.0, 80.0, 0.0};  // the hinge holds any force
+  l.torque = {0.0, 0.0, tau};
+  b.set_loads({l});
+  const int n = 400;
+  const double half = 3.14159265358979323846 / w, dt = half / n;
+  run_steps(b, n, dt);
+  EXPECT_NEAR(b.state(0).angles[2], 2 * tau / k, 1e-6);
+  EXPECT_NEAR(b.state(0).centre[0], 0.6, 1e-12);
+  EXPECT_NEAR(b.state(0).centre[1], 0.29, 1e-12);
+  // A pendulum: the same body hinged 5 cm above its centre of mass (on its top face), set swinging
+  // by a small torque over 1 ms: a quarter of its period 2 pi sqrt(I_h / (m g d)) later it turns.
+  const Case p = parse_case(case_2d("density: 500\n    hinge: {point: [0.6, 0.34]}"), "case.yaml");
+  RigidBodies q(p);
+  const double m = p.bodies[0].mass, d = 0.05, Ih = p.bodies[0].inertia[2] + m * d * d, wp = std::sqrt(m * 9.81 * d / Ih);
+  BodyLoad kick;
+  kick.torque = {0.0, 0.0, 0.002};
+  q.set_loads({kick});
+  run_steps(q, 1, 1e-3);  // a small angular impulse, then free swinging
+  q.set_loads({BodyLoad{}});
+  const double omega0 = q.state(0).angular_velocity[2];
+  const double quarter = 0.5 * 3.14159265358979323846 / wp;
+  for (int k2 = 0; k2 < 200; ++k2) q.advance(1e-3 + k2 * quarter / 200, 1e-3 + (k2 + 1) * quarter / 200);
+  // A quarter period after the kick (which lasted 1 ms) the swing turns: its speed is near zero.
+  EXPECT_LT(std::fabs(q.state(0).angular_velocity[2]), 0.02 * std::fabs(omega0));
+  EXPECT_GT(q.state(0).angles[2], 0.0);
+}
+
+// A heaving body on a vertical spring to an anchor above, at its natural length at rest: gravity
+// pulls it down by (m g / k)(1 - cos(w t)). A slack line (a mooring) longer than the distance does
+// nothing until taut: the body falls freely.
+TEST(RigidBodies, SpringsPullAndSlackLinesOnlyWhenTaut) {
+  const std::string keys = "density: 500\n    free: [y]\n    springs: [{point: [0.6, 0.34], anchor: [0.6, 0.5], stiffness: 400}]";
+  const Case c = parse_case(case_2d(keys), "case.yaml");
+  ASSERT_EQ(c.bodies[0].springs.size(), 1u);
+  EXPECT_NEAR(c.bodies[0].springs[0].length, 0.16, 1e-12);
+  RigidBodies b(c);
+  b.set_loads({BodyLoad{}});
+  const double m = c.bodies[0].mass, k = 400.0, w = std::sqrt(k / m), half = 3.14159265358979323846 / w;
+  run_steps(b, 400, half / 400);
+  EXPECT_NEAR(b.state(0).centre[1], 0.29 - 2 * m * 9.81 / k, 1e-6);
+  const Case s = parse_case(case_2d("density: 500\n    free: [y]\n    springs: [{point: [0.6, 0.34], anchor: [0.6, 0.5], stiffness: 400, "
+                                    "length: 0.3, slack: true}]"),
+                            "case.yaml");
+  RigidBodies f(s);
+  f.set_loads({BodyLoad{}});
+  run_steps(f, 100, 1e-3);  // 0.1 s: falls 4.9 cm, the line (0.16 m long now, 0.3 m slack) stays slack
+  EXPECT_NEAR(f.state(0).centre[1], 0.29 - 0.5 * 9.81 * 0.01, 1e-9);
+}
+
 std::string test_sinking() {
   std::string c = case_2d();
   c.replace(c.find("motion: floating"), 16, "motion: sinking");
@@ -158,6 +215,14 @@ TEST(RigidBodies, TheLoaderRefusesWhatCannotFloat) {
   EXPECT_NE(error_of(case_2d("density: 500\n    free: []")).find("key 'solids[0].free'"), std::string::npos);
   EXPECT_NE(error_of(test_sinking()).find("'sinking' is not a motion"), std::string::npos);
   EXPECT_NE(error_of(case_3d("density: 500\n    inertia: [1, 1, 5]")).find("is not the inertia of a body"), std::string::npos);
+  EXPECT_NE(error_of(case_2d("density: 500\n    hinge: {point: [0.2, 0.1]}")).find("the hinge lies outside solid 'box'"), std::string::npos);
+  EXPECT_NE(error_of(case_2d("density: 500\n    hinge: {point: [0.6, 0.24]}\n    free: [y]")).find("not both"), std::string::npos);
+  EXPECT_NE(error_of(case_2d("density: 500\n    springs: [{point: [0.6, 0.34], anchor: [0.6, 3.0], stiffness: 10}]"))
+                .find("a mooring to nowhere"), std::string::npos);
+  EXPECT_NE(error_of(case_2d("density: 500\n    springs: [{point: [0.1, 0.1], anchor: [0.6, 0.5], stiffness: 10}]"))
+                .find("the spring's end lies outside solid 'box'"), std::string::npos);
+  EXPECT_NE(error_of(case_2d("density: 500\n    springs: [{point: [0.6, 0.34], anchor: [0.6, 0.5], stiffness: 0}]")).find("must be > 0"),
+            std::string::npos);
   std::string fixed = case_2d();
   fixed.replace(fixed.find("motion: floating"), 16, "hollow: true");
   EXPECT_NE(error_of(fixed).find("only a floating solid (motion: floating) takes 'density'"), std::string::npos);
