@@ -761,7 +761,10 @@ MotionSpec read_floating(Section& m, Case& c, const SolidSpec& solid, int index)
   if (!(b.mass > 0)) m.fail(m.node(), "motion", "solid '" + solid.name + "' holds no volume to give a mass to");
   const double density = m.has("density") ? m.number("density") : m.number("mass") / b.mass;
   if (!(density > 0)) m.fail(m.raw(m.has("density") ? "density" : "mass"), m.has("density") ? "density" : "mass", "must be > 0");
-  b = uniform_body(solid, density, c);
+  // Mass and inertia scale with the density: the shape is integrated once (a mesh's distance
+  // queries are the cost).
+  b.mass *= density;
+  for (double& moment : b.inertia) moment *= density;
   b.solid = index;
   b.centre_of_mass = m.vector("centre_of_mass", d, b.centre_of_mass);
   if (m.has("inertia")) {

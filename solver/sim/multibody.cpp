@@ -18,7 +18,6 @@ struct System::Impl {
   SimTK::GeneralForceSubsystem forces{system};
   SimTK::Force::DiscreteForces fluid{forces, matter};
   std::vector<SimTK::MobilizedBody> bodies;
-  std::vector<bool> hinged;  // a Pin (q: the angle about the hinge) rather than a Planar or Free
   SimTK::State state;
 };
 
@@ -115,7 +114,6 @@ System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyIn
     for (const SpringInput& s : b.springs)
       lines.push_back({mob, vec_of(s.point, dim) - centre, vec_of(s.anchor, dim), s.stiffness, s.damping, s.length, s.slack});
     m.bodies.push_back(mob);
-    m.hinged.push_back(b.hinge.on);
   }
   if (!lines.empty()) Force::Custom(m.forces, new Springs(std::move(lines)));
   m.state = m.system.realizeTopology();
