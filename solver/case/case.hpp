@@ -114,6 +114,15 @@ struct BodySpec {
     bool slack = false;
   };
   std::vector<Spring> springs;
+  // Contact with the tank's walls (`contact:`; Simbody's Hunt-Crossley compliant contact, docs/cases.md
+  // "Floating solids"): on unless `contact: false` or the tank moves. `penetration`: the depth [m]
+  // at which one contact point carries the body's weight (the stiffness follows); `dissipation`:
+  // Hunt & Crossley's c [s/m] (restitution about 1 - c v at impact speed v); `friction`: Coulomb's
+  // coefficient against the walls.
+  struct Contact {
+    bool on = true;
+    double penetration = 0.0, dissipation = 0.5, friction = 0.5;
+  } contact;
 };
 
 enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid, Temperature, HeatFlux, Interface, Body };
@@ -266,6 +275,8 @@ PhysicsParams physics_params(const Case& c);
 // Why the tank has no wall at face f (2 axis + side): not a face of a case of this dimension, a
 // periodic axis, the open top; nothing when it has one.
 std::optional<std::string> tank_wall_missing(const Case& c, int face);
+// The tank's upper corner as its particles make it: its extents rounded to whole dp.
+Vec3d particle_tank_max(const Case& c);
 // Names of the materials of the case, by material index (fluids, then "tank", then the solids).
 std::vector<std::string> material_names(const Case& c);
 

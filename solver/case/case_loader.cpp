@@ -852,6 +852,29 @@ MotionSpec read_floating(Section& m, Case& c, const SolidSpec& solid, int index)
     sp.finish();
     b.springs.push_back(line);
   }
+  b.contact.penetration = 0.01 * c.dp;
+  // A hinged body is held by its hinge (often just above the floor): contact only when asked for.
+  b.contact.on = !b.hinge.on;
+  if (m.has("contact")) {
+    const YAML::Node n = m.raw("contact");
+    if (c.tank_motion >= 0)
+      m.fail(n, "contact", "the tank moves: contact with moving walls is not modelled (leave 'contact' out; the body then has none)");
+    if (n.IsScalar()) {
+      b.contact.on = m.boolean("contact", true);
+    } else if (auto k = m.child("contact")) {
+      b.contact.on = true;
+      b.contact.penetration = k->number("penetration", b.contact.penetration);
+      if (!(b.contact.penetration > 0 && b.contact.penetration <= 0.5 * c.dp))
+        k->fail(k->raw("penetration"), "penetration", fmt::format("must be > 0 and at most dp/2 = {:g} m: the depth at which one contact point "
+                                                                  "carries the body's weight", 0.5 * c.dp));
+      for (auto [key, value] : {std::pair{"dissipation", &b.contact.dissipation}, std::pair{"friction", &b.contact.friction}}) {
+        *value = k->number(key, *value);
+        if (!(*value >= 0)) k->fail(k->raw(key), key, "must be >= 0");
+      }
+      k->finish();
+    }
+  }
+  if (c.tank_motion >= 0) b.contact.on = false;
   MotionSpec spec;
   spec.body = solid.name;
   spec.floating = static_cast<int>(c.bodies.size());
@@ -878,14 +901,13 @@ std::optional<std::string> tank_wall_missing(const Case& c, int face) {
   return std::nullopt;
 }
 
-namespace {
-
-// The tank's upper corner as its particles make it: its extents rounded to whole dp.
 Vec3d particle_tank_max(const Case& c) {
   Vec3d hi{0, 0, 0};
   for (int k = 0; k < c.dim; ++k) hi[k] = c.tank_origin[k] + static_cast<double>(std::lround(c.tank_size[k] / c.dp)) * c.dp;
   return hi;
 }
+
+namespace {
 
 // A wall-pressure sensor sits on a face that fluid can touch: an interior face of the tank (not
 // along a periodic axis, not the open top) or a face of a solid box. Its normal points into the
@@ -1301,7 +1323,7 @@ Case read(Section& root, const std::string& file) {
       c.motions.push_back(read_motion(*m, c, spec.name, spec.box.min, spec.box.max));
     }
     if (spec.motion < 0 || c.motions[spec.motion].floating < 0)
-      for (const char* key : {"density", "mass", "centre_of_mass", "inertia", "free", "hinge", "springs"})
+      for (const char* key : {"density", "mass", "centre_of_mass", "inertia", "free", "hinge", "springs", "contact"})
         if (s.has(key)) s.fail(s.raw(key), key, "only a floating solid (motion: floating) takes '" + std::string(key) + "'");
     s.finish();
     if (!solid_names.insert(spec.name).second) s.fail(s.raw("name"), "name", "solid '" + spec.name + "' is defined twice");

@@ -2,6 +2,7 @@
 
 #include <Simbody.h>
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace spate::multibody {
@@ -17,6 +18,10 @@ struct System::Impl {
   SimTK::SimbodyMatterSubsystem matter{system};
   SimTK::GeneralForceSubsystem forces{system};
   SimTK::Force::DiscreteForces fluid{forces, matter};
+  // Compliant contact with the walls; none when no body has contact. The contact subsystem keeps a
+  // reference to the tracker's handle: both live as long as the system.
+  std::unique_ptr<SimTK::ContactTrackerSubsystem> tracker;
+  std::unique_ptr<SimTK::CompliantContactSubsystem> contact;
   std::vector<SimTK::MobilizedBody> bodies;
   SimTK::State state;
 };
@@ -80,17 +85,65 @@ class Springs : public SimTK::Force::Custom::Implementation {
 
 }  // namespace
 
-System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyInput>& bodies) : impl_(new Impl) {
+namespace {
+
+// The walls' material: so much stiffer than any body's, and of so much larger friction, that a
+// contact takes the body's stiffness, dissipation and (for a body friction of mu / 2) friction mu:
+// Simbody combines two materials as E = (s1 E1^(2/3))^(3/2) with s1 = E2^(2/3) / (E1^(2/3) +
+// E2^(2/3)), c = c1 s1 + c2 (1 - s1) and mu = 2 mu1 mu2 / (mu1 + mu2) (HuntCrossleyForce.h).
+constexpr double kWallStiffnessRatio = 1e9, kWallFriction = 1e9;
+constexpr double kTransitionVelocity = 2e-3;  // [m/s]
+
+// The walls of the tank, half-spaces of the ground, and the subsystems of compliant contact; none
+// when no body has contact.
+void add_walls(System::Impl& m, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls) {
+  using namespace SimTK;
+  double stiffest = 0.0;
+  for (const BodyInput& b : bodies)
+    if (b.contact.on) stiffest = std::max(stiffest, b.contact.stiffness);
+  if (!(stiffest > 0) || walls.empty()) return;
+  m.tracker.reset(new ContactTrackerSubsystem(m.system));
+  m.contact.reset(new CompliantContactSubsystem(m.system, *m.tracker));
+  // Friction grows linearly with the slip speed up to mu N at this speed: a body held by friction
+  // creeps below it. Its rate mu g / vt (2,000-5,000 1/s) times the step stays inside the explicit
+  // Runge-Kutta's stability for steps up to about 5e-4 s (SPH steps are some 1e-4 s).
+  m.contact->setTransitionVelocity(kTransitionVelocity);
+  const ContactMaterial wall(kWallStiffnessRatio * stiffest, 0.0, kWallFriction, kWallFriction);
+  for (const WallInput& w : walls) {
+    // A HalfSpace fills x > 0 of its frame: x points into the wall, against its normal.
+    const Vec3 into(-w.normal[0], -w.normal[1], -w.normal[2]);
+    m.matter.updGround().updBody().addContactSurface(Transform(Rotation(UnitVec3(into), XAxis), Vec3(w.point[0], w.point[1], w.point[2])),
+                                                     ContactSurface(ContactGeometry::HalfSpace(), wall));
+  }
+}
+
+// A body's contact spheres.
+void add_contact_spheres(SimTK::Body& body, const ContactInput& c, int dim) {
+  using namespace SimTK;
+  if (!c.on || !(c.stiffness > 0)) return;
+  const ContactMaterial material(c.stiffness, c.dissipation, 0.5 * c.friction, 0.5 * c.friction);
+  for (const auto& p : c.points) {
+    const Vec3 x(p[0], p[1], dim == 2 ? 0.0 : p[2]);
+    body.addContactSurface(Transform(x), ContactSurface(ContactGeometry::Sphere(c.radius), material));
+  }
+}
+
+}  // namespace
+
+System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls)
+    : impl_(new Impl) {
   using namespace SimTK;
   Impl& m = *impl_;
   m.dim = dim;
   Force::UniformGravity(m.forces, m.matter, Vec3(g[0], g[1], dim == 2 ? 0.0 : g[2]));
+  add_walls(m, bodies, walls);
   std::vector<Springs::Line> lines;
   for (const BodyInput& b : bodies) {
     const auto& I = b.inertia;
     // 2D: only Izz acts (Planar turns about z); the other moments just make a valid inertia.
     const Inertia inertia = dim == 2 ? Inertia(I[2], I[2], I[2]) : Inertia(I[0], I[1], I[2], I[3], I[4], I[5]);
-    const Body::Rigid info(MassProperties(b.mass, Vec3(0), inertia));
+    Body::Rigid info(MassProperties(b.mass, Vec3(0), inertia));
+    add_contact_spheres(info, b.contact, dim);
     const Vec3 centre = vec_of(b.centre, dim);
     MobilizedBody mob;
     if (b.hinge.on) {

@@ -24,6 +24,23 @@ struct SpringInput {
   bool slack = false;  // pulls only, when longer than `length`
 };
 
+// Contact with the walls (Simbody's compliant contact, Hunt & Crossley with Hertz's law): small
+// spheres centred at `points` (body frame: from the centre of mass, world axes at t = 0), the
+// body's outermost points, pressed against half-spaces.
+struct ContactInput {
+  bool on = false;
+  std::vector<std::array<double, 3>> points;  // the spheres' centres, body frame
+  double radius = 0.0;       // of each sphere [m]
+  double stiffness = 0.0;    // plane-strain modulus [Pa]: Hertz f = 4/3 E sqrt(R) x^1.5
+  double dissipation = 0.0;  // Hunt & Crossley c [s/m]
+  double friction = 0.0;     // Coulomb's coefficient against the walls
+};
+
+// A wall: the half-space behind a plane through `point` whose unit normal points into the fluid.
+struct WallInput {
+  std::array<double, 3> point{}, normal{};
+};
+
 struct BodyInput {
   double mass = 0.0;              // [kg] (2D: per metre)
   std::array<double, 3> centre{};  // centre of mass at t = 0 [m]
@@ -31,6 +48,7 @@ struct BodyInput {
   std::array<bool, 6> free{};      // x, y, z, rx, ry, rz (without a hinge)
   HingeInput hinge;
   std::vector<SpringInput> springs;
+  ContactInput contact;
 };
 
 struct BodyOutput {
@@ -44,7 +62,7 @@ using Load = std::array<double, 6>;
 
 class System {
  public:
-  System(int dim, const std::array<double, 3>& gravity, const std::vector<BodyInput>& bodies);
+  System(int dim, const std::array<double, 3>& gravity, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls = {});
   ~System();
   // The loads now: the accelerations follow.
   void set_loads(const std::vector<Load>& loads);
@@ -57,8 +75,9 @@ class System {
   // Returns false when their counts do not fit body b.
   bool set(int b, const std::vector<double>& q, const std::vector<double>& u);
 
+  struct Impl;  // Simbody's side (multibody.cpp), opaque here
+
  private:
-  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 

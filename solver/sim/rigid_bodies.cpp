@@ -1,5 +1,6 @@
 #include "rigid_bodies.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
@@ -15,6 +16,78 @@ struct RigidBodies::Impl {
   multibody::System system;
 };
 
+namespace {
+
+// The contact spheres' radius, in dp.
+constexpr double kContactRadius = 0.01;
+
+// The points of a solid that can touch a plane wall first: of its surface (the shape's, or the
+// box's corners), those farthest along each of a fan of directions (2D: 64 around the circle; 3D:
+// 256 spread over the sphere by the Fibonacci lattice, and the 6 axes). Every vertex of a polygon
+// or polyhedron whose outward normals span more than the fan's spacing (about 6 and 13 degrees) is
+// among them; a curved surface becomes that many facets. Deterministic: ties go to the first point.
+std::vector<std::array<double, 3>> contact_points(const SolidSpec& solid, int dim) {
+  std::vector<std::array<double, 3>> surface;
+  if (solid.shape) {
+    std::vector<std::vector<long long>> polygons;
+    solid.shape->surface(surface, polygons);
+  } else {
+    for (int corner = 0; corner < (1 << dim); ++corner) {
+      std::array<double, 3> p{0, 0, 0};
+      for (int k = 0; k < dim; ++k) p[k] = (corner >> k) & 1 ? solid.box.max[k] : solid.box.min[k];
+      surface.push_back(p);
+    }
+  }
+  std::vector<std::array<double, 3>> directions;
+  if (dim == 2) {
+    for (int k = 0; k < 64; ++k) directions.push_back({std::cos(2 * M_PI * k / 64), std::sin(2 * M_PI * k / 64), 0.0});
+  } else {
+    for (int k = 0; k < 3; ++k)
+      for (double sign : {-1.0, 1.0}) {
+        std::array<double, 3> e{0, 0, 0};
+        e[k] = sign;
+        directions.push_back(e);
+      }
+    const int n = 256;
+    for (int k = 0; k < n; ++k) {
+      const double z = 1.0 - (2.0 * k + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = k * M_PI * (3.0 - std::sqrt(5.0));
+      directions.push_back({r * std::cos(phi), r * std::sin(phi), z});
+    }
+  }
+  std::vector<std::size_t> chosen;
+  for (const auto& e : directions) {
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < surface.size(); ++i)
+      if (e[0] * surface[i][0] + e[1] * surface[i][1] + e[2] * surface[i][2] > e[0] * surface[best][0] + e[1] * surface[best][1] + e[2] * surface[best][2])
+        best = i;
+    chosen.push_back(best);
+  }
+  std::sort(chosen.begin(), chosen.end());
+  chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
+  std::vector<std::array<double, 3>> points;
+  for (std::size_t i : chosen) points.push_back(surface[i]);
+  return points;
+}
+
+// The tank's walls, each a plane with its normal into the fluid: none along a periodic axis nor at
+// the open top.
+std::vector<multibody::WallInput> tank_walls(const Case& c) {
+  std::vector<multibody::WallInput> walls;
+  const Vec3d hi = particle_tank_max(c);
+  for (int face = 0; face < 2 * c.dim; ++face) {
+    if (tank_wall_missing(c, face)) continue;
+    const int axis = face / 2;
+    multibody::WallInput w;
+    for (int k = 0; k < c.dim; ++k) w.point[k] = c.tank_origin[k];
+    w.point[axis] = face % 2 ? hi[axis] : c.tank_origin[axis];
+    w.normal[axis] = face % 2 ? -1.0 : 1.0;
+    walls.push_back(w);
+  }
+  return walls;
+}
+
+}  // namespace
+
 RigidBodies::RigidBodies(const Case& c) : case_(c) {
   slots_.assign(c.bodies.size(), -1);
   for (std::size_t k = 0; k < c.motions.size(); ++k)
@@ -22,12 +95,29 @@ RigidBodies::RigidBodies(const Case& c) : case_(c) {
   if (c.bodies.empty()) return;
   std::vector<multibody::BodyInput> in;
   for (const BodySpec& b : c.bodies) {
-    multibody::BodyInput body{b.mass, b.centre_of_mass, b.inertia, b.free, {}, {}};
+    multibody::BodyInput body{b.mass, b.centre_of_mass, b.inertia, b.free, {}, {}, {}};
     body.hinge = {b.hinge.on, b.hinge.point, b.hinge.axis, b.hinge.stiffness, b.hinge.damping};
     for (const BodySpec::Spring& s : b.springs) body.springs.push_back({s.point, s.anchor, s.stiffness, s.damping, s.length, s.slack});
+    if (b.contact.on) {
+      // Hertz: f = 4/3 E sqrt(R) x^1.5 carries the body's weight (at 9.81 m/s2 without gravity) on
+      // one sphere at x = penetration. The spheres are small (dp/100): the body stands that far off
+      // a wall it rests on.
+      multibody::ContactInput& k = body.contact;
+      k.on = true;
+      k.radius = kContactRadius * c.dp;
+      const double g = std::sqrt(c.gravity[0] * c.gravity[0] + c.gravity[1] * c.gravity[1] + c.gravity[2] * c.gravity[2]);
+      const double weight = b.mass * (g > 0 ? g : 9.81);
+      k.stiffness = 3.0 * weight / (4.0 * std::sqrt(k.radius) * std::pow(b.contact.penetration, 1.5));
+      k.dissipation = b.contact.dissipation;
+      k.friction = b.contact.friction;
+      for (auto p : contact_points(c.solids[b.solid], c.dim)) {
+        for (int a = 0; a < 3; ++a) p[a] -= b.centre_of_mass[a];
+        k.points.push_back(p);
+      }
+    }
     in.push_back(body);
   }
-  impl_.reset(new Impl{multibody::System(c.dim, c.gravity, in)});
+  impl_.reset(new Impl{multibody::System(c.dim, c.gravity, in, tank_walls(c))});
   loads_.assign(c.bodies.size(), BodyLoad{});
   read_state();
   previous_ = states_;

@@ -256,12 +256,14 @@ def bad_solid_outside_tank(env):
 @test
 def bad_floating_solids(env):
     """A floating solid without its mass, with both density and mass, with a degree of freedom the
-    case has not, a body probe on a solid that does not float: exit 2, naming the key and why."""
+    case has not, a contact deeper than dp/2, a body probe on a solid that does not float: exit 2,
+    naming the key and why."""
     solid = "solids:\n  - name: raft\n    min: [0.06, 0.02]\n    max: [0.09, 0.03]\n    motion: floating\n"
     for name, extra, key, why in (
             ("no_mass.yaml", "", "solids[0]", "needs its density"),
             ("two_masses.yaml", "    density: 500\n    mass: 2\n", "solids[0]", "one of them"),
             ("bad_dof.yaml", "    density: 500\n    free: [z]\n", "'solids[0].free'", "'z' is not one of: x, y, rz"),
+            ("bad_contact.yaml", "    density: 500\n    contact: {penetration: 0.01}\n", "'solids[0].contact.penetration'", "at most dp/2"),
             ("static_probe.yaml", "    density: 500\n  - name: post\n    min: [0.095, 0]\n    max: [0.1, 0.01]\n"
              "probes:\n  - name: p\n    type: body\n    solid: post\n", "'probes[0].solid'", "does not float")):
         path = env.write_case(name, env.tiny_text() + solid + extra)

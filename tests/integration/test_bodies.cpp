@@ -1,9 +1,13 @@
 // Bodies the water moves (issue 32): the shipped floating box (cases/floating_box_2d.yaml) settles
 // at the draft Archimedes gives and heaves with the period of its hydrostatic stiffness and mass
-// plus added mass (docs/validation.md, "Floating box").
+// plus added mass (docs/validation.md, "Floating box"); a dense one sinks and rests on the floor.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
 
 #include "case/motion.hpp"
 #include "run_helpers.hpp"
@@ -44,6 +48,24 @@ std::pair<double, double> extreme(const std::vector<std::pair<double, double>>& 
   return {v[best].first + s, c[0] + c[1] * s + c[2] * s * s};
 }
 
+// The body probe `box` of a run of the case (its columns x, y, angle from the second), on 2 threads.
+struct BoxRecord {
+  std::vector<std::pair<double, double>> x, y, angle;
+  std::filesystem::path csv;
+};
+BoxRecord run_box(const Case& c, const std::string& scratch) {
+  const auto out = test::scratch(scratch);
+  RunOptions o;
+  o.threads = 2;
+  const RunResult r = test::run_case(c, out, o);
+  EXPECT_EQ(r.exit_code, 0) << r.message;
+  BoxRecord b;
+  b.csv = out / "probes" / "box.csv";
+  b.x = test::read_probe(b.csv, 2), b.y = test::read_probe(b.csv, 3), b.angle = test::read_probe(b.csv, 4);
+  EXPECT_GT(b.y.size(), 100u);
+  return b;
+}
+
 // The box (0.2 m x 0.1 m, density 500) is released at a draft of 0.04 m, 1 cm above its equilibrium,
 // free in x, y and its rotation. Archimedes: draft d = rho_b H / rho_w = 0.05 m, where the still
 // water then stands at h_s = (A_water + B d) / L = 0.301 m (the water's area conserved), so that the
@@ -57,13 +79,9 @@ std::pair<double, double> extreme(const std::vector<std::pair<double, double>>& 
 TEST(FloatingBodies, ABoxSettlesAtArchimedesDraftWithItsHeavePeriod) {
   if (!body_support()) GTEST_SKIP() << "built without Simbody";
   const Case c = load_case(test::case_path("floating_box_2d.yaml"), {"time.end=1.5", "output.interval=0"});
-  const auto out = test::scratch("floating-box");
-  RunOptions o;
-  o.threads = 2;
-  const RunResult r = test::run_case(c, out, o);
-  ASSERT_EQ(r.exit_code, 0) << r.message;
-  const auto csv = out / "probes" / "box.csv";
-  const auto y = test::read_probe(csv, 3), angle = test::read_probe(csv, 4), x = test::read_probe(csv, 2);
+  const BoxRecord box = run_box(c, "floating-box");
+  const auto& csv = box.csv;
+  const auto &y = box.y, &angle = box.angle, &x = box.x;
   ASSERT_GT(y.size(), 100u);
   const double rho = c.fluids[0].density, g = std::fabs(c.gravity[1]), B = 0.2, H = 0.1;
   const double m = c.bodies[0].mass, draft = m / (rho * B);
@@ -85,6 +103,30 @@ TEST(FloatingBodies, ABoxSettlesAtArchimedesDraftWithItsHeavePeriod) {
   for (std::size_t k = 0; k < angle.size(); ++k) tilt = std::max(tilt, std::fabs(angle[k].second)), drift = std::max(drift, std::fabs(x[k].second - 1.0));
   EXPECT_LT(tilt, 2.0);
   EXPECT_LT(drift, 1e-3);
+}
+
+// Contact with the tank (docs/physics.md, "Contact"): the same box four times as dense (2000 kg/m3)
+// sinks through 0.26 m of water and comes to rest on the floor, level and in place, its centre half
+// its height above the floor (within the contact spheres' dp/100 and their penetration): it never
+// passes into the floor. At dp = 0.02 (the box's faces on that lattice too), 1.5 s.
+TEST(FloatingBodies, ADenseBoxSinksAndRestsOnTheFloor) {
+  if (!body_support()) GTEST_SKIP() << "built without Simbody";
+  const Case c = load_case(test::case_path("floating_box_2d.yaml"),
+                           {"dp=0.02", "time.end=1.5", "output.interval=0",
+                            "solids=[{name: box, polygon: [[0.9, 0.26], [1.1, 0.26], [1.1, 0.36], [0.9, 0.36]], motion: floating, density: 2000}]"});
+  ASSERT_TRUE(c.bodies[0].contact.on);
+  const BoxRecord box = run_box(c, "sinking-box");
+  const auto& csv = box.csv;
+  const auto &y = box.y, &angle = box.angle, &x = box.x;
+  ASSERT_GT(y.size(), 100u);
+  double lowest = 1.0;
+  for (const auto& [t, v] : y) lowest = std::min(lowest, v);
+  const double rest = test::mean_after(csv, 3, 1.2);
+  std::printf("lowest centre %.5f m, at rest %.5f m (on the floor: 0.05 m)\n", lowest, rest);
+  EXPECT_GT(lowest, 0.05 - 0.1 * c.dp);
+  EXPECT_NEAR(rest, 0.05, 0.02 * c.dp);
+  EXPECT_LT(std::fabs(angle.back().second), 0.5);
+  EXPECT_NEAR(x.back().second, 1.0, 0.1 * c.dp);
 }
 
 }  // namespace

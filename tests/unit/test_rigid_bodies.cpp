@@ -3,6 +3,7 @@
 // get, checkpoint round trips, mass properties, and what the case loader accepts.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -55,7 +56,7 @@ TEST(RigidBodies, ABoxGetsItsMassCentreAndInertiaFromItsDensity) {
 }
 
 TEST(RigidBodies, AFreeBodyFallsAndTurnsAsNewtonSays) {
-  const Case c = parse_case(case_2d(), "case.yaml");
+  const Case c = parse_case(case_2d("density: 500\n    contact: false"), "case.yaml");
   RigidBodies b(c);
   const double m = c.bodies[0].mass, I = c.bodies[0].inertia[2];
   BodyLoad l;
@@ -182,7 +183,7 @@ TEST(RigidBodies, AHingedBodyWithASpringSwingsAtItsNaturalFrequency) {
 // pulls it down by (m g / k)(1 - cos(w t)). A slack line (a mooring) longer than the distance does
 // nothing until taut: the body falls freely.
 TEST(RigidBodies, SpringsPullAndSlackLinesOnlyWhenTaut) {
-  const std::string keys = "density: 500\n    free: [y]\n    springs: [{point: [0.6, 0.34], anchor: [0.6, 0.5], stiffness: 400}]";
+  const std::string keys = "density: 500\n    free: [y]\n    contact: false\n    springs: [{point: [0.6, 0.34], anchor: [0.6, 0.5], stiffness: 400}]";
   const Case c = parse_case(case_2d(keys), "case.yaml");
   ASSERT_EQ(c.bodies[0].springs.size(), 1u);
   EXPECT_NEAR(c.bodies[0].springs[0].length, 0.16, 1e-12);
@@ -206,6 +207,78 @@ std::string test_sinking() {
   return c;
 }
 
+// Contact with the tank (Simbody's compliant contact): the box dropped 0.24 m onto the floor hits
+// it at 2.2 m/s, and neither passes through it (its corners at most dp/2 into it) nor bounces off
+// for good: it comes to rest on the contact spheres (radius dp/100) at its two lower corners, each
+// sunk by Hertz's x = penetration (1/2)^(2/3) under half its weight, level.
+TEST(RigidBodies, ABoxDroppedOnTheFloorComesToRestOnIt) {
+  const Case c = parse_case(case_2d(), "case.yaml");
+  ASSERT_TRUE(c.bodies[0].contact.on);
+  const double penetration = c.bodies[0].contact.penetration;
+  EXPECT_DOUBLE_EQ(penetration, 0.01 * c.dp);
+  RigidBodies b(c);
+  b.set_loads({BodyLoad{}});
+  double lowest = 1.0, mean = 0.0, low = 1.0, high = 0.0;
+  const double dt = 2e-4;
+  for (int k = 0; k < 12500; ++k) {  // 2.5 s; the last 0.25 s averaged
+    b.advance(k * dt, (k + 1) * dt);
+    const double y = b.state(0).centre[1];
+    lowest = std::min(lowest, y - 0.05);
+    if (k >= 11250) mean += y / 1250, low = std::min(low, y), high = std::max(high, y);
+  }
+  EXPECT_GT(lowest, -0.5 * c.dp);
+  EXPECT_LT(lowest, -penetration);  // it did reach the floor
+  // It bounces for about 1.5 s (restitution about 0.4 at 2 m/s; in water the water damps it),
+  // then rests but for a faint ringing on the contact's stiffness (Hunt & Crossley's damping fades
+  // with the depth and speed).
+  EXPECT_NEAR(mean, 0.05 + 0.01 * c.dp - penetration * std::pow(0.5, 2.0 / 3.0), 0.1 * penetration);
+  EXPECT_LT(high - low, 0.3 * penetration);
+  const BodyState& s = b.state(0);
+  EXPECT_NEAR(s.centre[0], 0.6, 1e-6);
+  EXPECT_NEAR(s.angles[2], 0.0, 1e-6);
+}
+
+// Friction against the floor: a push below mu W leaves the resting box all but still (Simbody's
+// continuous friction creeps below its transition velocity, 2 mm/s), one of 1.5 mu W slides it
+// at (1.5 - 1) mu g; and a side wall stops it. The box (x from 0.9 to 1.1) settles from 1 cm above
+// the floor.
+TEST(RigidBodies, ABoxOnTheFloorSlidesAgainstCoulombFrictionUpToTheWall) {
+  const Case c = parse_case(case_2d("density: 500\n    contact: {friction: 0.4}", "min: [0.9, 0.01]\n    max: [1.1, 0.11]"), "case.yaml");
+  const double m = c.bodies[0].mass, W = m * 9.81, mu = 0.4;
+  const double dt = 2e-4;
+  auto settled = [&](RigidBodies& b) {
+    b.set_loads({BodyLoad{}});
+    for (int k = 0; k < 5000; ++k) b.advance(k * dt, (k + 1) * dt);
+    ASSERT_LT(std::abs(b.state(0).velocity[1]), 0.01);  // but for a faint ringing
+  };
+  {
+    RigidBodies b(c);
+    settled(b);
+    BodyLoad push;
+    push.force = {0.8 * mu * W, 0.0, 0.0};
+    b.set_loads({push});
+    for (int k = 5000; k < 6000; ++k) b.advance(k * dt, (k + 1) * dt);
+    EXPECT_LT(std::abs(b.state(0).velocity[0]), 2e-3);
+  }
+  RigidBodies b(c);
+  settled(b);
+  BodyLoad push;
+  push.force = {1.5 * mu * W, 0.0, 0.0};
+  b.set_loads({push});
+  const double v0 = b.state(0).velocity[0];
+  for (int k = 5000; k < 6000; ++k) b.advance(k * dt, (k + 1) * dt);  // 0.2 s
+  EXPECT_NEAR((b.state(0).velocity[0] - v0) / 0.2, 0.5 * mu * 9.81, 0.05 * 0.5 * mu * 9.81);
+  // On to the wall at x = 1.2: the box's right face (0.1 m right of its centre) stops there.
+  double farthest = 0.0;
+  for (int k = 6000; k < 10000; ++k) {
+    b.advance(k * dt, (k + 1) * dt);
+    farthest = std::max(farthest, b.state(0).centre[0] + 0.1);
+  }
+  EXPECT_GT(farthest, 1.2 - 1e-3);
+  EXPECT_LT(farthest, 1.2 + 0.5 * c.dp);
+  EXPECT_NEAR(b.state(0).centre[0] + 0.1, 1.2, 0.5 * c.dp);
+}
+
 TEST(RigidBodies, TheLoaderRefusesWhatCannotFloat) {
   using test::error_of;
   EXPECT_NE(error_of(case_2d("centre_of_mass: [0.6, 0.29]")).find("needs its density"), std::string::npos);
@@ -223,6 +296,10 @@ TEST(RigidBodies, TheLoaderRefusesWhatCannotFloat) {
                 .find("the spring's end lies outside solid 'box'"), std::string::npos);
   EXPECT_NE(error_of(case_2d("density: 500\n    springs: [{point: [0.6, 0.34], anchor: [0.6, 0.5], stiffness: 0}]")).find("must be > 0"),
             std::string::npos);
+  EXPECT_NE(error_of(case_2d("density: 500\n    contact: {penetration: 0.02}")).find("at most dp/2"), std::string::npos);
+  EXPECT_NE(error_of(case_2d("density: 500\n    contact: {friction: -1}")).find("must be >= 0"), std::string::npos);
+  EXPECT_FALSE(parse_case(case_2d("density: 500\n    contact: false"), "c.yaml").bodies[0].contact.on);
+  EXPECT_FALSE(parse_case(case_2d("density: 500\n    hinge: {point: [0.6, 0.24]}"), "c.yaml").bodies[0].contact.on);
   std::string fixed = case_2d();
   fixed.replace(fixed.find("motion: floating"), 16, "hollow: true");
   EXPECT_NE(error_of(fixed).find("only a floating solid (motion: floating) takes 'density'"), std::string::npos);
