@@ -24,6 +24,9 @@ struct System::Impl {
   std::unique_ptr<SimTK::CompliantContactSubsystem> contact;
   std::vector<SimTK::MobilizedBody> bodies;
   SimTK::State state;
+  // One integrator for the run, initialised afresh from the state each step (so that a restart,
+  // whose integrator is new, steps bit for bit as the run it continues); made at the first step.
+  std::unique_ptr<SimTK::RungeKuttaMersonIntegrator> integrator;
 };
 
 namespace {
@@ -190,9 +193,12 @@ void System::advance(double t0, double t1) {
   m.state.setTime(t0);
   // One fixed step of a 4th-order Runge-Kutta (Merson) from a fresh start: the result depends on
   // the state and the loads alone, so that a restart continues bit for bit.
-  RungeKuttaMersonIntegrator integrator(m.system);
+  if (!m.integrator) {
+    m.integrator.reset(new RungeKuttaMersonIntegrator(m.system));
+    m.integrator->setConstraintTolerance(1e-12);
+  }
+  RungeKuttaMersonIntegrator& integrator = *m.integrator;
   integrator.setFixedStepSize(t1 - t0);
-  integrator.setConstraintTolerance(1e-12);
   integrator.initialize(m.state);
   // The first call after initialize() only reports the start of the interval (StartOfContinuousInterval).
   for (int calls = 0; calls < 8 && integrator.getTime() < t1; ++calls)

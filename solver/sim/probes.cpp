@@ -314,16 +314,39 @@ std::vector<double> sample_centroid(SlabWorker& w, int phase) {
 
 namespace {
 
+// The owned cells, in order; those that hold a point of `region` alone when it is given.
+std::vector<std::uint32_t> owned_cells_in(const CellGrid& grid, const Box* region) {
+  std::vector<std::uint32_t> cells;
+  if (!region) {
+    cells.resize(grid.owned_cell_count());
+    for (std::uint32_t c = 0; c < grid.owned_cell_count(); ++c) cells[c] = c;
+    return cells;
+  }
+  const Lattice& L = grid.lattice();
+  int lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+  for (int a = 0; a < L.dim; ++a) {
+    lo[a] = std::max(L.cell_of(static_cast<float>(region->min[a]), a), 0);
+    hi[a] = std::min(L.cell_of(static_cast<float>(region->max[a]), a), L.cells[a] - 1);
+  }
+  lo[0] = std::max(lo[0], grid.owned_lo()), hi[0] = std::min(hi[0], grid.owned_hi() - 1);
+  for (int x = lo[0]; x <= hi[0]; ++x)
+    for (int y = lo[1]; y <= hi[1]; ++y)
+      for (int z = lo[2]; z <= hi[2]; ++z)
+        if (const std::uint32_t c = grid.local_cell(x, y, z); c != CellGrid::kOutside && c < grid.owned_cell_count()) cells.push_back(c);
+  return cells;
+}
+
 // Calls fn(i, f) with the pressure force f[3] of the fluid on every owned particle i of material
 // `kind` (a solid). For one face of its box (face >= 0): only the particles less than a kernel
-// support below that face (the fluid beyond the face is all they can reach through it).
+// support below that face (the fluid beyond the face is all they can reach through it). Only in
+// the cells that hold a point of `region`, when it is given.
 template <class Fn>
-void for_each_solid_force(SlabWorker& w, std::uint8_t kind, const Box& box, int face, Fn&& fn) {
+void for_each_solid_force(SlabWorker& w, std::uint8_t kind, const Box& box, int face, Fn&& fn, const Box* region = nullptr) {
   ParticleStore& p = w.particles();
   const CellGrid& grid = w.grid();
   dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
     const CellGridView view = grid.view();
-    for (std::uint32_t c = 0; c < grid.owned_cell_count(); ++c) {
+    for (std::uint32_t c : owned_cells_in(grid, region)) {
       int g[3];
       grid.global_coords(c, g);
       for (std::uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
@@ -367,10 +390,20 @@ struct LoadRecord {
   std::uint32_t id;
   double v[6];
 };
-Bytes body_load_records(SlabWorker& w, std::uint8_t kind, const std::array<double, 3>& centre) {
+Bytes body_load_records(SlabWorker& w, std::uint8_t kind, const std::array<double, 3>& centre, double reach) {
   Bytes out;
   const ParticleStore& p = w.particles();
   const int d = w.lattice().dim;
+  // Only the cells the body can be in: within its reach of its centre (and a cell for rounding);
+  // all cells when an axis is periodic (the body's particles may lie across the period).
+  const Lattice& L = w.grid().lattice();
+  Box region;
+  bool periodic = false;
+  for (int k = 0; k < d; ++k) {
+    const double margin = reach + L.cell_size[k];
+    region.min[k] = centre[k] - margin, region.max[k] = centre[k] + margin;
+    periodic = periodic || L.periodic[k];
+  }
   for_each_solid_force(w, kind, Box{}, -1, [&](std::uint32_t i, const float f[3]) {
     LoadRecord rec{p.id[i], {f[0], f[1], f[2], 0, 0, 0}};
     double r[3] = {0, 0, 0};
@@ -379,7 +412,7 @@ Bytes body_load_records(SlabWorker& w, std::uint8_t kind, const std::array<doubl
     rec.v[4] = r[2] * rec.v[0] - r[0] * rec.v[2];
     rec.v[5] = r[0] * rec.v[1] - r[1] * rec.v[0];
     out.insert(out.end(), reinterpret_cast<char*>(&rec), reinterpret_cast<char*>(&rec) + sizeof rec);
-  });
+  }, periodic ? nullptr : &region);
   return out;
 }
 
@@ -507,7 +540,7 @@ std::vector<BodyLoad> body_loads(SlabWorker& w, const RigidBodies& bodies) {
   for (int b = 0; b < bodies.size(); ++b) {
     const std::uint8_t kind = w.params().materials.solid(bodies.solid(b));
     std::vector<LoadRecord> recs;
-    for (const Bytes& part : w.transport().allgather(body_load_records(w, kind, bodies.state(b).centre)))
+    for (const Bytes& part : w.transport().allgather(body_load_records(w, kind, bodies.state(b).centre, bodies.reach(b))))
       for (std::size_t k = 0; k + sizeof(LoadRecord) <= part.size(); k += sizeof(LoadRecord)) {
         LoadRecord r;
         std::memcpy(&r, part.data() + k, sizeof r);

@@ -50,6 +50,8 @@ class RigidBodies {
   // The motion slot (Case::motions) and the solid (Case::solids) of body b.
   int slot(int b) const { return slots_[b]; }
   int solid(int b) const { return case_.bodies[b].solid; }
+  // The largest distance of a point of body b from its centre of mass [m].
+  double reach(int b) const { return case_.motions[slots_[b]].reach; }
 
   // Advances every body from t0 to t1 with the last loads held over the step.
   void advance(double t0, double t1);
