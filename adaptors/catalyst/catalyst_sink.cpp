@@ -259,6 +259,10 @@ struct CatalystSink::Impl : ScriptObserver {
                      {"motion_frequency", l.initial.motion_frequency},
                      {"face_temperature", l.initial.face_temperature},
                      {"face_heat_flux", l.initial.face_heat_flux},
+                     {"spring_stiffness", l.initial.spring_stiffness},
+                     {"spring_damping", l.initial.spring_damping},
+                     {"hinge_stiffness", l.initial.hinge_stiffness},
+                     {"hinge_damping", l.initial.hinge_damping},
                      {"insitu_every", l.initial.insitu_every}}}};
     }
     return j;

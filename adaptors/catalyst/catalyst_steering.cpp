@@ -43,6 +43,10 @@ void SteeringInitial::take(const SteeringChange& c) {
   if (c.name == "motion_frequency" && v.size() == 2) motion_frequency = {v[0], v[1]};
   if (c.name == "face_temperature" && v.size() == 2) face_temperature = {v[0], v[1]};
   if (c.name == "face_heat_flux" && v.size() == 2) face_heat_flux = {v[0], v[1]};
+  if (c.name == "spring_stiffness" && v.size() == 2) spring_stiffness = {v[0], v[1]};
+  if (c.name == "spring_damping" && v.size() == 2) spring_damping = {v[0], v[1]};
+  if (c.name == "hinge_stiffness" && v.size() == 2) hinge_stiffness = {v[0], v[1]};
+  if (c.name == "hinge_damping" && v.size() == 2) hinge_damping = {v[0], v[1]};
 }
 
 CatalystSteering::CatalystSteering(const std::filesystem::path& xml, const SteeringInitial& initial) {
@@ -66,6 +70,10 @@ CatalystSteering::CatalystSteering(const std::filesystem::path& xml, const Steer
   vtkSMPropertyHelper(proxy, "motion_frequency").Set(initial.motion_frequency.data(), 2);
   vtkSMPropertyHelper(proxy, "face_temperature").Set(initial.face_temperature.data(), 2);
   vtkSMPropertyHelper(proxy, "face_heat_flux").Set(initial.face_heat_flux.data(), 2);
+  vtkSMPropertyHelper(proxy, "spring_stiffness").Set(initial.spring_stiffness.data(), 2);
+  vtkSMPropertyHelper(proxy, "spring_damping").Set(initial.spring_damping.data(), 2);
+  vtkSMPropertyHelper(proxy, "hinge_stiffness").Set(initial.hinge_stiffness.data(), 2);
+  vtkSMPropertyHelper(proxy, "hinge_damping").Set(initial.hinge_damping.data(), 2);
   vtkSMPropertyHelper(proxy, "insitu_every").Set(initial.insitu_every);
   vtkSMPropertyHelper(proxy, "write_checkpoint").Set(0);
   vtkSMPropertyHelper(proxy, "stop").Set(0);

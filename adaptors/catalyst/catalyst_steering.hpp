@@ -29,6 +29,10 @@ struct SteeringInitial {
   std::array<double, 2> motion_frequency{0.0, 0.0};  // motion number, frequency [Hz]
   std::array<double, 2> face_temperature{0.0, 293.15};  // tank face number, its temperature [K]
   std::array<double, 2> face_heat_flux{0.0, 0.0};        // tank face number, heat flux into the fluid [W/m2]
+  std::array<double, 2> spring_stiffness{0.0, 0.0};  // spring number, its stiffness [N/m]
+  std::array<double, 2> spring_damping{0.0, 0.0};    // spring number, its damping [N s/m]
+  std::array<double, 2> hinge_stiffness{0.0, 0.0};   // floating solid number, its hinge's stiffness [N m/rad]
+  std::array<double, 2> hinge_damping{0.0, 0.0};     // floating solid number, its hinge's damping [N m s/rad]
   int insitu_every = 1;
 
   // Shows an accepted change (a restart's history, or one steered before a fresh in-situ helper

@@ -182,6 +182,10 @@ SteeringInitial initial_from(const nlohmann::json& j) {
   s.motion_frequency = j.at("motion_frequency").get<std::array<double, 2>>();
   s.face_temperature = j.at("face_temperature").get<std::array<double, 2>>();
   s.face_heat_flux = j.at("face_heat_flux").get<std::array<double, 2>>();
+  s.spring_stiffness = j.at("spring_stiffness").get<std::array<double, 2>>();
+  s.spring_damping = j.at("spring_damping").get<std::array<double, 2>>();
+  s.hinge_stiffness = j.at("hinge_stiffness").get<std::array<double, 2>>();
+  s.hinge_damping = j.at("hinge_damping").get<std::array<double, 2>>();
   s.insitu_every = j.at("insitu_every").get<int>();
   return s;
 }

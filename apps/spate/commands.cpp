@@ -253,6 +253,19 @@ int run_case(const RunArgs& a, RunRecord& record) {
         if (face.kind == ThermalCondition::FaceTemperature) init.face_temperature = {double(f), face.value};
         if (face.kind == ThermalCondition::FaceFlux) init.face_heat_flux = {double(f), face.value};
       }
+      // The first spring of the floating solids, and the first hinged one.
+      for (const BodySpec& b : c.bodies)
+        if (!b.springs.empty()) {
+          init.spring_stiffness = {0.0, b.springs[0].stiffness};
+          init.spring_damping = {0.0, b.springs[0].damping};
+          break;
+        }
+      for (std::size_t b = 0; b < c.bodies.size(); ++b)
+        if (c.bodies[b].hinge.on) {
+          init.hinge_stiffness = {double(b), c.bodies[b].hinge.stiffness};
+          init.hinge_damping = {double(b), c.bodies[b].hinge.damping};
+          break;
+        }
       // A restart continues steered (the checkpoint holds the accepted changes): show those values.
       if (o.restart) {
         try {
@@ -556,11 +569,25 @@ int info_command(const InfoArgs& a) {
         std::string free;
         for (int f = 0; f < 6; ++f)
           if (b.free[f]) free += std::string(free.empty() ? "" : ", ") + dofs[f];
-        what = c.dim == 2 ? fmt::format("floating, mass {:g} kg/m, centre of mass [{:g}, {:g}], Izz {:g} kg m, free: {}", b.mass,
-                                        b.centre_of_mass[0], b.centre_of_mass[1], b.inertia[2], free)
-                          : fmt::format("floating, mass {:g} kg, centre of mass [{:g}, {:g}, {:g}], inertia [{:g}, {:g}, {:g}, {:g}, {:g}, {:g}] "
-                                        "kg m2, free: {}", b.mass, b.centre_of_mass[0], b.centre_of_mass[1], b.centre_of_mass[2],
-                                        b.inertia[0], b.inertia[1], b.inertia[2], b.inertia[3], b.inertia[4], b.inertia[5], free);
+        // Its number among the floating solids and its springs' numbers: the steering parameters
+        // hinge_* and spring_* name them so (docs/live.md).
+        int first_spring = 0;
+        for (int o = 0; o < ms.floating; ++o) first_spring += static_cast<int>(c.bodies[o].springs.size());
+        what = fmt::format("floating solid {}, ", ms.floating);
+        what += c.dim == 2 ? fmt::format("mass {:g} kg/m, centre of mass [{:g}, {:g}], Izz {:g} kg m", b.mass, b.centre_of_mass[0],
+                                         b.centre_of_mass[1], b.inertia[2])
+                           : fmt::format("mass {:g} kg, centre of mass [{:g}, {:g}, {:g}], inertia [{:g}, {:g}, {:g}, {:g}, {:g}, {:g}] kg m2",
+                                         b.mass, b.centre_of_mass[0], b.centre_of_mass[1], b.centre_of_mass[2], b.inertia[0], b.inertia[1],
+                                         b.inertia[2], b.inertia[3], b.inertia[4], b.inertia[5]);
+        if (b.hinge.on)
+          what += fmt::format(", hinge at [{:g}, {:g}, {:g}] (stiffness {:g}, damping {:g})", b.hinge.point[0], b.hinge.point[1],
+                              b.hinge.point[2], b.hinge.stiffness, b.hinge.damping);
+        else
+          what += ", free: " + free;
+        if (!b.springs.empty())
+          what += fmt::format(", springs {}-{}", first_spring, first_spring + static_cast<int>(b.springs.size()) - 1);
+        what += b.contact.on ? fmt::format(", contact (penetration {:g} m, friction {:g})", b.contact.penetration, b.contact.friction)
+                             : ", no contact";
         std::printf("  %-3zu %-12s %s\n", k, ms.body.c_str(), what.c_str());
         continue;
       }

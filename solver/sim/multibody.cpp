@@ -3,9 +3,12 @@
 #include <Simbody.h>
 
 #include <algorithm>
+#include <optional>
 #include <stdexcept>
 
 namespace spate::multibody {
+
+class Springs;
 
 // One Simbody system for all bodies: each hangs from the ground by a Planar (2D: rotation about z,
 // translation in x and y) or a Free (3D) mobilizer whose frame on the ground sits at the body's
@@ -23,6 +26,11 @@ struct System::Impl {
   std::unique_ptr<SimTK::ContactTrackerSubsystem> tracker;
   std::unique_ptr<SimTK::CompliantContactSubsystem> contact;
   std::vector<SimTK::MobilizedBody> bodies;
+  // A hinged body's rotational spring and damper (none for an unhinged one); the lines, owned by
+  // their Force::Custom.
+  std::vector<std::optional<SimTK::Force::MobilityLinearSpring>> hinge_springs;
+  std::vector<std::optional<SimTK::Force::MobilityLinearDamper>> hinge_dampers;
+  Springs* springs = nullptr;
   SimTK::State state;
   // One integrator for the run, initialised afresh from the state each step (so that a restart,
   // whose integrator is new, steps bit for bit as the run it continues); made at the first step.
@@ -38,6 +46,8 @@ constexpr int kFreeSpeed[6] = {3, 4, 5, 0, 1, 2};
 std::array<double, 3> array_of(const SimTK::Vec3& v) { return {v[0], v[1], v[2]}; }
 SimTK::Vec3 vec_of(const std::array<double, 3>& a, int dim) { return SimTK::Vec3(a[0], a[1], dim == 2 ? 0.0 : a[2]); }
 
+}  // namespace
+
 // The springs and mooring lines of every body, one Simbody custom force: tension
 // T = k (L - L0) + c dL/dt along the line from the body point to its anchor, none for a slack line
 // that is not taut (nor one that would push).
@@ -51,6 +61,13 @@ class Springs : public SimTK::Force::Custom::Implementation {
     bool slack;
   };
   explicit Springs(std::vector<Line> lines) : lines_(std::move(lines)) {}
+  // A steered line: the force reads it at its next evaluation (every step starts a new integration
+  // from a state whose time was set, so no cached force outlives the change).
+  void set(int line, double stiffness, double damping) {
+    lines_[line].stiffness = stiffness;
+    lines_[line].damping = damping;
+  }
+  const Line& line(int k) const { return lines_[k]; }
 
   void calcForce(const SimTK::State& state, SimTK::Vector_<SimTK::SpatialVec>& body_forces, SimTK::Vector_<SimTK::Vec3>&,
                  SimTK::Vector&) const override {
@@ -85,6 +102,8 @@ class Springs : public SimTK::Force::Custom::Implementation {
   }
   std::vector<Line> lines_;
 };
+
+namespace {
 
 }  // namespace
 
@@ -155,10 +174,13 @@ System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyIn
       const Rotation R = dim == 2 ? Rotation() : Rotation(UnitVec3(vec_of(b.hinge.axis, 3)), ZAxis);
       const Vec3 hinge = vec_of(b.hinge.point, dim);
       MobilizedBody::Pin pin(m.matter.Ground(), Transform(R, hinge), info, Transform(R, hinge - centre));
-      if (b.hinge.stiffness > 0) Force::MobilityLinearSpring(m.forces, pin, MobilizerQIndex(0), b.hinge.stiffness, 0.0);
-      if (b.hinge.damping > 0) Force::MobilityLinearDamper(m.forces, pin, MobilizerUIndex(0), b.hinge.damping);
+      // Both always, so that steering can give a hinge without them one.
+      m.hinge_springs.emplace_back(Force::MobilityLinearSpring(m.forces, pin, MobilizerQIndex(0), b.hinge.stiffness, 0.0));
+      m.hinge_dampers.emplace_back(Force::MobilityLinearDamper(m.forces, pin, MobilizerUIndex(0), b.hinge.damping));
       mob = pin;
     } else {
+      m.hinge_springs.emplace_back();
+      m.hinge_dampers.emplace_back();
       const Transform at(centre);
       mob = dim == 2 ? MobilizedBody(MobilizedBody::Planar(m.matter.Ground(), at, info, Transform()))
                      : MobilizedBody(MobilizedBody::Free(m.matter.Ground(), at, info, Transform()));
@@ -171,7 +193,10 @@ System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyIn
       lines.push_back({mob, vec_of(s.point, dim) - centre, vec_of(s.anchor, dim), s.stiffness, s.damping, s.length, s.slack});
     m.bodies.push_back(mob);
   }
-  if (!lines.empty()) Force::Custom(m.forces, new Springs(std::move(lines)));
+  if (!lines.empty()) {
+    m.springs = new Springs(std::move(lines));
+    Force::Custom(m.forces, m.springs);  // which owns it
+  }
   m.state = m.system.realizeTopology();
   set_loads(std::vector<Load>(bodies.size(), Load{}));
 }
@@ -244,6 +269,17 @@ bool System::set(int b, const std::vector<double>& q, const std::vector<double>&
   for (int k = 0; k < static_cast<int>(q.size()); ++k) mob.setOneQ(m.state, k, q[k]);
   for (int k = 0; k < static_cast<int>(u.size()); ++k) mob.setOneU(m.state, k, u[k]);
   return true;
+}
+
+void System::set_spring(int line, double stiffness, double damping) {
+  if (impl_->springs) impl_->springs->set(line, stiffness, damping);
+}
+
+void System::set_hinge(int b, double stiffness, double damping) {
+  Impl& m = *impl_;
+  if (!m.hinge_springs[b]) return;
+  m.hinge_springs[b]->setStiffness(m.state, stiffness);
+  m.hinge_dampers[b]->setDamping(m.state, damping);
 }
 
 }  // namespace spate::multibody

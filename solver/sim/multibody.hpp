@@ -74,6 +74,11 @@ class System {
   std::vector<double> u(int b) const;
   // Returns false when their counts do not fit body b.
   bool set(int b, const std::vector<double>& q, const std::vector<double>& u);
+  // Steering: spring or mooring line `line` (numbered over the bodies in order, each body's in its
+  // order) takes a new stiffness or damping; hinged body b's rotational spring or damper too.
+  // They act from the next step on.
+  void set_spring(int line, double stiffness, double damping);
+  void set_hinge(int b, double stiffness, double damping);
 
   struct Impl;  // Simbody's side (multibody.cpp), opaque here
 

@@ -17,5 +17,7 @@ std::vector<BodyOutput> System::state() const { return {}; }
 std::vector<double> System::q(int) const { return {}; }
 std::vector<double> System::u(int) const { return {}; }
 bool System::set(int, const std::vector<double>&, const std::vector<double>&) { return false; }
+void System::set_spring(int, double, double) {}
+void System::set_hinge(int, double, double) {}
 
 }  // namespace spate::multibody

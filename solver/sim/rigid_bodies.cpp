@@ -92,6 +92,10 @@ RigidBodies::RigidBodies(const Case& c) : case_(c) {
   slots_.assign(c.bodies.size(), -1);
   for (std::size_t k = 0; k < c.motions.size(); ++k)
     if (c.motions[k].floating >= 0) slots_[c.motions[k].floating] = static_cast<int>(k);
+  for (const BodySpec& b : c.bodies) {
+    hinges_.push_back({b.hinge.stiffness, b.hinge.damping});
+    for (const BodySpec::Spring& s : b.springs) springs_.push_back({s.stiffness, s.damping});
+  }
   if (c.bodies.empty()) return;
   std::vector<multibody::BodyInput> in;
   for (const BodySpec& b : c.bodies) {
@@ -206,6 +210,16 @@ void RigidBodies::restore(const std::string& text) {
   if (std::getline(in, line) && !line.empty()) throw std::runtime_error("it holds more floating solids than the case");
   apply_loads();
   previous_ = states_;
+}
+
+void RigidBodies::set_spring(int line, const Coefficients& k) {
+  springs_[line] = k;
+  impl_->system.set_spring(line, k.stiffness, k.damping);
+}
+
+void RigidBodies::set_hinge(int b, const Coefficients& k) {
+  hinges_[b] = k;
+  impl_->system.set_hinge(b, k.stiffness, k.damping);
 }
 
 void RigidBodies::set_step(PhysicsParams& P) const {

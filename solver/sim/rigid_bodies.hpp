@@ -70,6 +70,18 @@ class RigidBodies {
   std::string save() const;
   void restore(const std::string& text);
 
+  // Steering (sim/steering.hpp): a spring or mooring line, numbered over the floating solids in
+  // order and each one's lines in order, or a hinged body's rotational spring and damper, takes a
+  // new stiffness or damping from the next step on. The values now, first the case's.
+  struct Coefficients {
+    double stiffness = 0.0, damping = 0.0;
+  };
+  int spring_count() const { return static_cast<int>(springs_.size()); }
+  const Coefficients& spring(int line) const { return springs_[line]; }
+  void set_spring(int line, const Coefficients& k);
+  const Coefficients& hinge(int b) const { return hinges_[b]; }
+  void set_hinge(int b, const Coefficients& k);
+
  private:
   struct Impl;
   void read_state();
@@ -77,6 +89,7 @@ class RigidBodies {
   const Case& case_;
   std::unique_ptr<Impl> impl_;
   std::vector<int> slots_;
+  std::vector<Coefficients> springs_, hinges_;
   std::vector<BodyState> states_, previous_;
   std::vector<BodyLoad> loads_;
   bool loaded_ = false;  // loads have been set (or restored)

@@ -292,16 +292,16 @@ class Worker {
     PhysicsParams params = s_.params;
     int insitu_every = 1;
     MotionSet motions(s_.c.motions, s_.c.dim);
-    SteeringTarget steer{&params, &insitu_every, &motions};
+    // The floating solids (rigid_bodies.hpp): a restart continues from their saved state and loads
+    // (checked when the run was set up), with their springs as steered.
+    RigidBodies bodies(s_.c);
+    bodies_ = &bodies;
+    SteeringTarget steer{&params, &insitu_every, &motions, &bodies};
     for (auto& change : s_.steering_history) {
       apply(change, steer);
       if (change.name == "insitu_every" && s_.opts.insitu) s_.opts.insitu->set_interval(insitu_every);
     }
     steer.checkpoint_now = steer.stop = false;
-    // The floating solids (rigid_bodies.hpp): a restart continues from their saved state and loads
-    // (checked when the run was set up).
-    RigidBodies bodies(s_.c);
-    bodies_ = &bodies;
     if (s_.restarted) bodies.restore(s_.start.bodies);
     motions.set_step(params, s_.start.time, s_.start.time);
     bodies.set_step(params);

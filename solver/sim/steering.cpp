@@ -2,6 +2,7 @@
 
 #include "../case/case.hpp"
 #include "../io/input_file.hpp"
+#include "rigid_bodies.hpp"
 
 #include <cerrno>
 #include <cmath>
@@ -27,6 +28,12 @@ const std::vector<SteeringParameter>& steering_parameters() {
       {"face_temperature", 2, 0.0, 1.0e4, "K",
        "tank face number (0 x-, 1 x+, 2 y-, 3 y+, 4 z-, 5 z+), its fixed temperature (heat transfer; the face holds it from the next step)"},
       {"face_heat_flux", 2, -1.0e9, 1.0e9, "W/m2", "tank face number, the heat flux into the fluid through it (0: adiabatic)"},
+      {"spring_stiffness", 2, 0.0, 1.0e9, "N/m",
+       "spring number (the floating solids' springs and mooring lines in the case's order), its stiffness (2D: per metre)"},
+      {"spring_damping", 2, 0.0, 1.0e9, "N s/m", "spring number, its damping (2D: per metre)"},
+      {"hinge_stiffness", 2, 0.0, 1.0e9, "N m/rad",
+       "floating solid number (the case's order, as spate info lists them), its hinge's rotational stiffness (2D: per metre)"},
+      {"hinge_damping", 2, 0.0, 1.0e9, "N m s/rad", "floating solid number, its hinge's rotational damping (2D: per metre)"},
       {"insitu_every", 1, 1.0, 1.0e6, "steps", "steps between in-situ pipeline executions"},
       {"write_checkpoint", 1, 0.0, 1.0, "", "1: write a checkpoint at the next step boundary"},
       {"stop", 1, 0.0, 1.0, "", "1: write a checkpoint and stop cleanly (exit 0)"},
@@ -89,7 +96,22 @@ std::optional<std::string> validate(const SteeringChange& c, int dim, const Moti
       if (auto why = tank_wall_missing(*known, static_cast<int>(f))) return c.name + ": face " + std::to_string(static_cast<int>(f)) + " " + *why;
     }
   }
-  // The value's range (phase_viscosity, face_*: the second value, after the number).
+  if (c.name.rfind("spring_", 0) == 0 || c.name.rfind("hinge_", 0) == 0) {
+    const bool spring = c.name[0] == 's';
+    const double k = c.value[0];
+    if (k != std::floor(k) || k < 0) return c.name + ": the " + (spring ? "spring" : "floating solid") + " number must be a whole number >= 0";
+    if (known) {
+      int springs = 0;
+      for (const BodySpec& b : known->bodies) springs += static_cast<int>(b.springs.size());
+      if (spring && k >= springs)
+        return c.name + ": the case has " + std::to_string(springs) + " spring(s) on its floating solids, numbered from 0";
+      if (!spring && k >= static_cast<double>(known->bodies.size()))
+        return c.name + ": the case has " + std::to_string(known->bodies.size()) + " floating solid(s), numbered from 0";
+      if (!spring && !known->bodies[static_cast<std::size_t>(k)].hinge.on)
+        return c.name + ": floating solid " + std::to_string(static_cast<int>(k)) + " has no hinge";
+    }
+  }
+  // The value's range (phase_viscosity, face_*, spring_*, hinge_*: the second value, after the number).
   const double v = c.value.back();
   if (v < spec->min || v > spec->max) {
     std::ostringstream s;
@@ -119,6 +141,16 @@ void apply(const SteeringChange& c, SteeringTarget& t) {
     FaceCondition& face = t.params->heat.face[static_cast<int>(c.value[0])];
     face.kind = c.name == "face_temperature" ? ThermalCondition::FaceTemperature : ThermalCondition::FaceFlux;
     face.value = static_cast<float>(c.value[1]);
+  } else if (c.name.rfind("spring_", 0) == 0 || c.name.rfind("hinge_", 0) == 0) {
+    if (!t.bodies) return;
+    const int k = static_cast<int>(c.value[0]);
+    const bool spring = c.name[0] == 's', stiffness = c.name.ends_with("_stiffness");
+    RigidBodies::Coefficients now = spring ? t.bodies->spring(k) : t.bodies->hinge(k);
+    (stiffness ? now.stiffness : now.damping) = c.value[1];
+    if (spring)
+      t.bodies->set_spring(k, now);
+    else
+      t.bodies->set_hinge(k, now);
   } else if (c.name == "insitu_every") {
     if (t.insitu_every) *t.insitu_every = static_cast<int>(c.value[0]);
   } else if (c.name == "write_checkpoint") {

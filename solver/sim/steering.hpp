@@ -14,6 +14,7 @@
 namespace spate {
 
 struct Case;
+class RigidBodies;
 
 struct SteeringParameter {
   std::string name;
@@ -23,7 +24,8 @@ struct SteeringParameter {
 };
 
 // The documented set (docs/live.md): gravity, viscosity, phase_viscosity, artificial_viscosity,
-// motion_amplitude, motion_frequency, face_temperature, face_heat_flux, insitu_every, write_checkpoint, stop.
+// motion_amplitude, motion_frequency, face_temperature, face_heat_flux, spring_stiffness,
+// spring_damping, hinge_stiffness, hinge_damping, insitu_every, write_checkpoint, stop.
 const std::vector<SteeringParameter>& steering_parameters();
 
 struct SteeringChange {
@@ -38,6 +40,7 @@ struct SteeringTarget {
   PhysicsParams* params = nullptr;
   int* insitu_every = nullptr;
   MotionSet* motions = nullptr;  // the walls' motions (motion_amplitude, motion_frequency)
+  RigidBodies* bodies = nullptr;  // the floating solids (spring_*, hinge_*)
   bool checkpoint_now = false;
   bool stop = false;
 };
@@ -45,7 +48,8 @@ struct SteeringTarget {
 // Reason for rejection, or nothing when the change is acceptable. `motions`: the run's wall
 // motions (a motion change names one of them); null: not known (a recorded log read before the
 // run), only the ranges are checked. `known`: the case (phase_viscosity names one of its fluids,
-// face_temperature and face_heat_flux one of its tank's walls, in a case with heat transfer); null:
+// face_temperature and face_heat_flux one of its tank's walls, in a case with heat transfer,
+// spring_* one of its floating solids' springs, hinge_* one of its hinged floating solids); null:
 // not known, only the ranges are checked.
 std::optional<std::string> validate(const SteeringChange& change, int dim, const MotionSet* motions = nullptr, const Case* known = nullptr);
 void apply(const SteeringChange& change, SteeringTarget& target);

@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "case/motion.hpp"
 #include "run_helpers.hpp"
 
 namespace spate {
@@ -73,35 +74,55 @@ TEST(Restart, ReadsFormatVersionOneBitIdentically) {
   EXPECT_EQ(straight.simulated_time, resumed.simulated_time);
 }
 
+// A steered run of 120 steps replaying `log` (its changes at steps after 60 and before), straight
+// and restarted at step 60 (the earlier changes in the checkpoint's history, the later still to
+// come): both end bit for bit alike, with all `accepted` changes taken; unsteered, the run ends
+// elsewhere.
+void expect_steered_restart_identical(const Case& c, const std::string& log_text, int accepted, const std::string& name) {
+  const auto log = parse_log(log_text, "test log");
+  RunOptions o;
+  o.steps = 120;
+  SteeringReplay all(log);
+  o.steering = &all;
+  const RunResult straight = test::run_case(c, test::scratch(name + "-straight"), o);
+  EXPECT_EQ(straight.steering_accepted, accepted);
+  o.steps = 60;
+  SteeringReplay first_half(log);
+  o.steering = &first_half;
+  const RunResult first = test::run_case(c, test::scratch(name + "-first"), o);
+  o.restart = first.last_checkpoint;
+  SteeringReplay second_half(log);
+  o.steering = &second_half;
+  const RunResult second = test::run_case(c, test::scratch(name + "-second"), o);
+  ASSERT_EQ(second.final_step, 120) << second.message;
+  std::string why;
+  EXPECT_TRUE(test::identical_checkpoints(straight.last_checkpoint, second.last_checkpoint, &why)) << why;
+  o = RunOptions{};
+  o.steps = 120;
+  const RunResult plain = test::run_case(c, test::scratch(name + "-plain"), o);
+  EXPECT_FALSE(test::identical_checkpoints(straight.last_checkpoint, plain.last_checkpoint));
+}
+
 // Moving walls under steering: the amplitude and frequency changes of a replayed log live in the
 // checkpoint's steering history, so a restart half way continues on the same wall path, bit for bit.
 TEST(Restart, SteeredMovingWallsContinueBitIdentically) {
   const Case c = load_case(test::case_path("sloshing_2d.yaml"),
                            {"dp=0.02", "output.interval=0", "probes=[]", "time.dt=2e-4", "tank.motion.ramp=0", "tank.motion.period=0.25",
                             "tank.motion.rotation=3"});
-  const auto log = parse_log("40 0 motion_amplitude 0 1.8\n70 0 motion_frequency 0 3\n", "test log");
-  RunOptions o;
-  o.steps = 120;
-  SteeringReplay all(log);
-  o.steering = &all;
-  const RunResult straight = test::run_case(c, test::scratch("moving-straight"), o);
-  EXPECT_EQ(straight.steering_accepted, 2);
-  o.steps = 60;
-  SteeringReplay first_half(log);
-  o.steering = &first_half;
-  const RunResult first = test::run_case(c, test::scratch("moving-first"), o);
-  o.restart = first.last_checkpoint;
-  SteeringReplay second_half(log);
-  o.steering = &second_half;
-  const RunResult second = test::run_case(c, test::scratch("moving-second"), o);
-  ASSERT_EQ(second.final_step, 120);
-  std::string why;
-  EXPECT_TRUE(test::identical_checkpoints(straight.last_checkpoint, second.last_checkpoint, &why)) << why;
-  // Unsteered, the walls take another path.
-  o = RunOptions{};
-  o.steps = 120;
-  const RunResult plain = test::run_case(c, test::scratch("moving-plain"), o);
-  EXPECT_FALSE(test::identical_checkpoints(straight.last_checkpoint, plain.last_checkpoint));
+  expect_steered_restart_identical(c, "40 0 motion_amplitude 0 1.8\n70 0 motion_frequency 0 3\n", 2, "moving");
+}
+
+// Floating solids steered (docs/live.md): the box of cases/floating_box_2d.yaml on a hinge at its
+// bottom with a spring to the tank's top, its hinge's stiffness and the spring's stiffness changed
+// at step 40, the hinge's damping at step 70.
+TEST(Restart, SteeredFloatingSolidContinuesBitIdentically) {
+  if (!body_support()) GTEST_SKIP() << "built without Simbody";
+  const Case c = load_case(test::case_path("floating_box_2d.yaml"),
+                           {"dp=0.02", "output.interval=0", "probes=[]",
+                            "solids=[{name: box, polygon: [[0.9, 0.26], [1.1, 0.26], [1.1, 0.36], [0.9, 0.36]], motion: floating, density: 500, "
+                            "centre_of_mass: [1.04, 0.3], hinge: {point: [1.0, 0.26], stiffness: 1}, "
+                            "springs: [{point: [1.1, 0.36], anchor: [1.4, 0.5], stiffness: 5}]}]"});
+  expect_steered_restart_identical(c, "40 0 hinge_stiffness 0 40\n40 0 spring_stiffness 0 300\n70 0 hinge_damping 0 2\n", 3, "hinge");
 }
 
 // A wall moved by a time series named relative to its case file (the lifted gate of

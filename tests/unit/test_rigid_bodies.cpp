@@ -11,6 +11,7 @@
 #include "case_errors.hpp"
 #include "physics/params.hpp"
 #include "sim/rigid_bodies.hpp"
+#include "sim/steering.hpp"
 
 namespace spate {
 namespace {
@@ -277,6 +278,46 @@ TEST(RigidBodies, ABoxOnTheFloorSlidesAgainstCoulombFrictionUpToTheWall) {
   EXPECT_GT(farthest, 1.2 - 1e-3);
   EXPECT_LT(farthest, 1.2 + 0.5 * c.dp);
   EXPECT_NEAR(b.state(0).centre[0] + 0.1, 1.2, 0.5 * c.dp);
+}
+
+// Steering (docs/live.md): a hinge's stiffness steered from 2 to 8 N m/rad doubles its natural
+// frequency, so that the half period of the case's spring becomes a full one (the body back at
+// rest); a spring or mooring line steered, numbered over the bodies; and what validate refuses.
+TEST(RigidBodies, SteeredHingeAndSpringCoefficientsActFromTheNextStep) {
+  const Case c = parse_case(case_2d("density: 500\n    hinge: {point: [0.6, 0.29], stiffness: 2.0}\n"
+                                    "    springs: [{point: [0.6, 0.34], anchor: [0.6, 0.5], stiffness: 10}]"), "case.yaml");
+  RigidBodies b(c);
+  ASSERT_EQ(b.spring_count(), 1);
+  EXPECT_DOUBLE_EQ(b.hinge(0).stiffness, 2.0);
+  PhysicsParams P{};
+  int every = 1;
+  SteeringTarget target{&P, &every, nullptr, &b};
+  const SteeringChange stiffer{0, 0.0, "hinge_stiffness", {0, 8.0}};
+  ASSERT_FALSE(validate(stiffer, 2, nullptr, &c).has_value());
+  apply(stiffer, target);
+  EXPECT_DOUBLE_EQ(b.hinge(0).stiffness, 8.0);
+  EXPECT_DOUBLE_EQ(b.hinge(0).damping, 0.0);
+  // The spring through the centre of mass's vertical adds no torque at rest; the torque tau turns
+  // the body about a new equilibrium tau / k: after pi / w (w = sqrt(k / I)) it is at 2 tau / k.
+  const double I = c.bodies[0].inertia[2], k = 8.0, tau = 0.05, w = std::sqrt(k / I);
+  BodyLoad l;
+  l.torque = {0.0, 0.0, tau};
+  b.set_loads({l});
+  const int n = 400;
+  run_steps(b, n, 3.14159265358979323846 / w / n);
+  EXPECT_NEAR(b.state(0).angles[2], 2 * tau / k, 2e-3 * tau / k);
+  const SteeringChange line{0, 0.0, "spring_damping", {0, 3.5}};
+  ASSERT_FALSE(validate(line, 2, nullptr, &c).has_value());
+  apply(line, target);
+  EXPECT_DOUBLE_EQ(b.spring(0).stiffness, 10.0);
+  EXPECT_DOUBLE_EQ(b.spring(0).damping, 3.5);
+  auto why = [&](const SteeringChange& x, const Case* known) { return validate(x, 2, nullptr, known).value_or(""); };
+  EXPECT_NE(why({0, 0.0, "spring_stiffness", {1, 5.0}}, &c).find("has 1 spring(s)"), std::string::npos);
+  EXPECT_NE(why({0, 0.0, "hinge_damping", {0.5, 5.0}}, &c).find("whole number"), std::string::npos);
+  EXPECT_NE(why({0, 0.0, "hinge_stiffness", {0, -1.0}}, &c).find("outside"), std::string::npos);
+  const Case free = parse_case(case_2d(), "case.yaml");
+  EXPECT_NE(why({0, 0.0, "hinge_stiffness", {0, 1.0}}, &free).find("has no hinge"), std::string::npos);
+  EXPECT_EQ(why({0, 0.0, "spring_stiffness", {7, 5.0}}, nullptr), "");  // a log read before the run: ranges only
 }
 
 TEST(RigidBodies, TheLoaderRefusesWhatCannotFloat) {
