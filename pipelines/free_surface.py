@@ -8,9 +8,10 @@
 # estimate of f; without the division a field reads half its value on the 0.5 contour), by default
 # the speed |v|. The tank floor, its outline and every solid (the column) are drawn too, from a
 # three-quarter view like the paper's Figure 4, with the simulated time in a corner; a solid of any
-# shape (a mesh, a cylinder) from the surface spate wrote for it (<run output>/geometry/); a moving
-# solid (prescribed or floating) has none and is drawn as the box its particles fill, where they
-# are now. In 2D the
+# shape (a mesh, a cylinder) from the surface spate wrote for it (<run output>/geometry/), where it
+# stood at the start; a box solid as the box its particles fill, refitted at every step, so that a
+# moving one (prescribed or floating) is drawn where it is now (as the axis-aligned box around its
+# particles: a turned box is drawn a little larger). In 2D the
 # water is the region where the Shepard sum exceeds 0.5, seen from the front.
 # PNGs go to <run output>/insitu/free_surface_<step>.png.
 #
@@ -123,6 +124,17 @@ def _normalised(interpolated):
     return calc
 
 
+# The box solids, each as (its particles, the box drawn for it): refitted at every step, so that a
+# moving one (a wave paddle, a floating box) is drawn where it is now.
+_boxes = []
+
+
+def _fit_box(block, b):
+    """The drawn box made the bounding box b of a solid's particles."""
+    block.XLength, block.YLength, block.ZLength = b[1] - b[0], b[3] - b[2], b[5] - b[4]
+    block.Center = [(b[0] + b[1]) / 2, (b[2] + b[3]) / 2, (b[4] + b[5]) / 2]
+
+
 def _build_scene():
     """Once, from the first step's data: the grid, the static geometry and the camera."""
     dim = int(_constant("dimensions", 3))
@@ -197,8 +209,8 @@ def _build_scene():
                 block = XMLPolyDataReader(registrationName="solid_surface_%d" % kind, FileName=[surface_file])
             else:
                 block = Box(registrationName="solid_box_%d" % kind)
-                block.XLength, block.YLength, block.ZLength = sb[1] - sb[0], sb[3] - sb[2], sb[5] - sb[4]
-                block.Center = [(sb[0] + sb[1]) / 2, (sb[2] + sb[3]) / 2, (sb[4] + sb[5]) / 2]
+                _fit_box(block, sb)
+                _boxes.append((solid, block))
             block_shown = Show(block, view)
             block_shown.AmbientColor = block_shown.DiffuseColor = [0.75, 0.72, 0.66]
         # Three-quarter view from the downstream corner, a little above, like the paper's figure.
@@ -247,3 +259,9 @@ def catalyst_execute(info):
     clock.Text = "t = %.3f s   (step %d)" % (info.time, info.timestep)
     if _scene is None:
         _scene = _build_scene()
+    else:
+        for solid, block in _boxes:
+            solid.UpdatePipeline(info.time)
+            b = solid.GetDataInformation().GetBounds()
+            if b[0] <= b[1]:
+                _fit_box(block, b)

@@ -21,10 +21,9 @@ struct System::Impl {
   SimTK::SimbodyMatterSubsystem matter{system};
   SimTK::GeneralForceSubsystem forces{system};
   SimTK::Force::DiscreteForces fluid{forces, matter};
-  // Compliant contact with the walls; none when no body has contact. The contact subsystem keeps a
-  // reference to the tracker's handle: both live as long as the system.
-  std::unique_ptr<SimTK::ContactTrackerSubsystem> tracker;
-  std::unique_ptr<SimTK::CompliantContactSubsystem> contact;
+  // Contact with the walls (spheres and half-spaces found anew at every evaluation, Hunt &
+  // Crossley's force); none when no body has contact.
+  std::unique_ptr<SimTK::GeneralContactSubsystem> contacts;
   std::vector<SimTK::MobilizedBody> bodies;
   // A hinged body's rotational spring and damper (none for an unhinged one); the lines, owned by
   // their Force::Custom.
@@ -114,39 +113,43 @@ namespace {
 // Simbody combines two materials as E = (s1 E1^(2/3))^(3/2) with s1 = E2^(2/3) / (E1^(2/3) +
 // E2^(2/3)), c = c1 s1 + c2 (1 - s1) and mu = 2 mu1 mu2 / (mu1 + mu2) (HuntCrossleyForce.h).
 constexpr double kWallStiffnessRatio = 1e9, kWallFriction = 1e9;
+// Friction grows linearly with the slip speed up to mu N at this speed: a body held by friction
+// creeps below it. Its rate mu g / vt (2,000-5,000 1/s) times the step stays inside the explicit
+// Runge-Kutta's stability for steps up to about 5e-4 s (SPH steps are some 1e-4 s).
 constexpr double kTransitionVelocity = 2e-3;  // [m/s]
 
-// The walls of the tank, half-spaces of the ground, and the subsystems of compliant contact; none
-// when no body has contact.
-void add_walls(System::Impl& m, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls) {
+// Contact between the bodies' spheres and the walls, half-spaces of the ground: Simbody's
+// GeneralContactSubsystem finds the overlaps afresh at every evaluation (its newer tracking
+// subsystem fails an assertion when a body starts in contact, e.g. resting on the floor at a
+// restart), and a HuntCrossleyForce pushes them apart with 4/3 E sqrt(R) x^1.5 (1 + 3/2 c dx/dt).
+// Nothing when no body has contact.
+void add_contact(System::Impl& m, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls, int dim) {
   using namespace SimTK;
   double stiffest = 0.0;
   for (const BodyInput& b : bodies)
     if (b.contact.on) stiffest = std::max(stiffest, b.contact.stiffness);
   if (!(stiffest > 0) || walls.empty()) return;
-  m.tracker.reset(new ContactTrackerSubsystem(m.system));
-  m.contact.reset(new CompliantContactSubsystem(m.system, *m.tracker));
-  // Friction grows linearly with the slip speed up to mu N at this speed: a body held by friction
-  // creeps below it. Its rate mu g / vt (2,000-5,000 1/s) times the step stays inside the explicit
-  // Runge-Kutta's stability for steps up to about 5e-4 s (SPH steps are some 1e-4 s).
-  m.contact->setTransitionVelocity(kTransitionVelocity);
-  const ContactMaterial wall(kWallStiffnessRatio * stiffest, 0.0, kWallFriction, kWallFriction);
+  m.contacts.reset(new GeneralContactSubsystem(m.system));
+  const ContactSetIndex set = m.contacts->createContactSet();
+  HuntCrossleyForce force(m.forces, *m.contacts, set);
+  force.setTransitionVelocity(kTransitionVelocity);
+  int surface = 0;
   for (const WallInput& w : walls) {
     // A HalfSpace fills x > 0 of its frame: x points into the wall, against its normal.
     const Vec3 into(-w.normal[0], -w.normal[1], -w.normal[2]);
-    m.matter.updGround().updBody().addContactSurface(Transform(Rotation(UnitVec3(into), XAxis), Vec3(w.point[0], w.point[1], w.point[2])),
-                                                     ContactSurface(ContactGeometry::HalfSpace(), wall));
+    m.contacts->addBody(set, m.matter.Ground(), ContactGeometry::HalfSpace(),
+                        Transform(Rotation(UnitVec3(into), XAxis), Vec3(w.point[0], w.point[1], w.point[2])));
+    force.setBodyParameters(ContactSurfaceIndex(surface++), kWallStiffnessRatio * stiffest, 0.0, kWallFriction,
+                            kWallFriction, 0.0);
   }
-}
-
-// A body's contact spheres.
-void add_contact_spheres(SimTK::Body& body, const ContactInput& c, int dim) {
-  using namespace SimTK;
-  if (!c.on || !(c.stiffness > 0)) return;
-  const ContactMaterial material(c.stiffness, c.dissipation, 0.5 * c.friction, 0.5 * c.friction);
-  for (const auto& p : c.points) {
-    const Vec3 x(p[0], p[1], dim == 2 ? 0.0 : p[2]);
-    body.addContactSurface(Transform(x), ContactSurface(ContactGeometry::Sphere(c.radius), material));
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const ContactInput& c = bodies[b].contact;
+    if (!c.on || !(c.stiffness > 0)) continue;
+    for (const auto& p : c.points) {
+      m.contacts->addBody(set, m.bodies[b], ContactGeometry::Sphere(c.radius), Transform(Vec3(p[0], p[1], dim == 2 ? 0.0 : p[2])));
+      force.setBodyParameters(ContactSurfaceIndex(surface++), c.stiffness, c.dissipation, 0.5 * c.friction,
+                              0.5 * c.friction, 0.0);
+    }
   }
 }
 
@@ -158,14 +161,12 @@ System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyIn
   Impl& m = *impl_;
   m.dim = dim;
   Force::UniformGravity(m.forces, m.matter, Vec3(g[0], g[1], dim == 2 ? 0.0 : g[2]));
-  add_walls(m, bodies, walls);
   std::vector<Springs::Line> lines;
   for (const BodyInput& b : bodies) {
     const auto& I = b.inertia;
     // 2D: only Izz acts (Planar turns about z); the other moments just make a valid inertia.
     const Inertia inertia = dim == 2 ? Inertia(I[2], I[2], I[2]) : Inertia(I[0], I[1], I[2], I[3], I[4], I[5]);
-    Body::Rigid info(MassProperties(b.mass, Vec3(0), inertia));
-    add_contact_spheres(info, b.contact, dim);
+    const Body::Rigid info(MassProperties(b.mass, Vec3(0), inertia));
     const Vec3 centre = vec_of(b.centre, dim);
     MobilizedBody mob;
     if (b.hinge.on) {
@@ -193,6 +194,7 @@ System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyIn
       lines.push_back({mob, vec_of(s.point, dim) - centre, vec_of(s.anchor, dim), s.stiffness, s.damping, s.length, s.slack});
     m.bodies.push_back(mob);
   }
+  add_contact(m, bodies, walls, dim);
   if (!lines.empty()) {
     m.springs = new Springs(std::move(lines));
     Force::Custom(m.forces, m.springs);  // which owns it
