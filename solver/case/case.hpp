@@ -108,10 +108,13 @@ struct BodySpec {
   // Linear springs and mooring lines (`springs:`) from a point of the body (at t = 0) to a fixed
   // anchor: tension k (L - length) + c dL/dt along the line [N/m, N s/m] (2D: per metre); a `slack`
   // line (a mooring) only pulls, and only when longer than its length.
+  // With `to` (another floating solid, earlier in the case's list) the anchor is a point of that
+  // body (at t = 0) and the line pulls both.
   struct Spring {
     Vec3d point{0, 0, 0}, anchor{0, 0, 0};
     double stiffness = 0.0, damping = 0.0, length = 0.0;
     bool slack = false;
+    int to = -1;  // the other body (index into Case::bodies), or -1: a fixed anchor
   };
   std::vector<Spring> springs;
   // Contact with the tank's walls (`contact:`; Simbody's Hunt-Crossley compliant contact, docs/cases.md

@@ -798,14 +798,14 @@ MotionSpec read_floating(Section& m, Case& c, const SolidSpec& solid, int index)
     }
   }
   if (d == 2) b.free[2] = b.free[3] = b.free[4] = false;
-  // Whether x lies in the solid or within dp of it.
-  auto on_body = [&](const Vec3d& x) {
-    if (solid.shape) {
+  // Whether x lies in solid s or within dp of it.
+  auto on_body = [&](const Vec3d& x, const SolidSpec& s) {
+    if (s.shape) {
       double point[3] = {x[0], x[1], d == 3 ? x[2] : 0.0}, normal[3];
-      return solid.shape->distance(point, normal) <= c.dp;
+      return s.shape->distance(point, normal) <= c.dp;
     }
     for (int k = 0; k < d; ++k)
-      if (x[k] < solid.box.min[k] - c.dp || x[k] > solid.box.max[k] + c.dp) return false;
+      if (x[k] < s.box.min[k] - c.dp || x[k] > s.box.max[k] + c.dp) return false;
     return true;
   };
   auto non_negative = [](Section& sec, const char* key) {
@@ -817,7 +817,7 @@ MotionSpec read_floating(Section& m, Case& c, const SolidSpec& solid, int index)
     if (m.has("free")) m.fail(m.raw("free"), "free", "a hinged solid turns about its hinge only: give 'hinge' or 'free', not both");
     b.hinge.on = true;
     b.hinge.point = h->vector("point", d);
-    if (!on_body(b.hinge.point))
+    if (!on_body(b.hinge.point, solid))
       h->fail(h->raw("point"), "point", fmt::format("the hinge lies outside solid '{}' (more than dp from it): a hinge joins the body to the ground "
                                                     "where the body is", solid.name));
     if (d == 3) {
@@ -836,11 +836,25 @@ MotionSpec read_floating(Section& m, Case& c, const SolidSpec& solid, int index)
     BodySpec::Spring line;
     line.point = sp.vector("point", d);
     line.anchor = sp.vector("anchor", d);
-    if (!on_body(line.point))
+    if (!on_body(line.point, solid))
       sp.fail(sp.raw("point"), "point", fmt::format("the spring's end lies outside solid '{}' (more than dp from it)", solid.name));
-    for (int k = 0; k < d; ++k)
-      if (line.anchor[k] < c.tank_origin[k] - c.dp || line.anchor[k] > c.tank_origin[k] + c.tank_size[k] + c.dp)
-        sp.fail(sp.raw("anchor"), "anchor", "the anchor lies outside the tank (a mooring to nowhere): tie a spring or mooring line to a point of the tank");
+    if (sp.has("to")) {
+      // Between two bodies: the other must float and come earlier in the list (its body exists).
+      const std::string other = sp.text("to");
+      std::optional<int> found;
+      for (std::size_t k = 0; k < c.bodies.size(); ++k)
+        if (c.solids[c.bodies[k].solid].name == other) found = static_cast<int>(k);
+      if (!found)
+        sp.fail(sp.raw("to"), "to", fmt::format("'{}' is not a floating solid listed before '{}' (write a spring between two bodies on the second)",
+                                                other, solid.name));
+      line.to = *found;
+      if (!on_body(line.anchor, c.solids[c.bodies[*found].solid]))
+        sp.fail(sp.raw("anchor"), "anchor", fmt::format("the anchor lies outside solid '{}' (more than dp from it)", other));
+    } else {
+      for (int k = 0; k < d; ++k)
+        if (line.anchor[k] < c.tank_origin[k] - c.dp || line.anchor[k] > c.tank_origin[k] + c.tank_size[k] + c.dp)
+          sp.fail(sp.raw("anchor"), "anchor", "the anchor lies outside the tank (a mooring to nowhere): tie a spring or mooring line to a point of the tank");
+    }
     line.stiffness = sp.number("stiffness");
     if (!(line.stiffness > 0)) sp.fail(sp.raw("stiffness"), "stiffness", "must be > 0 [N/m" + std::string(d == 2 ? " per metre" : "") + "]");
     line.damping = non_negative(sp, "damping");

@@ -55,7 +55,8 @@ class Springs : public SimTK::Force::Custom::Implementation {
   struct Line {
     SimTK::MobilizedBody body;
     SimTK::Vec3 point;   // on the body, from its origin (the centre of mass), body frame
-    SimTK::Vec3 anchor;  // world
+    SimTK::MobilizedBody other;  // the anchor's body: the ground for a fixed anchor
+    SimTK::Vec3 anchor;  // on it, body frame (the ground's: world)
     double stiffness, damping, length;
     bool slack;
   };
@@ -66,7 +67,6 @@ class Springs : public SimTK::Force::Custom::Implementation {
     lines_[line].stiffness = stiffness;
     lines_[line].damping = damping;
   }
-  const Line& line(int k) const { return lines_[k]; }
 
   void calcForce(const SimTK::State& state, SimTK::Vector_<SimTK::SpatialVec>& body_forces, SimTK::Vector_<SimTK::Vec3>&,
                  SimTK::Vector&) const override {
@@ -75,12 +75,13 @@ class Springs : public SimTK::Force::Custom::Implementation {
       SimTK::Vec3 e;
       if (!tension(state, l, T, e)) continue;
       l.body.applyForceToBodyPoint(state, l.point, T * e, body_forces);
+      l.other.applyForceToBodyPoint(state, l.anchor, -T * e, body_forces);  // the ground takes it unmoved
     }
   }
   SimTK::Real calcPotentialEnergy(const SimTK::State& state) const override {
     double energy = 0.0;
     for (const Line& l : lines_) {
-      const double stretch = (l.anchor - l.body.findStationLocationInGround(state, l.point)).norm() - l.length;
+      const double stretch = (ends(state, l).first).norm() - l.length;
       if (!l.slack || stretch > 0) energy += 0.5 * l.stiffness * stretch * stretch;
     }
     return energy;
@@ -88,13 +89,18 @@ class Springs : public SimTK::Force::Custom::Implementation {
   bool dependsOnlyOnPositions() const override { return false; }
 
  private:
+  // The line from the body point to the anchor, and its rate of change.
+  static std::pair<SimTK::Vec3, SimTK::Vec3> ends(const SimTK::State& state, const Line& l) {
+    return {l.other.findStationLocationInGround(state, l.anchor) - l.body.findStationLocationInGround(state, l.point),
+            l.other.findStationVelocityInGround(state, l.anchor) - l.body.findStationVelocityInGround(state, l.point)};
+  }
   // The line's tension and its unit direction from the body point to the anchor; false: no force.
   static bool tension(const SimTK::State& state, const Line& l, double& T, SimTK::Vec3& e) {
-    const SimTK::Vec3 d = l.anchor - l.body.findStationLocationInGround(state, l.point);
+    const auto [d, v] = ends(state, l);
     const double L = d.norm();
     if (!(L > 0)) return false;
     e = d / L;
-    const double rate = -SimTK::dot(l.body.findStationVelocityInGround(state, l.point), e);  // dL/dt
+    const double rate = SimTK::dot(v, e);  // dL/dt
     T = l.stiffness * (L - l.length) + l.damping * rate;
     if (l.slack && (L <= l.length || T < 0)) return false;
     return true;
@@ -190,8 +196,12 @@ System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyIn
         if (u >= 0 && !b.free[dof]) Constraint::ConstantSpeed(mob, MobilizerUIndex(u), 0.0);
       }
     }
-    for (const SpringInput& s : b.springs)
-      lines.push_back({mob, vec_of(s.point, dim) - centre, vec_of(s.anchor, dim), s.stiffness, s.damping, s.length, s.slack});
+    for (const SpringInput& s : b.springs) {
+      const bool fixed = s.other < 0;
+      const SimTK::MobilizedBody& other = fixed ? m.matter.Ground() : m.bodies[s.other];
+      const Vec3 anchor = vec_of(s.anchor, dim) - (fixed ? Vec3(0) : vec_of(bodies[s.other].centre, dim));
+      lines.push_back({mob, vec_of(s.point, dim) - centre, other, anchor, s.stiffness, s.damping, s.length, s.slack});
+    }
     m.bodies.push_back(mob);
   }
   add_contact(m, bodies, walls, dim);

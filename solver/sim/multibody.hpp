@@ -17,11 +17,13 @@ struct HingeInput {
   double stiffness = 0.0, damping = 0.0;
 };
 
-// A spring or mooring line from a body point (at t = 0) to a fixed anchor (world).
+// A spring or mooring line from a body point (at t = 0) to a fixed anchor (world), or to a point of
+// another body (`other`, an earlier one; `anchor` its point at t = 0).
 struct SpringInput {
   std::array<double, 3> point{}, anchor{};
   double stiffness = 0.0, damping = 0.0, length = 0.0;
   bool slack = false;  // pulls only, when longer than `length`
+  int other = -1;
 };
 
 // Contact with the walls (Simbody's compliant contact, Hunt & Crossley with Hertz's law): small

@@ -101,7 +101,7 @@ RigidBodies::RigidBodies(const Case& c) : case_(c) {
   for (const BodySpec& b : c.bodies) {
     multibody::BodyInput body{b.mass, b.centre_of_mass, b.inertia, b.free, {}, {}, {}};
     body.hinge = {b.hinge.on, b.hinge.point, b.hinge.axis, b.hinge.stiffness, b.hinge.damping};
-    for (const BodySpec::Spring& s : b.springs) body.springs.push_back({s.point, s.anchor, s.stiffness, s.damping, s.length, s.slack});
+    for (const BodySpec::Spring& s : b.springs) body.springs.push_back({s.point, s.anchor, s.stiffness, s.damping, s.length, s.slack, s.to});
     if (b.contact.on) {
       // Hertz: f = 4/3 E sqrt(R) x^1.5 carries the body's weight (at 9.81 m/s2 without gravity) on
       // one sphere at x = penetration. The spheres are small (dp/100): the body stands that far off

@@ -331,6 +331,36 @@ TEST(RigidBodies, SteeredHingeAndSpringCoefficientsActFromTheNextStep) {
   EXPECT_EQ(why({0, 0.0, "spring_stiffness", {7, 5.0}}, nullptr), "");  // a log read before the run: ranges only
 }
 
+// A spring between two bodies (`to`): two boxes of 10 kg/m side by side, without gravity, the
+// spring between their facing sides stretched by 2 cm: they swing against each other at
+// w = sqrt(k / mu), mu = m1 m2 / (m1 + m2), their common centre of mass still; half a period
+// later the stretch has turned to a squeeze of 2 cm.
+TEST(RigidBodies, ASpringBetweenTwoBodiesPullsBothAndKeepsTheirCentre) {
+  const std::string text =
+      "name: t\ndimensions: 2\ndp: 0.01\ngravity: [0, 0]\ntime: {end: 1}\ntank: {origin: [0, 0], size: [1.2, 0.5]}\n"
+      "fluid_blocks: [{min: [0, 0], max: [0.2, 0.3]}]\n"
+      "solids:\n  - name: a\n    min: [0.3, 0.2]\n    max: [0.5, 0.3]\n    motion: floating\n    density: 500\n    free: [x]\n"
+      "  - name: b\n    min: [0.6, 0.2]\n    max: [0.8, 0.3]\n    motion: floating\n    density: 500\n    free: [x]\n"
+      "    springs: [{point: [0.6, 0.25], to: a, anchor: [0.5, 0.25], stiffness: 500, length: 0.08}]\n";
+  const Case c = parse_case(text, "case.yaml");
+  ASSERT_EQ(c.bodies[1].springs[0].to, 0);
+  RigidBodies b(c);
+  b.set_loads({BodyLoad{}, BodyLoad{}});
+  const double m = 10.0, mu = m * m / (m + m), w = std::sqrt(500.0 / mu);
+  const int n = 400;
+  run_steps(b, n, 3.14159265358979323846 / w / n);
+  const double gap = (b.state(1).centre[0] - 0.1) - (b.state(0).centre[0] + 0.1);
+  EXPECT_NEAR(gap, 0.08 - 0.02, 1e-6);
+  EXPECT_NEAR(0.5 * (b.state(0).centre[0] + b.state(1).centre[0]), 0.55, 1e-9);
+  using test::error_of;
+  std::string later = text;
+  later.replace(later.find("to: a"), 5, "to: c");
+  EXPECT_NE(error_of(later).find("'c' is not a floating solid listed before 'b'"), std::string::npos);
+  std::string off = text;
+  off.replace(off.find("anchor: [0.5, 0.25]"), 19, "anchor: [0.1, 0.25]");
+  EXPECT_NE(error_of(off).find("the anchor lies outside solid 'a'"), std::string::npos);
+}
+
 TEST(RigidBodies, TheLoaderRefusesWhatCannotFloat) {
   using test::error_of;
   EXPECT_NE(error_of(case_2d("centre_of_mass: [0.6, 0.29]")).find("needs its density"), std::string::npos);
