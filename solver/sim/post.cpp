@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
@@ -10,6 +11,7 @@
 #include "../comm/in_process_transport.hpp"
 #include "../io/checkpoint.hpp"
 #include "../io/vtk_snapshot.hpp"
+#include "rigid_bodies.hpp"
 #include "slab_worker.hpp"
 
 namespace spate {
@@ -70,6 +72,7 @@ SavedState load_saved(const SavedStep& s, int dim) {
     state.step = meta.step;
     state.derived_saved = meta.derived_saved;
     state.case_yaml = meta.case_yaml;
+    state.bodies = meta.bodies;
     state.pieces.push_back(std::move(p));
     state.slabs = {0};
     return state;
@@ -80,6 +83,7 @@ SavedState load_saved(const SavedStep& s, int dim) {
   state.step = static_cast<std::int64_t>(snap.value("step", static_cast<double>(s.step)));
   state.pieces = std::move(snap.pieces);
   state.slabs = std::move(snap.slabs);
+  state.field_data = std::move(snap.field_data);
   state.slab_count = static_cast<int>(state.pieces.size());
   for (int slab : state.slabs) state.slab_count = std::max(state.slab_count, slab + 1);
   return state;
@@ -125,11 +129,20 @@ std::vector<std::vector<double>> SavedProbes::sample(const SavedState& s) {
   // that follow a body, the wall state of an old checkpoint.
   PhysicsParams P = physics_params(case_);
   motions_.set_step(P, s.time, s.time);
+  // The floating solids as saved (body probes; the wall state of an old checkpoint); none in a
+  // snapshot written before snapshots held them (their body probes are NaN).
+  std::optional<RigidBodies> bodies;
+  const std::string text = !s.bodies.empty() || case_.bodies.empty() ? s.bodies : RigidBodies(case_).text_from(s.field_data);
+  if (!text.empty()) {
+    bodies.emplace(case_);
+    bodies->restore(text);
+    bodies->set_step(P);
+  }
   SlabWorker w(lattice, P, *transport);
   w.take_share(merged(s.pieces, case_.dim), SlabLayout::uniform(lattice.cells[0], 1));
   if (s.derived_saved) w.prepare_saved();
   else w.prepare(false);
-  return probes_.sample(s.time, s.step, w, &motions_);
+  return probes_.sample(s.time, s.step, w, &motions_, bodies ? &*bodies : nullptr);
 }
 
 }  // namespace spate

@@ -11,6 +11,7 @@
 
 #include "../case/case.hpp"
 #include "../case/motion.hpp"
+#include "../io/vtk_snapshot.hpp"
 #include "../particles/particle_store.hpp"
 #include "probes.hpp"
 #include "steering.hpp"
@@ -38,6 +39,8 @@ struct SavedState {
   int slab_count = 1;
   bool derived_saved = true;   // pressures (and wall states) as the run had them; false: an old checkpoint without them
   std::string case_yaml;       // checkpoints: the effective case they hold (else empty)
+  std::string bodies;          // checkpoints: the floating solids' state (RigidBodies::save()'s text)
+  FieldData field_data;        // snapshots: their field data (the floating solids' state among it)
 };
 // Throws std::runtime_error naming the file.
 SavedState load_saved(const SavedStep& s, int dim);

@@ -174,6 +174,38 @@ std::string RigidBodies::save() const {
   return out;
 }
 
+std::vector<std::pair<std::string, double>> RigidBodies::field_data() const {
+  std::vector<std::pair<std::string, double>> out;
+  for (int b = 0; b < size(); ++b) {
+    auto put = [&](const char* tag, const auto& values) {
+      int i = 0;
+      for (double v : values) out.emplace_back(fmt::format("floating_{}_{}{}", b, tag, i++), v);
+    };
+    put("q", impl_->system.q(b));
+    put("u", impl_->system.u(b));
+    put("load", std::array<double, 6>{loads_[b].force[0], loads_[b].force[1], loads_[b].force[2], loads_[b].torque[0],
+                                      loads_[b].torque[1], loads_[b].torque[2]});
+  }
+  return out;
+}
+
+std::string RigidBodies::text_from(const std::vector<std::pair<std::string, double>>& field_data) const {
+  std::string out;
+  for (int b = 0; b < size(); ++b) {
+    std::string line = case_.solids[solid(b)].name;
+    for (const char* tag : {"q", "u", "load"}) {
+      line += std::string(" ") + tag;
+      const std::string prefix = fmt::format("floating_{}_{}", b, tag);
+      for (const auto& [name, value] : field_data)
+        if (name.rfind(prefix, 0) == 0 && name.find_first_not_of("0123456789", prefix.size()) == std::string::npos)
+          line += fmt::format(" {:a}", value);
+    }
+    if (line == case_.solids[solid(b)].name + " q u load") return {};  // none of this body's numbers
+    out += line + "\n";
+  }
+  return out;
+}
+
 void RigidBodies::restore(const std::string& text) {
   if (!impl_) {
     if (!text.empty()) throw std::runtime_error("it holds floating solids' states, and the case has none");

@@ -69,6 +69,11 @@ class RigidBodies {
   // reads it back, throwing std::runtime_error (saying why) when it does not fit the case's bodies.
   std::string save() const;
   void restore(const std::string& text);
+  // The same state as named numbers for a snapshot's field data (floating_<b>_q<i>, _u<i>,
+  // _load<i>), and its text for restore() again from a snapshot's field data (empty when it has
+  // none: a snapshot written before them).
+  std::vector<std::pair<std::string, double>> field_data() const;
+  std::string text_from(const std::vector<std::pair<std::string, double>>& field_data) const;
 
   // Steering (sim/steering.hpp): a spring or mooring line, numbered over the floating solids in
   // order and each one's lines in order, or a hinged body's rotational spring and damper, takes a

@@ -575,6 +575,11 @@ class Worker {
     for (int s = 0; s < t_.slab_count(); ++s) pieces.push_back(step_name(step) + "/slab_" + std::to_string(s) + ".vtp");
     FieldData field_data = case_constants(s_.c);
     field_data.insert(field_data.end(), {{"time", time}, {"step", static_cast<double>(step)}, {"TimeValue", time}});
+    // The floating solids' state, so that spate post writes their body probes from snapshots too.
+    if (bodies_) {
+      const auto bodies = bodies_->field_data();
+      field_data.insert(field_data.end(), bodies.begin(), bodies.end());
+    }
     write_vtm(dir / (step_name(step) + ".vtm"), pieces, field_data);
     if (index) pvd.add(time, folder + "/" + step_name(step) + ".vtm");
     spdlog::debug("snapshot of step {} (t = {:.6g} s): {}", step, time, (dir / (step_name(step) + ".vtm")).string());

@@ -199,6 +199,33 @@ def post_reproduces_probes_at_every_saved_step(env):
 
 
 @test
+def post_writes_body_probes(env):
+    """A floating solid's body probe (issue 32): spate post writes, from the snapshots (their field
+    data holds the bodies' state) and from the checkpoints, exactly the run's rows."""
+    out = env.path("run")
+    p = env.run("run", os.path.join(env.shipped, "floating_box_2d.yaml"), "--set", "dp=0.02", "--set", "output.interval=0.02",
+                "--set", "output.probe_interval=0", "--until", "0.1", "--checkpoint-every", "150", "--out", out, "--quiet")
+    check(p.returncode == 0, f"run: exit {p.returncode}: {p.stderr[-500:]}")
+    snapshots = sorted(int(f[5:13]) for f in os.listdir(os.path.join(out, "snapshots")) if f.endswith(".vtm"))
+    checkpoints = sorted(int(f[16:24]) for f in os.listdir(os.path.join(out, "checkpoints")) if f.endswith(".h5"))
+    p = env.run("post", out)
+    check(p.returncode == 0, f"post: exit {p.returncode}: {p.stderr[-500:]}")
+    run = probe_rows(os.path.join(out, "probes"))
+    for where, steps in ((os.path.join(out, "post", "probes"), snapshots), (env.path("from_checkpoints", "probes"), checkpoints)):
+        if where.startswith(env.path("from_checkpoints")):
+            p = env.run("post", out, "--from", "checkpoints", "--out", env.path("from_checkpoints"))
+            check(p.returncode == 0, f"post --from checkpoints: exit {p.returncode}")
+        post = probe_rows(where)
+        rows = post["box"][1]
+        check(sorted(rows, key=int) == [str(s) for s in steps], f"{where}: box at steps {sorted(rows, key=int)}, saved {steps}")
+        for step, row in rows.items():
+            check("nan" not in row and row == run["box"][1].get(step), f"{where}: box at step {step}: post {row!r}, run {run['box'][1].get(step)!r}")
+    # The box moves: its height changes over the run.
+    heights = {float(r.split(",")[3]) for r in run["box"][1].values()}
+    check(max(heights) - min(heights) > 1e-3, f"the box's centre stays between {min(heights)} and {max(heights)} m")
+
+
+@test
 def post_probes_from_the_command_line(env):
     """--probe defines probes after the run; one that repeats a case probe gives the run's values."""
     out = env.path("run")
