@@ -261,7 +261,7 @@ def catalyst_execute(info):
         _scene = _build_scene()
     else:
         for solid, block in _boxes:
-            solid.UpdatePipeline()  # this step's particles (as _build_scene reads them)
+            solid.UpdatePipeline(info.time)
             b = solid.GetDataInformation().GetBounds()
             if b[0] <= b[1]:
                 _fit_box(block, b)
