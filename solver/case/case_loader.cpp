@@ -1479,7 +1479,6 @@ Case read(Section& root, const std::string& file) {
         if (solid.name == body) motion = solid.motion;
       if (body != "tank" && !solid_names.count(body)) p.fail(p.raw("follow"), "follow", "no solid named '" + body + "' (or 'tank')");
       if (motion < 0) p.fail(p.raw("follow"), "follow", "'" + body + "' does not move (it has no motion)");
-      if (c.motions[motion].floating >= 0) p.fail(p.raw("follow"), "follow", "'" + body + "' floats: probes follow prescribed motions only");
       probe.follow = motion;
     }
     p.finish();

@@ -161,6 +161,19 @@ Vec3d followed_position(const ProbeSpec& gauge, const Case& c, const MotionSet& 
   return out;
 }
 
+// The same for a floating solid: x(t) = c(t) + R(t) (x(0) - c(0)), its centre of mass c and its turn
+// R since t = 0 as its dynamics have them now.
+Vec3d followed_position(const ProbeSpec& gauge, const Case& c, const RigidBodies& bodies) {
+  const int b = c.motions[gauge.follow].floating;
+  const BodyState& s = bodies.state(b);
+  Vec3d r = gauge.position;
+  if (gauge.type == ProbeType::Height) r[c.dim - 1] = c.tank_origin[c.dim - 1];
+  for (int k = 0; k < 3; ++k) r[k] -= c.bodies[b].centre_of_mass[k];
+  Vec3d out{0, 0, 0};
+  for (int i = 0; i < c.dim; ++i) out[i] = s.centre[i] + s.rotation[i][0] * r[0] + s.rotation[i][1] * r[1] + s.rotation[i][2] * r[2];
+  return out;
+}
+
 std::vector<Vec3d> sensor_points(const ProbeSpec& sensor, int dim, double dp) {
   const Vec3d& c = sensor.position;
   const Vec3d& n = sensor.normal;
@@ -734,8 +747,9 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
         std::vector<double> mine;
         ProbeSpec at = p;
         std::optional<double> floor;
-        if (p.follow >= 0 && motions) {  // riding with a moving body
-          at.position = followed_position(p, case_, *motions, time);
+        const bool floating = p.follow >= 0 && case_.motions[p.follow].floating >= 0;
+        if (p.follow >= 0 && (floating ? bodies != nullptr : motions != nullptr)) {  // riding with a moving body
+          at.position = floating ? followed_position(p, case_, *bodies) : followed_position(p, case_, *motions, time);
           if (p.type == ProbeType::Height) floor = at.position[case_.dim - 1];
         }
         if (p.type == ProbeType::Velocity) mine = sample_velocity(w, at.position, p.phase);
