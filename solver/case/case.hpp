@@ -122,9 +122,12 @@ struct BodySpec {
   // at which one contact point carries the body's weight (the stiffness follows); `dissipation`:
   // Hunt & Crossley's c [s/m] (restitution about 1 - c v at impact speed v); `friction`: Coulomb's
   // coefficient against the walls.
+  // `points`: where its contact spheres sit, relative to the centre of mass at t = 0 (the loader's
+  // contact_points: the surface points farthest along a fan of directions).
   struct Contact {
     bool on = true;
     double penetration = 0.0, dissipation = 0.5, friction = 0.5;
+    std::vector<Vec3d> points;
   } contact;
 };
 

@@ -110,10 +110,6 @@ class Springs : public SimTK::Force::Custom::Implementation {
 
 namespace {
 
-}  // namespace
-
-namespace {
-
 // The walls' material: so much stiffer than any body's, and of so much larger friction, that a
 // contact takes the body's stiffness, dissipation and (for a body friction of mu / 2) friction mu:
 // Simbody combines two materials as E = (s1 E1^(2/3))^(3/2) with s1 = E2^(2/3) / (E1^(2/3) +

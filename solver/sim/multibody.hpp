@@ -26,7 +26,7 @@ struct SpringInput {
   int other = -1;
 };
 
-// Contact with the walls (Simbody's compliant contact, Hunt & Crossley with Hertz's law): small
+// Contact with the walls (Simbody's Hunt & Crossley force on Hertz's law, multibody.cpp): small
 // spheres centred at `points` (body frame: from the centre of mass, world axes at t = 0), the
 // body's outermost points, pressed against half-spaces.
 struct ContactInput {

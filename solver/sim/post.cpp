@@ -132,7 +132,7 @@ std::vector<std::vector<double>> SavedProbes::sample(const SavedState& s) {
   // The floating solids as saved (body probes; the wall state of an old checkpoint); none in a
   // snapshot written before snapshots held them (their body probes are NaN).
   std::optional<RigidBodies> bodies;
-  const std::string text = !s.bodies.empty() || case_.bodies.empty() ? s.bodies : RigidBodies(case_).text_from(s.field_data);
+  const std::string text = s.bodies.empty() ? RigidBodies::text_from(case_, s.field_data) : s.bodies;
   if (!text.empty()) {
     bodies.emplace(case_);
     bodies->restore(text);

@@ -327,13 +327,13 @@ std::vector<double> sample_centroid(SlabWorker& w, int phase) {
 
 namespace {
 
-// The owned cells, in order; those that hold a point of `region` alone when it is given.
-std::vector<std::uint32_t> owned_cells_in(const CellGrid& grid, const Box* region) {
-  std::vector<std::uint32_t> cells;
+// Calls visit(c) for the owned cells in order; only for those that hold a point of `region` when it
+// is given.
+template <class Visit>
+void for_owned_cells(const CellGrid& grid, const Box* region, Visit&& visit) {
   if (!region) {
-    cells.resize(grid.owned_cell_count());
-    for (std::uint32_t c = 0; c < grid.owned_cell_count(); ++c) cells[c] = c;
-    return cells;
+    for (std::uint32_t c = 0; c < grid.owned_cell_count(); ++c) visit(c);
+    return;
   }
   const Lattice& L = grid.lattice();
   int lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
@@ -345,8 +345,7 @@ std::vector<std::uint32_t> owned_cells_in(const CellGrid& grid, const Box* regio
   for (int x = lo[0]; x <= hi[0]; ++x)
     for (int y = lo[1]; y <= hi[1]; ++y)
       for (int z = lo[2]; z <= hi[2]; ++z)
-        if (const std::uint32_t c = grid.local_cell(x, y, z); c != CellGrid::kOutside && c < grid.owned_cell_count()) cells.push_back(c);
-  return cells;
+        if (const std::uint32_t c = grid.local_cell(x, y, z); c != CellGrid::kOutside && c < grid.owned_cell_count()) visit(c);
 }
 
 // Calls fn(i, f) with the pressure force f[3] of the fluid on every owned particle i of material
@@ -359,7 +358,7 @@ void for_each_solid_force(SlabWorker& w, std::uint8_t kind, const Box& box, int 
   const CellGrid& grid = w.grid();
   dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
     const CellGridView view = grid.view();
-    for (std::uint32_t c : owned_cells_in(grid, region)) {
+    for_owned_cells(grid, region, [&](std::uint32_t c) {
       int g[3];
       grid.global_coords(c, g);
       for (std::uint32_t i = grid.begin(c); i < grid.end(c); ++i) {
@@ -378,7 +377,7 @@ void for_each_solid_force(SlabWorker& w, std::uint8_t kind, const Box& box, int 
         for (int k = 0; k < Dim; ++k) out[k] = f[k];
         fn(i, out);
       }
-    }
+    });
   });
 }
 

@@ -21,54 +21,6 @@ namespace {
 // The contact spheres' radius, in dp.
 constexpr double kContactRadius = 0.01;
 
-// The points of a solid that can touch a plane wall first: of its surface (the shape's, or the
-// box's corners), those farthest along each of a fan of directions (2D: 64 around the circle; 3D:
-// 256 spread over the sphere by the Fibonacci lattice, and the 6 axes). Every vertex of a polygon
-// or polyhedron whose outward normals span more than the fan's spacing (about 6 and 13 degrees) is
-// among them; a curved surface becomes that many facets. Deterministic: ties go to the first point.
-std::vector<std::array<double, 3>> contact_points(const SolidSpec& solid, int dim) {
-  std::vector<std::array<double, 3>> surface;
-  if (solid.shape) {
-    std::vector<std::vector<long long>> polygons;
-    solid.shape->surface(surface, polygons);
-  } else {
-    for (int corner = 0; corner < (1 << dim); ++corner) {
-      std::array<double, 3> p{0, 0, 0};
-      for (int k = 0; k < dim; ++k) p[k] = (corner >> k) & 1 ? solid.box.max[k] : solid.box.min[k];
-      surface.push_back(p);
-    }
-  }
-  std::vector<std::array<double, 3>> directions;
-  if (dim == 2) {
-    for (int k = 0; k < 64; ++k) directions.push_back({std::cos(2 * M_PI * k / 64), std::sin(2 * M_PI * k / 64), 0.0});
-  } else {
-    for (int k = 0; k < 3; ++k)
-      for (double sign : {-1.0, 1.0}) {
-        std::array<double, 3> e{0, 0, 0};
-        e[k] = sign;
-        directions.push_back(e);
-      }
-    const int n = 256;
-    for (int k = 0; k < n; ++k) {
-      const double z = 1.0 - (2.0 * k + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = k * M_PI * (3.0 - std::sqrt(5.0));
-      directions.push_back({r * std::cos(phi), r * std::sin(phi), z});
-    }
-  }
-  std::vector<std::size_t> chosen;
-  for (const auto& e : directions) {
-    std::size_t best = 0;
-    for (std::size_t i = 1; i < surface.size(); ++i)
-      if (e[0] * surface[i][0] + e[1] * surface[i][1] + e[2] * surface[i][2] > e[0] * surface[best][0] + e[1] * surface[best][1] + e[2] * surface[best][2])
-        best = i;
-    chosen.push_back(best);
-  }
-  std::sort(chosen.begin(), chosen.end());
-  chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
-  std::vector<std::array<double, 3>> points;
-  for (std::size_t i : chosen) points.push_back(surface[i]);
-  return points;
-}
-
 // The tank's walls, each a plane with its normal into the fluid: none along a periodic axis nor at
 // the open top.
 std::vector<multibody::WallInput> tank_walls(const Case& c) {
@@ -114,10 +66,7 @@ RigidBodies::RigidBodies(const Case& c) : case_(c) {
       k.stiffness = 3.0 * weight / (4.0 * std::sqrt(k.radius) * std::pow(b.contact.penetration, 1.5));
       k.dissipation = b.contact.dissipation;
       k.friction = b.contact.friction;
-      for (auto p : contact_points(c.solids[b.solid], c.dim)) {
-        for (int a = 0; a < 3; ++a) p[a] -= b.centre_of_mass[a];
-        k.points.push_back(p);
-      }
+      k.points = b.contact.points;
     }
     in.push_back(body);
   }
@@ -156,19 +105,27 @@ void RigidBodies::advance(double t0, double t1) {
   read_state();
 }
 
+namespace {
+
+// The parts of a body's saved state, in order, each with its numbers.
+constexpr const char* kStateParts[3] = {"q", "u", "load"};
+
+}  // namespace
+
+std::array<std::vector<double>, 3> RigidBodies::state_parts(int b) const {
+  const BodyLoad& l = loads_[b];
+  return {impl_->system.q(b), impl_->system.u(b), {l.force[0], l.force[1], l.force[2], l.torque[0], l.torque[1], l.torque[2]}};
+}
+
 std::string RigidBodies::save() const {
   std::string out;
   for (int b = 0; b < size(); ++b) {
     out += case_.solids[solid(b)].name;
-    auto put = [&](const char* tag, const auto& values) {
-      out += std::string(" ") + tag;
-      for (double v : values) out += fmt::format(" {:a}", v);
-    };
-    put("q", impl_->system.q(b));
-    put("u", impl_->system.u(b));
-    std::array<double, 6> load{};
-    for (int k = 0; k < 3; ++k) load[k] = loads_[b].force[k], load[3 + k] = loads_[b].torque[k];
-    put("load", load);
+    const auto parts = state_parts(b);
+    for (int k = 0; k < 3; ++k) {
+      out += std::string(" ") + kStateParts[k];
+      for (double v : parts[k]) out += fmt::format(" {:a}", v);
+    }
     out += "\n";
   }
   return out;
@@ -177,30 +134,26 @@ std::string RigidBodies::save() const {
 std::vector<std::pair<std::string, double>> RigidBodies::field_data() const {
   std::vector<std::pair<std::string, double>> out;
   for (int b = 0; b < size(); ++b) {
-    auto put = [&](const char* tag, const auto& values) {
-      int i = 0;
-      for (double v : values) out.emplace_back(fmt::format("floating_{}_{}{}", b, tag, i++), v);
-    };
-    put("q", impl_->system.q(b));
-    put("u", impl_->system.u(b));
-    put("load", std::array<double, 6>{loads_[b].force[0], loads_[b].force[1], loads_[b].force[2], loads_[b].torque[0],
-                                      loads_[b].torque[1], loads_[b].torque[2]});
+    const auto parts = state_parts(b);
+    for (int k = 0; k < 3; ++k)
+      for (std::size_t i = 0; i < parts[k].size(); ++i) out.emplace_back(fmt::format("floating_{}_{}{}", b, kStateParts[k], i), parts[k][i]);
   }
   return out;
 }
 
-std::string RigidBodies::text_from(const std::vector<std::pair<std::string, double>>& field_data) const {
+std::string RigidBodies::text_from(const Case& c, const std::vector<std::pair<std::string, double>>& field_data) {
   std::string out;
-  for (int b = 0; b < size(); ++b) {
-    std::string line = case_.solids[solid(b)].name;
-    for (const char* tag : {"q", "u", "load"}) {
+  for (std::size_t b = 0; b < c.bodies.size(); ++b) {
+    const std::string name = c.solids[c.bodies[b].solid].name;
+    std::string line = name;
+    for (const char* tag : kStateParts) {
       line += std::string(" ") + tag;
       const std::string prefix = fmt::format("floating_{}_{}", b, tag);
-      for (const auto& [name, value] : field_data)
-        if (name.rfind(prefix, 0) == 0 && name.find_first_not_of("0123456789", prefix.size()) == std::string::npos)
+      for (const auto& [key, value] : field_data)
+        if (key.rfind(prefix, 0) == 0 && key.find_first_not_of("0123456789", prefix.size()) == std::string::npos)
           line += fmt::format(" {:a}", value);
     }
-    if (line == case_.solids[solid(b)].name + " q u load") return {};  // none of this body's numbers
+    if (line == name + " q u load") return {};  // none of this body's numbers
     out += line + "\n";
   }
   return out;

@@ -73,7 +73,7 @@ class RigidBodies {
   // _load<i>), and its text for restore() again from a snapshot's field data (empty when it has
   // none: a snapshot written before them).
   std::vector<std::pair<std::string, double>> field_data() const;
-  std::string text_from(const std::vector<std::pair<std::string, double>>& field_data) const;
+  static std::string text_from(const Case& c, const std::vector<std::pair<std::string, double>>& field_data);
 
   // Steering (sim/steering.hpp): a spring or mooring line, numbered over the floating solids in
   // order and each one's lines in order, or a hinged body's rotational spring and damper, takes a
@@ -91,6 +91,8 @@ class RigidBodies {
   struct Impl;
   void read_state();
   void apply_loads();  // loads_ to the system: the accelerations now
+  // Body b's saved state: its coordinates q, speeds u and last load (save(), field_data()).
+  std::array<std::vector<double>, 3> state_parts(int b) const;
   const Case& case_;
   std::unique_ptr<Impl> impl_;
   std::vector<int> slots_;
