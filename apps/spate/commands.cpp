@@ -488,6 +488,9 @@ int info_command(const InfoArgs& a) {
       motions.push_back(e);
     }
     j["motions"] = motions;
+    if (c.drive.on)
+      j["drive"] = {{"mean_velocity", std::vector<double>(c.drive.mean_velocity.begin(), c.drive.mean_velocity.begin() + c.dim)},
+                    {"response_time", c.drive.response_time}};
     j["dt"] = dt;
     j["dt_adaptive"] = !c.fixed_dt.has_value();
     j["cells"] = {L.cells[0], L.cells[1], L.cells[2]};
@@ -607,6 +610,12 @@ int info_command(const InfoArgs& a) {
       if (ms.ramp > 0) what += fmt::format(", ramp {:g} s", ms.ramp);
       if (ms.end) what += fmt::format(", ends at {:g} s (over {:g} s)", *ms.end, ms.end_ramp);
       std::printf("  %-3zu %-12s %s\n", k, ms.body.c_str(), what.c_str());
+    }
+    if (c.drive.on) {
+      std::string target;
+      for (int k = 0; k < c.dim; ++k) target += fmt::format("{}{:g}", k ? ", " : "", c.drive.mean_velocity[k]);
+      std::printf("drive           mean velocity [%s] m/s along the periodic axes, response time %g s\n", target.c_str(),
+                  c.drive.response_time);
     }
     std::printf("time step       %g s (%s)\n", dt, c.fixed_dt ? "fixed" : "adaptive, initial CFL estimate");
     std::printf("cell lattice    %d x %d x %d\n", L.cells[0], L.cells[1], L.cells[2]);

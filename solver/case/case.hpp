@@ -56,7 +56,7 @@ struct TemperatureField {
   int axis = 0;
 };
 
-// A block of one fluid at rest at t = 0: a box, or a disc (2D) / sphere (3D) when `radius` > 0
+// A block of one fluid (at rest at t = 0 unless it has a velocity): a box, or a disc (2D) / sphere (3D) when `radius` > 0
 // (min and max are then its bounding box), optionally with a sinusoidal top face. Where blocks
 // overlap, the first listed holds the site (a bubble listed before the water around it).
 struct FluidBlock : Box {
@@ -71,6 +71,10 @@ struct FluidBlock : Box {
   // which places the interface to a fraction of dp (generator.cpp, displace_by_waves).
   bool wave_displaces = false;
   std::optional<TemperatureField> temperature{};  // heat transfer: the block's (default: heat.initial_temperature)
+  // The fluid's velocity at t = 0: uniform, or (`velocity_profile: parabolic`) a plane Poiseuille
+  // profile across the block's height, `velocity` at mid-height and 0 at its bottom and top.
+  Vec3d velocity{0, 0, 0};
+  bool parabolic = false;
   // A region of any shape (mesh, polygon, polyhedron, cylinder; shape.hpp): the sites inside it,
   // less those under or within dp/2 of a shaped solid; min and max its bounding box.
   ShapePtr shape{};
@@ -88,7 +92,7 @@ struct SolidSpec {
 };
 
 // A solid the water moves (`motion: floating`, issue 32; sim/rigid_bodies.*): a rigid
-// body of Simbody's whose load each step is the fluid's pressure force on its particles plus gravity.
+// body of Simbody's whose load each step is the fluid's force (pressure and viscous) on its particles plus gravity.
 struct BodySpec {
   int solid = -1;                  // index into Case::solids
   double mass = 0.0;               // [kg] (2D: per metre of depth)
@@ -140,6 +144,7 @@ struct ProbeSpec {
                             // wall_pressure: the centre of the sensing disc, on a wall or solid face
   std::string solid;        // force, body: the solid's name
   int face = -1;            // force, heat_flux: -1 the whole solid, else one face: 2 axis + (0 lower, 1 upper side)
+  bool viscous = false;     // force: also the viscous part (columns f<axis>_viscous)
   int axis = 0;             // front: the axis along which the front advances
   Vec3d normal{0, 0, 0};    // wall_pressure: unit normal of the face, pointing into the fluid
   double diameter = 0.0;    // wall_pressure: diameter of the sensing disc [m] (0: a point)
@@ -220,6 +225,23 @@ struct Case {
   double shifting_mach = 0.1;
   Vec3d gravity{0, 0, -9.81};
   Vec3d body_force{0, 0, 0};
+  // `drive`: the body force along the periodic axes set every step so that the fluid's mean
+  // velocity (over its particles) approaches `mean_velocity` with the time constant
+  // `response_time` (sim/flow_drive.hpp): a periodic channel driven at a given flow rate.
+  struct DriveSpec {
+    bool on = false;
+    Vec3d mean_velocity{0, 0, 0};
+    std::array<bool, 3> axes{false, false, false};  // the driven (periodic) axes
+    double response_time = 0.0;                     // 0: one step
+  } drive;
+  // `relaxation_zone`: a box where the fluid's velocity relaxes towards `velocity` (a plane
+  // Poiseuille profile across the box's height when parabolic) with the time constant `time`
+  // (PhysicsParams::zone); time 0: none.
+  struct ZoneSpec : Box {
+    Vec3d velocity{0, 0, 0};
+    bool parabolic = false;
+    double time = 0.0;
+  } zone;
 
   double end_time = 1.0;
   std::optional<double> fixed_dt;  // empty: adaptive

@@ -583,6 +583,11 @@ FluidBlock read_fluid_block(Section& f, const Case& c) {
     }
   }
   b.fluid = fluid_index(f, "fluid", c);
+  b.velocity = f.vector("velocity", d, Vec3d{0, 0, 0});
+  for (int k = 0; k < d; ++k)
+    if (!std::isfinite(b.velocity[k])) f.fail(f.raw("velocity"), "velocity", "must be finite [m/s]");
+  b.parabolic = f.choice<bool>("velocity_profile", false, {{"uniform", false}, {"parabolic", true}});
+  if (b.parabolic && !f.has("velocity")) f.fail(f.raw("velocity_profile"), "velocity_profile", "a parabolic profile needs the block's `velocity` (its peak)");
   if (f.has("temperature")) {
     if (!c.heat) f.fail(f.raw("temperature"), "temperature", "heat transfer is off: add a `heat:` section");
     b.temperature = read_temperature_field(f, "temperature", d);
@@ -1320,6 +1325,43 @@ Case read(Section& root, const std::string& file) {
       if (f.kind != ThermalCondition::Conducting)
         tank->fail(tank->raw("thermal"), "thermal.faces", "face conditions are for a tank at rest (not with tank.motion)");
   tank->finish();
+  if (auto dr = root.child("drive")) {
+    // A periodic flow driven at a given mean velocity: only along periodic axes (across a wall
+    // the mean velocity is zero by itself).
+    c.drive.on = true;
+    c.drive.mean_velocity = dr->vector("mean_velocity", d);
+    bool any = false;
+    for (int k = 0; k < d; ++k) any = any || c.periodic[k];
+    if (!any) root.fail(root.raw("drive"), "drive", "needs a periodic axis (tank.periodic) to drive the flow along");
+    for (int k = 0; k < d; ++k) {
+      c.drive.axes[k] = c.periodic[k];
+      if (!c.periodic[k] && c.drive.mean_velocity[k] != 0)
+        dr->fail(dr->raw("mean_velocity"), "mean_velocity",
+                 std::string("the ") + "xyz"[k] + " component must be 0: only a periodic axis can be driven (tank.periodic)");
+      if (!std::isfinite(c.drive.mean_velocity[k])) dr->fail(dr->raw("mean_velocity"), "mean_velocity", "must be finite [m/s]");
+    }
+    c.drive.response_time = dr->number("response_time", 0.0);
+    if (!(c.drive.response_time >= 0) || !std::isfinite(c.drive.response_time))
+      dr->fail(dr->raw("response_time"), "response_time", "must be >= 0 [s] (0: one time step)");
+    dr->finish();
+  }
+  if (auto z = root.child("relaxation_zone")) {
+    c.zone.min = z->vector("min", d);
+    c.zone.max = z->vector("max", d);
+    for (int k = 0; k < d; ++k) {
+      if (!(c.zone.max[k] > c.zone.min[k])) z->fail(z->raw("max"), "max", "must be greater than min on every axis");
+      if (c.zone.min[k] < c.tank_origin[k] - 1e-9 || c.zone.max[k] > c.tank_origin[k] + c.tank_size[k] + 1e-9)
+        z->fail(z->raw("max"), "min/max", "the zone must lie inside the tank");
+    }
+    c.zone.velocity = z->vector("velocity", d);
+    for (int k = 0; k < d; ++k)
+      if (!std::isfinite(c.zone.velocity[k])) z->fail(z->raw("velocity"), "velocity", "must be finite [m/s]");
+    c.zone.parabolic = z->choice<bool>("velocity_profile", false, {{"uniform", false}, {"parabolic", true}});
+    c.zone.time = z->number("time");
+    if (!(c.zone.time > 0) || !std::isfinite(c.zone.time))
+      z->fail(z->raw("time"), "time", "must be > 0 [s] (the relaxation's time constant; several time steps)");
+    z->finish();
+  }
   {
     double largest = 0;
     for (int k = 0; k < d; ++k) {
@@ -1493,6 +1535,7 @@ Case read(Section& root, const std::string& file) {
                                               (d == 3 ? "y-, y+, z-, z+)" : "y-, y+)"));
           if (shaped_solid(probe.solid)) p.fail(p.raw("face"), "face", "solid '" + probe.solid + "' is not a box: its force is the whole solid's");
         }
+        probe.viscous = p.boolean("viscous", false);
         break;
       case ProbeType::Body: {
         probe.solid = p.text("solid");
@@ -1767,6 +1810,15 @@ PhysicsParams physics_params(const Case& c) {
   for (int k = 0; k < 3; ++k) {
     P.gravity[k] = static_cast<float>(c.gravity[k]);
     P.body_force[k] = static_cast<float>(c.body_force[k]);
+  }
+  if (c.zone.time > 0) {
+    for (int k = 0; k < 3; ++k) {
+      P.zone.lo[k] = static_cast<float>(c.zone.min[k]);
+      P.zone.hi[k] = static_cast<float>(c.zone.max[k]);
+      P.zone.velocity[k] = static_cast<float>(c.zone.velocity[k]);
+    }
+    P.zone.inv_time = static_cast<float>(1.0 / c.zone.time);
+    P.zone.parabolic = c.zone.parabolic;
   }
   if (c.heat) set_heat_params(c, P);
   return P;

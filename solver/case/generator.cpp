@@ -542,6 +542,22 @@ double initial_temperature(const Case& c, const MaterialTable& M, std::uint8_t k
   return c.solids[kind - M.tank() - 1].thermal.temperature.value_or(c.initial_temperature);
 }
 
+// The velocity at t = 0 of a fluid particle at x (FluidBlock::velocity): its block's, zero outside
+// every block (the wet bed is at rest).
+std::array<double, 3> initial_velocity(const Case& c, std::uint8_t kind, const double x[3]) {
+  const int v = c.dim - 1;
+  for (const FluidBlock& b : c.fluid_blocks) {
+    if (b.fluid != kind || !in_block(b, x, c.dim)) continue;
+    double scale = 1.0;
+    if (b.parabolic) {
+      const double s = (x[v] - b.min[v]) / (b.max[v] - b.min[v]);
+      scale = 4.0 * s * (1.0 - s);
+    }
+    return {scale * b.velocity[0], scale * b.velocity[1], scale * b.velocity[2]};
+  }
+  return {0, 0, 0};
+}
+
 ParticleStore generate_particles(const Case& c) {
   std::vector<std::uint8_t> sites;  // shapes: every site's material, classified once
   const bool shapes = has_shapes(c);
@@ -572,6 +588,9 @@ ParticleStore generate_particles(const Case& c) {
     const FluidMaterial& fluid = P.materials.wall_fluid();
     p.density[i] = fluid.rho0;
     if (P.is_fluid(kind)) {
+      const double xs[3] = {s.coord(0, idx[0]), c.dim > 1 ? s.coord(1, idx[1]) : 0.0, c.dim > 2 ? s.coord(2, idx[2]) : 0.0};
+      const auto u = initial_velocity(c, kind, xs);
+      for (int a = 0; a < c.dim; ++a) p.vel[a][i] = static_cast<float>(u[a]);
       const FluidMaterial& m = P.materials.of(kind);
       // Start from hydrostatic balance (inverse of eq. 9) rather than from a uniform density that
       // would first have to collapse into it.

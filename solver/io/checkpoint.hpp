@@ -64,6 +64,9 @@ struct CheckpointMeta {
   // The floating solids' state and last loads (RigidBodies::save; empty without them): attribute
   // `bodies`, part of the header checksum when there is one.
   std::string bodies;
+  // A driven flow's state (FlowDrive::save; empty without `drive`): attribute `drive`, part of the
+  // header checksum when there is one.
+  std::string drive;
   std::string geometry_hash;  // geometry_hash() of the case (generator.hpp); empty before version 3
   int format_version = kCheckpointFormatVersion;  // of the file read (writes use the current one)
   bool derived_saved = false;  // read: the file held the derived datasets (else they are zero)

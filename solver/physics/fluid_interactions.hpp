@@ -264,7 +264,27 @@ SPATE_HD void accumulate_fluid_pair(const PhysicsParams& P, const FluidMaterial&
   add_pair_rates(out, fluid_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, i, j));
 }
 
-// Once per fluid particle after the pair sum: the Riemann solver's wall term, then body forces.
+// A relaxation zone (PhysicsParams::zone, case key `relaxation_zone`): inside its box the fluid's
+// velocity relaxes towards the zone's (a plane Poiseuille profile across the box's height when
+// parabolic) with the time constant 1/inv_time, a forcing zone as in wave flumes' relaxation
+// zones: upstream of a body in a periodic channel it gives the body the inflow of a channel with
+// an inlet (its own wake, which would come round the period, is reset there).
+template <int Dim>
+SPATE_HD void relax_in_zone(const PhysicsParams& P, const ParticleState<Dim>& i, Vec<Dim>& acc) {
+  const auto& z = P.zone;
+  bool inside = true;
+  SPATE_UNROLL for (int a = 0; a < Dim; ++a) inside = inside && i.x[a] >= z.lo[a] && i.x[a] <= z.hi[a];
+  if (!inside) return;
+  float scale = 1.0f;
+  if (z.parabolic) {
+    const float s = (i.x[Dim - 1] - z.lo[Dim - 1]) / (z.hi[Dim - 1] - z.lo[Dim - 1]);
+    scale = 4.0f * s * (1.0f - s);
+  }
+  SPATE_UNROLL for (int a = 0; a < Dim; ++a) acc[a] += (scale * z.velocity[a] - i.v[a]) * z.inv_time;
+}
+
+// Once per fluid particle after the pair sum: the Riemann solver's wall term, then body forces
+// and the relaxation zone.
 // Against a wall the Riemann problem is between the fluid and its mirror image (velocity 2 v_w - v_i,
 // v_w = 0), along the wall's normal n: the jump is 2 v_i . n towards the wall, and p* - (p_i + p_w)/2
 // acts along n (SPHinXsys). n is not stored for walls: the kernel-weighted direction from the walls to
@@ -284,6 +304,7 @@ SPATE_HD void finish_fluid_rates(const PhysicsParams& P, const FluidMaterial& M,
     SPATE_UNROLL for (int k = 0; k < Dim; ++k) out.acc[k] += push * out.wall_gradient[k] * inv_g;
   }
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) out.acc[k] += P.gravity[k] + P.body_force[k];
+  if (P.zone.inv_time > 0.0f) relax_in_zone(P, i, out.acc);
 }
 
 // Mass summation, eq. 5 (times rho0): rho_i = sum_j m_j W_ij, self included by the caller's loop

@@ -74,6 +74,15 @@ struct PhysicsParams {
   // Only the first `dim` components are used; the last used axis is vertical (y in 2D, z in 3D).
   float gravity[3] = {0.0f, 0.0f, -9.81f};
   float body_force[3] = {0.0f, 0.0f, 0.0f};  // extra acceleration on fluid (Poiseuille driving)
+  // A relaxation zone (case key `relaxation_zone`; fluid_interactions.hpp, relax_in_zone): inside
+  // the box [lo, hi] the fluid's velocity relaxes towards `velocity` (times 4 s (1 - s) across the
+  // box's height when parabolic) at the rate inv_time: a += (u* - v) inv_time. inv_time 0: none.
+  struct RelaxationZone {
+    float lo[3] = {0.0f, 0.0f, 0.0f}, hi[3] = {0.0f, 0.0f, 0.0f};
+    float velocity[3] = {0.0f, 0.0f, 0.0f};
+    float inv_time = 0.0f;
+    bool parabolic = false;
+  } zone;
   // Rest density, mass, viscosity, sound speed, Tait exponent of every fluid; walls and solids
   // (materials.hpp). The pair terms read fluid properties from here, never from scalars.
   MaterialTable materials;

@@ -348,15 +348,39 @@ void for_owned_cells(const CellGrid& grid, const Box* region, Visit&& visit) {
         if (const std::uint32_t c = grid.local_cell(x, y, z); c != CellGrid::kOutside && c < grid.owned_cell_count()) visit(c);
 }
 
-// Calls fn(i, f) with the pressure force f[3] of the fluid on every owned particle i of material
-// `kind` (a solid). For one face of its box (face >= 0): only the particles less than a kernel
-// support below that face (the fluid beyond the face is all they can reach through it). Only in
-// the cells that hold a point of `region`, when it is given.
-template <class Fn>
+// The force of fluid particle f on wall particle w through every pair term (pressure, artificial
+// and laminar viscosity, and the interface and Riemann options' terms when on): minus m_f times
+// the acceleration that w gives f in the fluid's own pair terms, so that the wall takes exactly
+// what the fluid loses (its momentum is conserved pair by pair). The moving-wall and Riemann forms
+// of the terms give the plain ones' values when walls are at rest and the options off.
+template <class Kernel, int Dim, bool Multiphase>
+Vec<Dim> wall_pair_reaction(const PhysicsParams& P, const ParticleStore& p, std::uint32_t f, std::uint32_t w) {
+  const ParticleState<Dim> sf = load_state<Dim>(p, f);
+  ParticleState<Dim> sw = load_state<Dim>(p, w);
+  sw.w = boundary_velocity<Dim>(P, sw);
+  sw.w_av = sliding_velocity<Dim>(P, sw);
+  const FluidMaterial& M = P.materials.of(sf.material);
+  FluidRates<Dim> r;
+  if constexpr (Multiphase)
+    r = multiphase_pair_terms<Kernel, Dim, true, true, true>(P, M, sf, sw, particle_neighbour_fluid(P, p, w), particle_viscosity(P, p, f));
+  else
+    r = fluid_pair_terms<Kernel, Dim, true, true, true>(P, M, sf, sw);
+  return (-M.mass) * r.acc;
+}
+
+// Calls fn(i, f, v) with the pressure force f[3] of the fluid on every owned particle i of material
+// `kind` (a solid) and, when Viscous, the rest of the fluid's pair force on it v[3]
+// (wall_pair_reaction less the pressure: its viscous stresses; else zeros). For one face of its box
+// (face >= 0): only the particles less than a kernel support below that face (the fluid beyond
+// the face is all they can reach through it). Only in the cells that hold a point of `region`,
+// when it is given.
+template <bool Viscous = false, class Fn>
 void for_each_solid_force(SlabWorker& w, std::uint8_t kind, const Box& box, int face, Fn&& fn, const Box* region = nullptr) {
   ParticleStore& p = w.particles();
   const CellGrid& grid = w.grid();
-  dispatch_kernel_dim(w.params(), [&]<class Kernel, int Dim>() {
+  const PhysicsParams& P = w.params();
+  const bool multiphase = pair_loop_flags(P).multiphase;
+  dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
     const CellGridView view = grid.view();
     for_owned_cells(grid, region, [&](std::uint32_t c) {
       int g[3];
@@ -365,39 +389,54 @@ void for_each_solid_force(SlabWorker& w, std::uint8_t kind, const Box& box, int 
         if (p.material[i] != kind) continue;
         if (face >= 0) {
           const double x[3] = {p.pos[0][i], p.pos[1][i], Dim == 3 ? p.pos[2][i] : 0.0};
-          if (face_depth(box, x, face) >= 2.0 * w.params().h) continue;
+          if (face_depth(box, x, face) >= 2.0 * P.h) continue;
         }
         const auto wi = load_state<Dim>(p, i);
-        Vec<Dim> f = zero_vec<Dim>();
+        Vec<Dim> f = zero_vec<Dim>(), total = zero_vec<Dim>();
         view.for_each_neighbour_range(g, [&](std::uint32_t b, std::uint32_t e) {
-          for (std::uint32_t j = b; j < e; ++j)
-            if (w.params().is_fluid(p.material[j])) f += wall_pressure_force<Kernel, Dim>(w.params(), wi, load_state<Dim>(p, j));
+          for (std::uint32_t j = b; j < e; ++j) {
+            if (!P.is_fluid(p.material[j])) continue;
+            f += wall_pressure_force<Kernel, Dim>(P, wi, load_state<Dim>(p, j));
+            if constexpr (Viscous) {
+              if (distance_squared<Dim>(wi.x, p.pos, j) >= P.support2) continue;
+              total += multiphase ? wall_pair_reaction<Kernel, Dim, true>(P, p, j, i) : wall_pair_reaction<Kernel, Dim, false>(P, p, j, i);
+            }
+          }
         });
-        float out[3] = {0, 0, 0};
+        float out[3] = {0, 0, 0}, viscous[3] = {0, 0, 0};
         for (int k = 0; k < Dim; ++k) out[k] = f[k];
-        fn(i, out);
+        if constexpr (Viscous)
+          for (int k = 0; k < Dim; ++k) viscous[k] = total[k] - f[k];
+        fn(i, out, viscous);
       }
     });
   });
 }
 
-// The pressure force of the fluid on every owned particle of material `kind` (a solid), as
-// (id, fx, fy, fz) records; for one face of its box (face >= 0), the component along the face's
+// The pressure force of the fluid on every owned particle of material `kind` (a solid) and its
+// viscous part (zeros unless `viscous`), as (id, fx, fy, fz, vx, vy, vz) records; for one face of its box (face >= 0), the component along the face's
 // axis (a particle near an edge gives each of its faces that face's component).
-Bytes solid_force_records(SlabWorker& w, std::uint8_t kind, const Box& box, int face) {
+Bytes solid_force_records(SlabWorker& w, std::uint8_t kind, const Box& box, int face, bool viscous) {
   Bytes out;
   const ParticleStore& p = w.particles();
-  for_each_solid_force(w, kind, box, face, [&](std::uint32_t i, const float f[3]) {
-    float rec[4] = {0, 0, 0, 0};
+  auto record = [&](std::uint32_t i, const float f[3], const float v[3]) {
+    float rec[7] = {0, 0, 0, 0, 0, 0, 0};
     std::memcpy(&rec[0], &p.id[i], sizeof(float));
-    for (int k = 0; k < 3; ++k) rec[1 + k] = face < 0 || k == face / 2 ? f[k] : 0.0f;
+    for (int k = 0; k < 3; ++k) {
+      const bool along = face < 0 || k == face / 2;
+      rec[1 + k] = along ? f[k] : 0.0f;
+      rec[4 + k] = along ? v[k] : 0.0f;
+    }
     out.insert(out.end(), reinterpret_cast<char*>(rec), reinterpret_cast<char*>(rec) + sizeof rec);
-  });
+  };
+  if (viscous) for_each_solid_force<true>(w, kind, box, face, record);
+  else for_each_solid_force<false>(w, kind, box, face, record);
   return out;
 }
 
-// The force and the torque about `centre` of the fluid's pressure on every owned particle of a
-// floating solid, as (id, fx, fy, fz, tx, ty, tz) records, in double.
+// The force and the torque about `centre` of the fluid on every owned particle of a floating solid
+// (pressure and viscous: every pair term's reaction, so that the body takes what the fluid loses),
+// as (id, fx, fy, fz, tx, ty, tz) records, in double.
 struct LoadRecord {
   std::uint32_t id;
   double v[6];
@@ -416,8 +455,8 @@ Bytes body_load_records(SlabWorker& w, std::uint8_t kind, const std::array<doubl
     region.min[k] = centre[k] - margin, region.max[k] = centre[k] + margin;
     periodic = periodic || L.periodic[k];
   }
-  for_each_solid_force(w, kind, Box{}, -1, [&](std::uint32_t i, const float f[3]) {
-    LoadRecord rec{p.id[i], {f[0], f[1], f[2], 0, 0, 0}};
+  for_each_solid_force<true>(w, kind, Box{}, -1, [&](std::uint32_t i, const float f[3], const float v[3]) {
+    LoadRecord rec{p.id[i], {f[0] + v[0], f[1] + v[1], f[2] + v[2], 0, 0, 0}};
     double r[3] = {0, 0, 0};
     for (int k = 0; k < d; ++k) r[k] = static_cast<double>(p.pos[k][i]) - centre[k];
     rec.v[3] = r[1] * rec.v[2] - r[2] * rec.v[1];
@@ -521,24 +560,26 @@ std::vector<double> owners_values(SlabTransport& t, const std::vector<double>& m
   return out;
 }
 
-// Sum in id order, so the total is the same however the solid is split between slabs.
+// Sum in id order, so the total is the same however the solid is split between slabs: of records
+// (id, N - 1 floats), the N - 1 sums.
+template <int N = 4>
 std::vector<double> sum_by_id(const std::vector<Bytes>& parts) {
-  std::vector<std::array<float, 4>> recs;
+  std::vector<std::array<float, N>> recs;
   for (auto& b : parts)
-    for (std::size_t k = 0; k + sizeof(float) * 4 <= b.size(); k += sizeof(float) * 4) {
-      std::array<float, 4> r;
+    for (std::size_t k = 0; k + sizeof(float) * N <= b.size(); k += sizeof(float) * N) {
+      std::array<float, N> r;
       std::memcpy(r.data(), b.data() + k, sizeof r);
       recs.push_back(r);
     }
-  auto id_of = [](const std::array<float, 4>& r) {
+  auto id_of = [](const std::array<float, N>& r) {
     std::uint32_t id;
     std::memcpy(&id, &r[0], sizeof id);
     return id;
   };
   std::sort(recs.begin(), recs.end(), [&](auto& a, auto& b) { return id_of(a) < id_of(b); });
-  std::vector<double> f(3, 0.0);
+  std::vector<double> f(N - 1, 0.0);
   for (auto& r : recs)
-    for (int k = 0; k < 3; ++k) f[k] += r[1 + k];
+    for (int k = 0; k < N - 1; ++k) f[k] += r[1 + k];
   return f;
 }
 
@@ -586,7 +627,11 @@ std::vector<std::string> probe_columns(const ProbeSpec& p, int dim) {
       break;
     case ProbeType::Velocity: components("v", "m/s"); break;
     case ProbeType::Height: columns.push_back("height[m]"); break;
-    case ProbeType::Force: components("f", dim == 2 ? "N/m" : "N"); break;  // 2D: per metre of depth
+    case ProbeType::Force:  // 2D: per metre of depth
+      components("f", dim == 2 ? "N/m" : "N");
+      if (p.viscous)
+        for (int k = 0; k < dim; ++k) columns.push_back(std::string("f") + axes[k] + "_viscous[" + (dim == 2 ? "N/m" : "N") + "]");
+      break;
     case ProbeType::Front: columns.push_back("front[m]"); break;
     case ProbeType::Body:
       // Centre of mass, angles, velocities, the fluid's force and its torque about the centre of mass.
@@ -644,7 +689,7 @@ std::string probe_description(const ProbeSpec& p, int dim) {
     case ProbeType::Centroid: return "centroid and mean velocity of " + p.phase_name;
     case ProbeType::Interface: return "interface of " + p.phase_name + ": half its vertical extent, its top and bottom";
     case ProbeType::Force:
-      return "pressure force on solid '" + p.solid + "'" + (p.face >= 0 ? fmt::format(" face {}{}", p.face % 2 ? "+" : "-", axes[p.face / 2]) : "");
+      return std::string(p.viscous ? "pressure and viscous force" : "pressure force") + " on solid '" + p.solid + "'" + (p.face >= 0 ? fmt::format(" face {}{}", p.face % 2 ? "+" : "-", axes[p.face / 2]) : "");
     case ProbeType::Body: return "floating solid '" + p.solid + "': centre of mass, angles, velocities, the fluid's force and torque";
     case ProbeType::Front:
       return fmt::format("front{} along {}", of_phase, axes[p.axis]) + (p.min_depth > 0 ? fmt::format(" (water at least {:g} m deep)", p.min_depth) : "");
@@ -772,8 +817,9 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
         Box box;
         for (std::size_t k = 0; k < case_.solids.size(); ++k)
           if (case_.solids[k].name == p.solid) kind = w.params().materials.solid(static_cast<int>(k)), box = case_.solids[k].box;
-        row = sum_by_id(t.allgather(solid_force_records(w, kind, box, p.face)));
-        row.resize(case_.dim);
+        const std::vector<double> sums = sum_by_id<7>(t.allgather(solid_force_records(w, kind, box, p.face, p.viscous)));
+        row.assign(sums.begin(), sums.begin() + case_.dim);
+        if (p.viscous) row.insert(row.end(), sums.begin() + 3, sums.begin() + 3 + case_.dim);
         break;
       }
       case ProbeType::Temperature: row = owners_values(t, {sample_temperature(w, p.position, p.phase)}); break;

@@ -34,6 +34,7 @@
 #include "memory_estimate.hpp"
 #include "../io/vtk_snapshot.hpp"
 #include "../particles/particle_pack.hpp"
+#include "flow_drive.hpp"
 #include "probes.hpp"
 #include "relax.hpp"
 #include "slab_worker.hpp"
@@ -303,6 +304,11 @@ class Worker {
     }
     steer.checkpoint_now = steer.stop = false;
     if (s_.restarted) bodies.restore(s_.start.bodies);
+    // A driven periodic flow (flow_drive.hpp): a restart continues with the saved body force.
+    FlowDrive drive(s_.c);
+    drive_ = &drive;
+    if (s_.restarted) drive.restore(s_.start.drive);
+    drive.apply(params);
     motions.set_step(params, s_.start.time, s_.start.time);
     bodies.set_step(params);
     w_.set_params(params);
@@ -315,6 +321,17 @@ class Worker {
     std::int64_t step = s_.start.step;
     if (s_.restarted && writer) pvd.load_existing(time);
     double dt = s_.restarted ? s_.start.dt : next_time_step();
+    // The drive's mean velocity: exact sums over every slab's fluid (sample_centroid).
+    auto mean_velocity = [&]() {
+      const std::vector<double> centroid = sample_centroid(w_, -1);
+      std::array<double, 3> u{0, 0, 0};
+      for (int k = 0; k < s_.c.dim; ++k) u[k] = centroid[s_.c.dim + k];
+      return u;
+    };
+    if (drive.on() && !s_.restarted) {
+      drive.update(params, mean_velocity(), 0.0, dt);
+      w_.set_params(params);
+    }
 
     const double end_time = s_.opts.until.value_or(s_.c.end_time);
     const int checkpoint_every = s_.opts.checkpoint_every.value_or(s_.c.checkpoint_every);
@@ -448,10 +465,15 @@ class Worker {
         break;
       }
       if (!bodies.empty()) bodies.set_loads(body_loads(w_, bodies));
+      const double dt_taken = dt;
       dt = next_time_step();
       if (!(dt > 0) || !std::isfinite(dt)) {
         unstable = fmt::format("step {}, t = {:.6g} s: the time step collapsed to {}", step, time, dt);
         break;
+      }
+      if (drive.on()) {
+        drive.update(params, mean_velocity(), dt_taken, dt);
+        w_.set_params(params);
       }
       interrupted = report.stop_signal;
       const bool last = interrupted || (s_.opts.steps ? taken >= *s_.opts.steps : time >= end_time - 1e-12);
@@ -601,6 +623,7 @@ class Worker {
       meta.removed = removed;
       meta.geometry_hash = geometry_hash(s_.c);
       if (bodies_) meta.bodies = bodies_->save();
+      if (drive_) meta.drive = drive_->save();
       std::vector<std::vector<FieldRef>> fields;
       for (auto* slab : all.slabs) fields.push_back(slab->fields());
       write_checkpoint(path, meta, s_.c.dim, all.by_id.size(), [&](std::size_t k, char* out) {
@@ -646,6 +669,7 @@ class Worker {
   SlabTransport& t_;
   SlabWorker w_;
   const RigidBodies* bodies_ = nullptr;  // the run's floating solids (for checkpoints)
+  const FlowDrive* drive_ = nullptr;      // the run's flow drive (for checkpoints)
 };
 
 }  // namespace
@@ -703,6 +727,11 @@ RunResult Simulation::run() {
       RigidBodies(case_).restore(s.start.bodies);
     } catch (const std::exception& e) {
       throw InputError(fmt::format("{}: attribute 'bodies': {}", options_.restart->string(), e.what()));
+    }
+    try {
+      FlowDrive(case_).restore(s.start.drive);
+    } catch (const std::exception& e) {
+      throw InputError(fmt::format("{}: attribute 'drive': {}", options_.restart->string(), e.what()));
     }
   } else {
     s.initial = relax_particles(case_, generate_particles(case_));  // as generated unless `relax:` asks

@@ -70,12 +70,14 @@ BoxRecord run_box(const Case& c, const std::string& scratch) {
 // free in x, y and its rotation. Archimedes: draft d = rho_b H / rho_w = 0.05 m, where the still
 // water then stands at h_s = (A_water + B d) / L = 0.301 m (the water's area conserved), so that the
 // box's centre rests at h_s - d + H/2. Its mean centre over 0.8 to 1.5 s (after the first period,
-// before the tank's slow seiche builds) gives the draft within 2% (measured +0.2%; at dp = 0.02 it
-// is -2.3%, hence dp = 0.01). The heave period, release (a maximum) to the next maximum, against
+// before the tank's slow seiche builds) gives the draft within 2% (measured -0.18% with the viscous
+// load, +0.47% with the pressure alone; at dp = 0.02 it is -2.3%, hence dp = 0.01). The heave period, release (a maximum) to the next maximum, against
 // T = 2 pi sqrt((m + a33) / (rho g B)) with the added mass a33 = rho pi B^2 / 8 of a flat plate on
 // the surface (Korotkin 2009, "Added masses of ship structures", 5.31; the high-frequency limit),
-// 0.719 s: within 10% (measured 0.684 s, -4.9%). The box stays upright (within 2 degrees) and in
-// place (within 1 mm) in this symmetric setting.
+// 0.719 s: within 10% (measured 0.721 s, +0.2%; -4.9% with the pressure alone). The box stays
+// upright (within 2 degrees) and in place within 5 mm in this symmetric setting: rounding excites
+// the tank's first (antisymmetric) seiche, whose flow under the box drags it by a few millimetres
+// once the load has its viscous part (2.7 mm by 1.5 s; 0.7 mm with the pressure alone).
 TEST(FloatingBodies, ABoxSettlesAtArchimedesDraftWithItsHeavePeriod) {
   if (!body_support()) GTEST_SKIP() << "built without Simbody";
   const Case c = load_case(test::case_path("floating_box_2d.yaml"),
@@ -105,10 +107,10 @@ TEST(FloatingBodies, ABoxSettlesAtArchimedesDraftWithItsHeavePeriod) {
   double tilt = 0.0, drift = 0.0;
   for (std::size_t k = 0; k < angle.size(); ++k) tilt = std::max(tilt, std::fabs(angle[k].second)), drift = std::max(drift, std::fabs(x[k].second - 1.0));
   EXPECT_LT(tilt, 2.0);
-  EXPECT_LT(drift, 1e-3);
+  EXPECT_LT(drift, 5e-3);
   // A pressure probe riding with the box, dp/2 under the middle of its bottom: at rest it reads
   // the box's weight over its width plus the water above it, m g / B + rho g dp/2, within 8%
-  // (measured +4.6%; a probe left where it started, 0.9 cm higher than the box took it, would
+  // (measured +4.2%; a probe left where it started, 0.9 cm higher than the box took it, would
   // read 16% less).
   const double under = test::mean_after(box.csv.parent_path() / "under.csv", 2, 0.8);
   const double expected = m * g / B + rho * g * 0.5 * c.dp;

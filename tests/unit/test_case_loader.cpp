@@ -59,9 +59,20 @@ tank:
   open_top: false
   headroom: 0.25
   periodic: [y]
+drive:
+  mean_velocity: [0, 0.5, 0]
+  response_time: 0.2
+relaxation_zone:
+  min: [1.1, 2.0, 3.0]
+  max: [1.3, 2.5, 3.4]
+  velocity: [0, 0.5, 0]
+  velocity_profile: parabolic
+  time: 0.05
 fluid_blocks:
   - min: [1, 2, 3]
     max: [1.4, 2.5, 3.2]
+    velocity: [0, 0.75, 0]
+    velocity_profile: parabolic
 wet_bed: 0.04
 solids:
   - name: post
@@ -192,6 +203,18 @@ TEST(CaseLoader, EveryKeyIsRead) {
   EXPECT_DOUBLE_EQ(c.headroom, 0.25);
   EXPECT_FALSE(c.periodic[0]);
   EXPECT_TRUE(c.periodic[1]);
+  EXPECT_TRUE(c.drive.on);
+  EXPECT_FALSE(c.drive.axes[0]);
+  EXPECT_TRUE(c.drive.axes[1]);
+  EXPECT_DOUBLE_EQ(c.drive.mean_velocity[1], 0.5);
+  EXPECT_DOUBLE_EQ(c.drive.response_time, 0.2);
+  EXPECT_DOUBLE_EQ(c.zone.min[0], 1.1);
+  EXPECT_DOUBLE_EQ(c.zone.max[2], 3.4);
+  EXPECT_DOUBLE_EQ(c.zone.velocity[1], 0.5);
+  EXPECT_TRUE(c.zone.parabolic);
+  EXPECT_FLOAT_EQ(physics_params(c).zone.inv_time, 20.0f);
+  EXPECT_DOUBLE_EQ(c.fluid_blocks[0].velocity[1], 0.75);
+  EXPECT_TRUE(c.fluid_blocks[0].parabolic);
   EXPECT_DOUBLE_EQ(c.wet_bed, 0.04);
   ASSERT_EQ(c.solids.size(), 1u);
   EXPECT_EQ(c.solids[0].name, "post");
@@ -377,6 +400,16 @@ TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
        {"fluid_blocks[0].min", "'centre' and 'radius' only"}},
       {"wet bed of an unknown fluid", {"wet_bed={depth: 0.02, fluid: air}"}, {"wet_bed.fluid", "no fluid named 'air'"}},
       {"probe on a missing solid", {"probes=[{name: f, type: force, solid: nope}]"}, {"probes[0].solid", "no solid named 'nope'"}},
+      {"drive without a periodic axis", {"drive={mean_velocity: [0.1, 0]}"}, {"'drive'", "needs a periodic axis"}},
+      {"drive across a wall", {"tank.periodic=[x]", "drive={mean_velocity: [0.1, 0.1]}"}, {"'drive.mean_velocity'", "y component must be 0"}},
+      {"drive with a negative response time", {"tank.periodic=[x]", "drive={mean_velocity: [0.1, 0], response_time: -1}"},
+       {"'drive.response_time'", ">= 0"}},
+      {"relaxation zone without a time", {"relaxation_zone={min: [0, 0], max: [0.05, 0.06], velocity: [0.1, 0]}"},
+       {"'relaxation_zone.time'", "required"}},
+      {"relaxation zone outside the tank", {"relaxation_zone={min: [0, 0], max: [5, 0.06], velocity: [0.1, 0], time: 0.1}"},
+       {"relaxation_zone", "inside the tank"}},
+      {"parabolic block without a velocity", {"fluid_blocks=[{min: [0, 0], max: [0.05, 0.06], velocity_profile: parabolic}]"},
+       {"fluid_blocks[0].velocity_profile", "needs the block's `velocity`"}},
       {"force on a face that a 2D box has not",
        {"solids=[{name: s, min: [0.15, 0], max: [0.18, 0.05]}]", "probes=[{name: f, type: force, solid: s, face: z+}]"},
        {"probes[0].face", "'z+' is not a face", "x-, x+, y-, y+"}},

@@ -58,6 +58,9 @@ TEST(ProbeFiles, HeadersCarryUnits) {
   p.type = ProbeType::Force;
   EXPECT_EQ(probe_header(p, 2), "time[s],step,fx[N/m],fy[N/m]");  // 2D: per metre of depth
   EXPECT_EQ(probe_header(p, 3), "time[s],step,fx[N],fy[N],fz[N]");
+  p.viscous = true;  // then the viscous part
+  EXPECT_EQ(probe_header(p, 2), "time[s],step,fx[N/m],fy[N/m],fx_viscous[N/m],fy_viscous[N/m]");
+  p.viscous = false;
   p.type = ProbeType::Front;
   EXPECT_EQ(probe_header(p, 3), "time[s],step,front[m]");
   p.type = ProbeType::WallPressure;
