@@ -8,10 +8,11 @@
 # estimate of f; without the division a field reads half its value on the 0.5 contour), by default
 # the speed |v|. The tank floor, its outline and every solid (the column) are drawn too, from a
 # three-quarter view like the paper's Figure 4, with the simulated time in a corner; a solid of any
-# shape (a mesh, a cylinder) from the surface spate wrote for it (<run output>/geometry/), where it
-# stood at the start; a box solid as the box its particles fill, refitted at every step, so that a
-# moving one (prescribed or floating) is drawn where it is now (as the axis-aligned box around its
-# particles: a turned box is drawn a little larger). In 2D the
+# shape (a mesh, a cylinder) from the surface spate wrote for it (<run output>/geometry/), a static
+# box solid as the box its particles fill. A moving solid (prescribed or floating; its box too) is
+# drawn where it is now: at every step the rigid motion that carries its particles from their start
+# (geometry/solid_<kind>_start.vtp) to where they are (least squares, Kabsch 1976) places its
+# surface, turned and shifted as the body is. In 2D the
 # water is the region where the Shepard sum exceeds 0.5, seen from the front.
 # PNGs go to <run output>/insitu/free_surface_<step>.png.
 #
@@ -32,8 +33,12 @@
 # run cannot change it.
 import os
 
+import numpy as np
 from paraview.simple import *
 from paraview import catalyst
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkCommonMath import vtkMatrix4x4
+from vtkmodules.vtkCommonTransforms import vtkTransform
 
 width, height = (int(v) for v in os.environ.get("SPATE_INSITU_IMAGE_SIZE", "1200x800").split("x"))
 cell_factor = float(os.environ.get("SPATE_FREE_SURFACE_CELL", "1.0"))
@@ -135,7 +140,65 @@ def _fit_box(block, b):
     block.Center = [(b[0] + b[1]) / 2, (b[2] + b[3]) / 2, (b[4] + b[5]) / 2]
 
 
-def _build_scene():
+# The moving solids, each as (its particles, the Transform that places its surface, its particles'
+# ids and positions at the start, sorted by id).
+_posed = []
+
+
+def _ids_and_points(source):
+    """The ids and positions of a source's points, sorted by id."""
+    data = source.GetClientSideObject().GetOutputDataObject(0)
+    if data is None or data.GetNumberOfPoints() == 0:
+        return np.zeros(0, np.int64), np.zeros((0, 3))
+    ids = vtk_to_numpy(data.GetPointData().GetArray("id")).astype(np.int64)
+    x = vtk_to_numpy(data.GetPoints().GetData()).astype(np.float64)
+    order = np.argsort(ids, kind="stable")
+    return ids[order], x[order]
+
+
+def _rigid_fit(x0, x):
+    """The rotation R and translation t that carry points x0 closest to x (x ~ R x0 + t; Kabsch)."""
+    c0, c = x0.mean(axis=0), x.mean(axis=0)
+    u, _, vt = np.linalg.svd((x0 - c0).T @ (x - c))
+    d = 1.0 if np.linalg.det(vt.T @ u.T) >= 0 else -1.0
+    r = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
+    return r, c - r @ c0
+
+
+def _place(entry, time):
+    """Moves a solid's surface to the pose its particles have now."""
+    particles_now, placed, ids0, x0 = entry
+    particles_now.UpdatePipeline(time)
+    ids, x = _ids_and_points(particles_now)
+    _, at0, at = np.intersect1d(ids0, ids, assume_unique=True, return_indices=True)
+    if len(at) < 4:
+        return
+    r, t = _rigid_fit(x0[at0], x[at])
+    m = vtkMatrix4x4()
+    for i in range(3):
+        for j in range(3):
+            m.SetElement(i, j, r[i, j])
+    turn = vtkTransform()
+    turn.SetMatrix(m)
+    # ParaView's Transform applies Translate after RotateZ, RotateX, RotateY (vtkProp3D's order),
+    # which is how vtkTransform reports an orientation.
+    placed.Transform.Rotate = list(turn.GetOrientation())
+    placed.Transform.Translate = [float(v) for v in t]
+
+
+def _posed_solid(kind, particles_of_solid, surface, start_file):
+    """The surface of a moving solid, placed at every step where its particles are."""
+    start = XMLPolyDataReader(registrationName="solid_start_%d" % kind, FileName=[start_file])
+    start.UpdatePipeline()
+    ids0, x0 = _ids_and_points(start)
+    placed = Transform(registrationName="solid_placed_%d" % kind, Input=surface)
+    placed.Transform = "Transform"
+    entry = (MergeBlocks(registrationName="solid_merged_%d" % kind, Input=particles_of_solid), placed, ids0, x0)
+    _posed.append(entry)
+    return entry
+
+
+def _build_scene(time):
     """Once, from the first step's data: the grid, the static geometry and the camera."""
     dim = int(_constant("dimensions", 3))
     dp = _constant("dp", 0.01)
@@ -205,8 +268,13 @@ def _build_scene():
             # A solid of any shape (a mesh, a cylinder, ...) is drawn from the surface spate wrote
             # for it; a box solid as the box its particles fill.
             surface_file = os.path.join(run_dir, "geometry", "solid_%d.vtp" % kind)
+            start_file = os.path.join(run_dir, "geometry", "solid_%d_start.vtp" % kind)
             if os.path.exists(surface_file):
                 block = XMLPolyDataReader(registrationName="solid_surface_%d" % kind, FileName=[surface_file])
+                if os.path.exists(start_file):
+                    entry = _posed_solid(kind, solid, block, start_file)
+                    _place(entry, time)
+                    block = entry[1]
             else:
                 block = Box(registrationName="solid_box_%d" % kind)
                 _fit_box(block, sb)
@@ -258,8 +326,10 @@ def catalyst_execute(info):
     particles.UpdatePipeline(info.time)
     clock.Text = "t = %.3f s   (step %d)" % (info.time, info.timestep)
     if _scene is None:
-        _scene = _build_scene()
+        _scene = _build_scene(info.time)
     else:
+        for entry in _posed:
+            _place(entry, info.time)
         for solid, block in _boxes:
             solid.UpdatePipeline(info.time)
             b = solid.GetDataInformation().GetBounds()

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <vector>
 
@@ -392,10 +394,49 @@ ParticleCounts count_sites(const Case& c, std::vector<std::uint8_t>* record) {
   for_each_site(c, [&](const Sites&, const int*, std::uint8_t kind) { (M.is_fluid(kind) ? n.fluid : n.wall) += 1; }, record);
   return n;
 }
+
+// The materials of a shaped case's lattice sites, classified once. A run counts its particles for
+// its memory estimate, again to check the generated set, and the generator fills from the same
+// sites: a mesh case's classification (its distance queries) is most of its start-up, so the last
+// one is kept, under a key of everything that decides a site, until the generator has used it.
+struct SiteRecord {
+  std::string key;
+  std::vector<std::uint8_t> kinds;
+  ParticleCounts counts;
+};
+std::mutex site_record_mutex;
+std::shared_ptr<const SiteRecord> site_record_cache;
+
+std::string site_signature(const Case& c) {
+  std::string s = geometry_signature(c) + fmt::format("fluids: {}\nwet_bed_fluid: {}\n", c.fluids.size(), c.wet_bed_fluid);
+  for (const FluidBlock& b : c.fluid_blocks)
+    s += fmt::format("block: fluid {}, centre {:.17g} {:.17g} {:.17g}, radius {:.17g}, wave {:.17g} {:.17g} {}\n", b.fluid, b.centre[0],
+                     b.centre[1], b.centre[2], b.radius, b.wave_amplitude, b.wavelength, b.wave_displaces);
+  return s;
+}
+
+std::shared_ptr<const SiteRecord> site_record(const Case& c) {
+  std::string key = site_signature(c);
+  {
+    const std::lock_guard lock(site_record_mutex);
+    if (site_record_cache && site_record_cache->key == key) return site_record_cache;
+  }
+  auto r = std::make_shared<SiteRecord>();
+  r->key = std::move(key);
+  r->counts = count_sites(c, &r->kinds);
+  const std::lock_guard lock(site_record_mutex);
+  site_record_cache = r;
+  return r;
+}
+
+void forget_site_record() {
+  const std::lock_guard lock(site_record_mutex);
+  site_record_cache.reset();
+}
 }  // namespace
 
 ParticleCounts count_particles(const Case& c) {
-  if (has_shapes(c)) return count_sites(c, nullptr);
+  if (has_shapes(c)) return site_record(c)->counts;
   const Sites s(c);
   const int d = c.dim;
   ParticleCounts n;
@@ -559,9 +600,11 @@ std::array<double, 3> initial_velocity(const Case& c, std::uint8_t kind, const d
 }
 
 ParticleStore generate_particles(const Case& c) {
-  std::vector<std::uint8_t> sites;  // shapes: every site's material, classified once
   const bool shapes = has_shapes(c);
-  const ParticleCounts n = shapes ? count_sites(c, &sites) : count_particles(c);
+  // Shapes: every site's material, classified once (and no longer kept once filled from).
+  const std::shared_ptr<const SiteRecord> sites = shapes ? site_record(c) : nullptr;
+  if (shapes) forget_site_record();
+  const ParticleCounts n = shapes ? sites->counts : count_particles(c);
   if (n.fluid == 0) throw CaseError(c.file + ": the case generates no fluid particles (check fluid_blocks, wet_bed and dp)");
   if (n.total() > 0xfffffff0LL) throw CaseError(c.file + ": key 'dp': more than 4e9 particles");
   ParticleStore p(c.dim);
@@ -581,14 +624,11 @@ ParticleStore generate_particles(const Case& c) {
     for (int a = 0; a < c.dim; ++a) p.pos[a][i] = static_cast<float>(s.coord(a, idx[a]));
     p.material[i] = kind;
     p.id[i] = static_cast<std::uint32_t>(i);
-    if (heat) {
-      const double x[3] = {s.coord(0, idx[0]), c.dim > 1 ? s.coord(1, idx[1]) : 0.0, c.dim > 2 ? s.coord(2, idx[2]) : 0.0};
-      p.temperature[i] = static_cast<float>(initial_temperature(c, P.materials, kind, x));
-    }
+    const double xs[3] = {s.coord(0, idx[0]), c.dim > 1 ? s.coord(1, idx[1]) : 0.0, c.dim > 2 ? s.coord(2, idx[2]) : 0.0};
+    if (heat) p.temperature[i] = static_cast<float>(initial_temperature(c, P.materials, kind, xs));
     const FluidMaterial& fluid = P.materials.wall_fluid();
     p.density[i] = fluid.rho0;
     if (P.is_fluid(kind)) {
-      const double xs[3] = {s.coord(0, idx[0]), c.dim > 1 ? s.coord(1, idx[1]) : 0.0, c.dim > 2 ? s.coord(2, idx[2]) : 0.0};
       const auto u = initial_velocity(c, kind, xs);
       for (int a = 0; a < c.dim; ++a) p.vel[a][i] = static_cast<float>(u[a]);
       const FluidMaterial& m = P.materials.of(kind);
@@ -600,7 +640,7 @@ ParticleStore generate_particles(const Case& c) {
       p.density[i] = tait_density(static_cast<float>(m.rho0 * g * depth), m);
     }
     ++i;
-  }, nullptr, shapes ? &sites : nullptr);
+  }, nullptr, shapes ? &sites->kinds : nullptr);
   if (i != p.size()) throw std::logic_error("generate_particles: the site loop disagrees with count_particles");
   if (P.materials.multiphase()) layered_hydrostatic_density(c, P, p);
   displace_by_waves(c, P, p);  // after the column sums, which need the lattice

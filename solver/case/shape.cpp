@@ -209,10 +209,8 @@ class Polygon final : public Shape {
 
 }  // namespace
 
-std::string surface_vtp(const Shape& shape) {
-  std::vector<std::array<double, 3>> points;
-  std::vector<std::vector<long long>> polygons;
-  shape.surface(points, polygons);
+namespace {
+std::string polydata_vtp(const std::vector<std::array<double, 3>>& points, const std::vector<std::vector<long long>>& polygons) {
   std::string s = fmt::format(
       "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
       "<PolyData>\n<Piece NumberOfPoints=\"{}\" NumberOfPolys=\"{}\">\n<Points>\n"
@@ -228,6 +226,34 @@ std::string surface_vtp(const Shape& shape) {
   long long offset = 0;
   for (const auto& poly : polygons) s += fmt::format("{}\n", offset += static_cast<long long>(poly.size()));
   s += "</DataArray>\n</Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+  return s;
+}
+}  // namespace
+
+std::string surface_vtp(const Shape& shape) {
+  std::vector<std::array<double, 3>> points;
+  std::vector<std::vector<long long>> polygons;
+  shape.surface(points, polygons);
+  return polydata_vtp(points, polygons);
+}
+
+std::string box_surface_vtp(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+  std::vector<std::array<double, 3>> points;
+  for (int k = 0; k < 8; ++k) points.push_back({k & 1 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1], k & 4 ? hi[2] : lo[2]});
+  // Corner k has bit a set where it is on the upper side along axis a; faces counter-clockwise from outside.
+  const std::vector<std::vector<long long>> faces = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+  return polydata_vtp(points, faces);
+}
+
+std::string points_vtp(const std::vector<std::array<double, 3>>& points, const std::vector<std::uint32_t>& ids) {
+  std::string s = fmt::format(
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+      "<PolyData>\n<Piece NumberOfPoints=\"{}\">\n<PointData>\n<DataArray type=\"UInt32\" Name=\"id\" format=\"ascii\">\n",
+      points.size());
+  for (const std::uint32_t id : ids) s += fmt::format("{}\n", id);
+  s += "</DataArray>\n</PointData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (const auto& p : points) s += fmt::format("{:.9g} {:.9g} {:.9g}\n", p[0], p[1], p[2]);
+  s += "</DataArray>\n</Points>\n</Piece>\n</PolyData>\n</VTKFile>\n";
   return s;
 }
 

@@ -7,6 +7,7 @@
 // Primitives are exact; meshes (STL, OBJ, PLY, VTK/VTP) are read and
 // checked with VTK (mesh_shape.cpp), in builds that have it.
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -40,6 +41,11 @@ using ShapePtr = std::shared_ptr<const Shape>;
 
 // The surface of a shape as VTK XML polydata (a .vtp file's text; ASCII, readable by ParaView).
 std::string surface_vtp(const Shape& shape);
+// The same of a box (its six faces).
+std::string box_surface_vtp(const std::array<double, 3>& lo, const std::array<double, 3>& hi);
+// Points with an unsigned integer point array `id`, as VTK XML polydata (the start positions of a
+// moving solid's particles, which the in-situ pipeline fits its motion to).
+std::string points_vtp(const std::vector<std::array<double, 3>>& points, const std::vector<std::uint32_t>& ids);
 
 // A disc (2D) or sphere (3D).
 ShapePtr make_ball(const std::array<double, 3>& centre, double radius, int dim);

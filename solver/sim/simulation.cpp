@@ -16,6 +16,7 @@
 #include <spdlog/spdlog.h>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <fstream>
 #include <thread>
 
@@ -57,6 +58,34 @@ bool balancing_pass_due(std::int64_t taken, std::int64_t step, std::int64_t ever
 }
 
 std::string step_name(std::int64_t step) { return fmt::format("step_{:08d}", step); }
+
+// geometry/solid_<material>.vtp and, for moving solids, solid_<material>_start.vtp (Simulation::run
+// says what for). `initial`: the particles at t = 0, or null on a restart, when they are generated
+// again if some solid moves (its particles' start is what the pipeline fits to).
+void write_solid_geometry(const Case& c, const std::filesystem::path& out, const ParticleStore* initial) {
+  const MaterialTable M = physics_params(c).materials;
+  std::optional<ParticleStore> generated;
+  for (std::size_t k = 0; k < c.solids.size(); ++k) {
+    const SolidSpec& solid = c.solids[k];
+    const bool moves = solid.motion >= 0;
+    if (!solid.shape && !(moves && c.dim == 3)) continue;
+    const int material = M.solid(static_cast<int>(k));
+    const std::filesystem::path folder = out / "geometry";
+    create_output_folder(folder);
+    write_file_atomically(folder / fmt::format("solid_{}.vtp", material),
+                          solid.shape ? surface_vtp(*solid.shape) : box_surface_vtp(solid.box.min, solid.box.max));
+    if (!moves) continue;
+    if (!initial) initial = &generated.emplace(generate_particles(c));
+    std::vector<std::array<double, 3>> points;
+    std::vector<std::uint32_t> ids;
+    for (std::size_t i = 0; i < initial->size(); ++i) {
+      if (initial->material[i] != material) continue;
+      points.push_back({initial->pos[0][i], initial->pos[1][i], c.dim == 3 ? initial->pos[2][i] : 0.0f});
+      ids.push_back(initial->id[i]);
+    }
+    write_file_atomically(folder / fmt::format("solid_{}_start.vtp", material), points_vtp(points, ids));
+  }
+}
 
 // The first time after `time` on the grid k * interval (k whole), in closed form: a loop adding the
 // interval would never get past `time` when the interval is below its resolution. Such an interval
@@ -755,17 +784,13 @@ RunResult Simulation::run() {
     if (group.rank == 0)
       write_file_atomically(options_.out_dir / "case.yaml", "# The effective case of the run in this folder (" + case_.file +
                                                                 " with --set applied), written by spate run.\n" + case_.source_yaml + "\n");
-    // The shaped solids' surfaces, geometry/solid_<material>.vtp, for drawing them: the in-situ
-    // free surface (pipelines/free_surface.py) and ParaView beside the snapshots. Not for a solid
-    // that moves (prescribed or floating): the surface would stay where it started, so the
-    // pipeline draws it from its particles instead.
-    if (group.rank == 0)
-      for (std::size_t k = 0; k < case_.solids.size(); ++k)
-        if (case_.solids[k].shape && case_.solids[k].motion < 0) {
-          const int material = physics_params(case_).materials.solid(static_cast<int>(k));
-          create_output_folder(options_.out_dir / "geometry");
-          write_file_atomically(options_.out_dir / "geometry" / fmt::format("solid_{}.vtp", material), surface_vtp(*case_.solids[k].shape));
-        }
+    // The solids' surfaces at the start, geometry/solid_<material>.vtp, for drawing them: the
+    // in-situ free surface (pipelines/free_surface.py) and ParaView beside the snapshots; every
+    // shaped solid's, and a moving box solid's box. A solid that moves (prescribed or floating)
+    // also gets the start positions of its particles with their ids, solid_<material>_start.vtp:
+    // the pipeline fits the rigid motion that carries them to where they are now and draws the
+    // surface there.
+    if (group.rank == 0) write_solid_geometry(case_, options_.out_dir, s.restarted ? nullptr : &s.initial);
   } catch (const OutputError& e) {
     throw InputError(fmt::format("--out {}: the output folder is not usable: {}", options_.out_dir.string(), e.what()));
   }
