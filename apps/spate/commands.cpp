@@ -491,6 +491,8 @@ int info_command(const InfoArgs& a) {
     if (c.drive.on)
       j["drive"] = {{"mean_velocity", std::vector<double>(c.drive.mean_velocity.begin(), c.drive.mean_velocity.begin() + c.dim)},
                     {"response_time", c.drive.response_time}};
+    j["turbulence"] = c.sps ? nlohmann::ordered_json{{"model", "sps"}, {"smagorinsky", c.smagorinsky}, {"isotropic", c.sps_isotropic}}
+                            : nlohmann::ordered_json{{"model", "none"}};
     j["dt"] = dt;
     j["dt_adaptive"] = !c.fixed_dt.has_value();
     j["cells"] = {L.cells[0], L.cells[1], L.cells[2]};
@@ -520,6 +522,8 @@ int info_command(const InfoArgs& a) {
                 static_cast<long long>(n.wall), static_cast<long long>(n.total()));
     std::printf("resolution      dp = %g m, h = %g m (%.2f dp), support 2h\n", c.dp, P.h, c.smoothing_ratio);
     std::printf("sound speed     c0 = %g m/s (%s)\n", fluid.c0, c.fluids[0].sound_speed ? "from the case" : "automatic: 10 sqrt(g H)");
+    if (c.sps)
+      std::printf("turbulence      SPS (Smagorinsky C_s = %g, C_I = %g; filter width dp)\n", c.smagorinsky, c.sps_isotropic);
     std::printf("materials       %d (index: name, kind, properties)\n", static_cast<int>(P.materials.count));
     for (int m = 0; m < P.materials.count; ++m) {
       if (P.is_fluid(m)) {

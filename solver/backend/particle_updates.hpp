@@ -14,6 +14,7 @@
 #include "../physics/multiphase_interactions.hpp"
 #include "../physics/surface_tension.hpp"
 #include "../physics/shifting.hpp"
+#include "../physics/turbulence.hpp"
 #include "../physics/wall_boundary.hpp"
 
 namespace spate {
@@ -240,6 +241,61 @@ SPATE_HD void add_antuono_diffusion(const PhysicsParams& P, const CellGridView& 
       diffusion += antuono_diffusion_term<Kernel, Dim>(P, M, si, grad_i, load_state<Dim>(f, j), load_vec<Dim>(f.density_gradient, j));
   });
   f.density_rate[i] += diffusion;
+}
+
+// SPS turbulence (physics/turbulence.hpp): particle i's stored T = tau / rho.
+template <int Dim, class Fields>
+SPATE_HD SpsStress<Dim> load_sps_stress(const Fields& f, std::uint32_t i) {
+  SpsStress<Dim> T;
+  T.diagonal = load_vec<Dim>(f.sps_stress, i);
+  SPATE_UNROLL for (int k = 0; k < Dim * (Dim - 1) / 2; ++k) T.shear[k] = f.sps_shear[k][i];
+  return T;
+}
+
+// SPS turbulence, pass 1: the SPS stress of fluid particle i (zero for walls) from its velocity
+// gradient, into `sps_stress`/`sps_shear` (which the halo refresh then sends to the ghosts) and
+// its eddy viscosity. A wall neighbour stands in for i's fluid (its mass), as in the fluid pass.
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void update_sps_stress(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
+  SpsStress<Dim> T;
+  float nu_t = 0.0f;
+  if (P.is_fluid(f.material[i])) {
+    const ParticleState<Dim> si = load_state<Dim>(f, i);
+    const float mass_i = P.materials.of(si.material).mass;
+    VelocityGradient<Dim> grad;
+    v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+      for (std::uint32_t j = jb; j < je; ++j) {
+        const ParticleState<Dim> sj = load_state<Dim>(f, j);
+        const float mass_j = P.is_fluid(sj.material) ? P.materials.of(sj.material).mass : mass_i;
+        accumulate_velocity_gradient<Kernel, Dim>(P, si, sj, mass_j / sj.rho, grad);
+      }
+    });
+    T = sps_stress<Dim>(P, grad, si.rho, nu_t);
+  }
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.sps_stress[k][i] = T.diagonal[k];
+  SPATE_UNROLL for (int k = 0; k < Dim * (Dim - 1) / 2; ++k) f.sps_shear[k][i] = T.shear[k];
+  f.eddy_viscosity[i] = nu_t;
+}
+
+// SPS turbulence, pass 2: the divergence of the SPS stress, added to fluid particle i's
+// acceleration from the fluid pass; a wall neighbour carries i's own stress (turbulence.hpp).
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void add_sps_acceleration(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
+  const std::uint8_t m = f.material[i];
+  if (!P.is_fluid(m)) return;
+  const Vec<Dim> xi = load_vec<Dim>(f.pos, i);
+  const SpsStress<Dim> Ti = load_sps_stress<Dim>(f, i);
+  const float mass_i = P.materials.of(m).mass;
+  Vec<Dim> acc = zero_vec<Dim>();
+  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+    for (std::uint32_t j = jb; j < je; ++j) {
+      const bool fluid = P.is_fluid(f.material[j]);
+      const SpsStress<Dim> Tj = fluid ? load_sps_stress<Dim>(f, j) : Ti;
+      const float mass_j = fluid ? P.materials.of(f.material[j]).mass : mass_i;
+      acc = acc + sps_pair_acceleration<Kernel, Dim>(P, xi, Ti, load_vec<Dim>(f.pos, j), Tj, mass_j);
+    }
+  });
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] += acc[k];
 }
 
 // The volume particle j conducts with (physics/heat_transfer.hpp).

@@ -55,6 +55,16 @@ class StepKernels {
     (void)p, (void)g, (void)P;
     throw std::logic_error(std::string(name()) + " backend: no renormalised density diffusion");
   }
+  // SPS turbulence (only when P.turbulence.on; physics/turbulence.hpp), after the fluid rates: the
+  // SPS stress of the owned particles, then (after a halo refresh) its divergence (owned fluid).
+  virtual void sps_stress(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) {
+    (void)p, (void)g, (void)P;
+    throw std::logic_error(std::string(name()) + " backend: no SPS turbulence");
+  }
+  virtual void sps_acceleration(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) {
+    (void)p, (void)g, (void)P;
+    throw std::logic_error(std::string(name()) + " backend: no SPS turbulence");
+  }
   // Particle shifting (only called when P.shifting.enabled): the displacement of the owned fluid
   // particles into `shift`, after the fluid rates and before correct(), which applies it.
   virtual void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt) {

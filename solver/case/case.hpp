@@ -219,6 +219,11 @@ struct Case {
   int relax_steps = 0;
   double relax_perturbation = 0.2;
   double relax_rate = 0.1;
+  // SPS turbulence (Dalrymple & Rogers 2006; physics/turbulence.hpp), key `turbulence`: `model: sps`
+  // with the Smagorinsky constant C_s and the isotropic coefficient C_I.
+  bool sps = false;
+  double smagorinsky = 0.12;
+  double sps_isotropic = 0.0066;
   // Particle shifting (delta-plus-SPH; physics/shifting.hpp), key `shifting`.
   bool shifting = false;
   double shifting_coefficient = 1.0;

@@ -1240,6 +1240,15 @@ Case read(Section& root, const std::string& file) {
     r.finish();
   }
   {
+    auto t = root.optional_child("turbulence");
+    c.sps = t.choice<bool>("model", false, {{"none", false}, {"sps", true}});
+    c.smagorinsky = t.number("smagorinsky", 0.12);
+    if (!(c.smagorinsky > 0 && c.smagorinsky <= 1)) t.fail(t.raw("smagorinsky"), "smagorinsky", "must be in (0, 1]");
+    c.sps_isotropic = t.number("isotropic", 0.0066);
+    if (!(c.sps_isotropic >= 0 && c.sps_isotropic <= 1)) t.fail(t.raw("isotropic"), "isotropic", "must be in [0, 1]");
+    t.finish();
+  }
+  {
     auto s = root.optional_child("shifting");
     c.shifting = s.boolean("enabled", false);
     c.shifting_coefficient = s.number("coefficient", 1.0);
@@ -1804,6 +1813,10 @@ PhysicsParams physics_params(const Case& c) {
   P.pressure_difference = c.pressure_difference ? 1.0f : 0.0f;
   P.riemann_limiter = static_cast<float>(c.riemann_limiter);
   P.density_mode = c.density_mode;
+  // SPS turbulence: the filter width is the particle spacing (turbulence.hpp).
+  P.turbulence.on = c.sps;
+  P.turbulence.smagorinsky2 = static_cast<float>(c.smagorinsky * c.dp * c.smagorinsky * c.dp);
+  P.turbulence.isotropic = static_cast<float>(2.0 / 3.0 * c.sps_isotropic * c.dp * c.dp);
   P.shifting.enabled = c.shifting;
   P.shifting.coefficient = static_cast<float>(c.shifting_coefficient);
   P.shifting.mach = static_cast<float>(c.shifting_mach);

@@ -44,10 +44,12 @@ enum FieldFlag : std::uint16_t {
                          // a feature's field that every other run must not pay for
   kThermal = 1 << 7,     // optional too, in its own group: only in the stores of runs with heat
                          // transfer (physics/heat_transfer.hpp), which do not pay for kOptional's
+  kTurbulence = 1 << 8,  // optional, its own group: only in the stores of runs with SPS turbulence
+                         // (physics/turbulence.hpp)
 };
 // The groups of optional fields (OptionalFields): a field in a group is in the stores of the runs
 // that enable that group and no others.
-constexpr std::uint16_t kOptionalGroups = kOptional | kThermal;
+constexpr std::uint16_t kOptionalGroups = kOptional | kThermal | kTurbulence;
 
 struct FieldSpec {
   std::string_view member;  // C++ member of ParticleStore / DeviceFields
@@ -86,6 +88,9 @@ constexpr FieldType field_type_of() {
 // each particle conducts with (its own, or the mirrored material's behind a tank face; its
 // neighbours read it, so it is sent to ghosts; saved with snapshots and checkpoints, so that
 // `spate post` evaluates a heat-flux probe as the run did).
+// `sps_stress`, `sps_shear`: the SPS stress over density T = tau / rho of `turbulence: {model: sps}`
+// (physics/turbulence.hpp), diagonal (xx, yy, zz) and shear (xy, xz, yz; in 2D xy alone, the second
+// component unused), sent to ghosts; `eddy_viscosity` nu_t [m^2/s], exported.
 // `temperature_gradient`: per-step scratch of the heat pass when particles are shifted (the corrector
 // carries the temperature to the shifted position, T += grad T . dr).
 // Order matters only for readability and the neighbour record layout (kNeighbour fields in this
@@ -116,7 +121,12 @@ constexpr FieldType field_type_of() {
   F(temperature_rate_prev, float, Scalar, History, kMigrated | kThermal, "", "temperature_rate_prev")              \
   F(conductivity, float, Scalar, Derived, kGhost | kRefreshed | kExported | kThermal, "conductivity", "conductivity")          \
   F(temperature_gradient, float, Vector, Derived, kThermal, "", "temperature_gradient_x", "temperature_gradient_y",     \
-    "temperature_gradient_z")
+    "temperature_gradient_z")                                                                                         \
+  F(sps_stress, float, Vector, Derived, kGhost | kRefreshed | kTurbulence, "", "sps_stress_xx", "sps_stress_yy",      \
+    "sps_stress_zz")                                                                                                  \
+  F(sps_shear, float, Vector, Derived, kGhost | kRefreshed | kTurbulence, "", "sps_stress_xy", "sps_stress_xz",       \
+    "sps_stress_yz")                                                                                                  \
+  F(eddy_viscosity, float, Scalar, Derived, kExported | kTurbulence, "eddy_viscosity", "eddy_viscosity")
 // clang-format on
 
 #define SPATE_FIELD_SPEC(member, ctype, shape, role, flags, exported, ...) \

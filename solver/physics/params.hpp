@@ -42,6 +42,13 @@ struct ShiftingParams {
   float tensile = 0.2f;      // R of the tensile-instability term (Sun et al. 2017: 0.2; relaxation: 0)
 };
 
+// SPS turbulence (turbulence.hpp; case key `turbulence`). Off: no SPS fields, no SPS passes.
+struct TurbulenceParams {
+  bool on = false;
+  float smagorinsky2 = 0.0f;  // (C_s Delta)^2 [m^2], Delta = dp
+  float isotropic = 0.0f;     // (2/3) C_I Delta^2 [m^2]
+};
+
 struct PhysicsParams {
   int dim = 3;
   KernelType kernel = KernelType::WendlandC2;
@@ -71,6 +78,7 @@ struct PhysicsParams {
   bool tension = true;
   DensityMode density_mode = DensityMode::Continuity;
   ShiftingParams shifting;
+  TurbulenceParams turbulence;
   // Only the first `dim` components are used; the last used axis is vertical (y in 2D, z in 3D).
   float gravity[3] = {0.0f, 0.0f, -9.81f};
   float body_force[3] = {0.0f, 0.0f, 0.0f};  // extra acceleration on fluid (Poiseuille driving)
@@ -176,9 +184,11 @@ inline bool needs_optional_fields(const PhysicsParams& P) {
 }
 
 // The optional field groups a run carries (OptionalFields, particle_store.hpp, as a mask of
-// kOptionalGroups): kOptional as above, kThermal (the temperature and its rates) with heat transfer.
+// kOptionalGroups): kOptional as above, kThermal (the temperature and its rates) with heat transfer,
+// kTurbulence (the SPS stress, turbulence.hpp) with SPS turbulence.
 inline std::uint16_t optional_field_groups(const PhysicsParams& P) {
-  return static_cast<std::uint16_t>((needs_optional_fields(P) ? kOptional : 0) | (P.heat.on ? kThermal : 0));
+  return static_cast<std::uint16_t>((needs_optional_fields(P) ? kOptional : 0) | (P.heat.on ? kThermal : 0) |
+                                    (P.turbulence.on ? kTurbulence : 0));
 }
 
 }  // namespace spate

@@ -352,7 +352,10 @@ void for_owned_cells(const CellGrid& grid, const Box* region, Visit&& visit) {
 // and laminar viscosity, and the interface and Riemann options' terms when on): minus m_f times
 // the acceleration that w gives f in the fluid's own pair terms, so that the wall takes exactly
 // what the fluid loses (its momentum is conserved pair by pair). The moving-wall and Riemann forms
-// of the terms give the plain ones' values when walls are at rest and the options off.
+// of the terms give the plain ones' values when walls are at rest and the options off; Gamma7 =
+// true whatever the fluid's exponent, as the acceleration does not depend on it (only the density
+// diffusion's rate does). With SPS turbulence the wall also takes the SPS stress's pair term
+// (turbulence.hpp: the wall carries f's stress), from the stress of the last rates.
 template <class Kernel, int Dim, bool Multiphase>
 Vec<Dim> wall_pair_reaction(const PhysicsParams& P, const ParticleStore& p, std::uint32_t f, std::uint32_t w) {
   const ParticleState<Dim> sf = load_state<Dim>(p, f);
@@ -365,6 +368,11 @@ Vec<Dim> wall_pair_reaction(const PhysicsParams& P, const ParticleStore& p, std:
     r = multiphase_pair_terms<Kernel, Dim, true, true, true>(P, M, sf, sw, particle_neighbour_fluid(P, p, w), particle_viscosity(P, p, f));
   else
     r = fluid_pair_terms<Kernel, Dim, true, true, true>(P, M, sf, sw);
+  // (A store read back from a snapshot by spate post has no stress: the SPS term is left out there.)
+  if (P.turbulence.on && p.sps_stress[0].size() == p.size()) {
+    const SpsStress<Dim> T = load_sps_stress<Dim>(p, f);
+    r.acc += sps_pair_acceleration<Kernel, Dim>(P, sf.x, T, sw.x, T, M.mass);
+  }
   return (-M.mass) * r.acc;
 }
 

@@ -98,6 +98,18 @@ void SlabWorker::compute_rates() {
   const double wall = since(t0);
   // The fluid phase excludes the wait for the halo (on a GPU: host time around the launches).
   double fluid = fluid_rates_overlapping_refresh();
+  // SPS turbulence (physics/turbulence.hpp): the stress needs the walls' no-slip velocities, which
+  // the ghosts have only from the refresh above, so it is computed after it and sent to the ghosts
+  // by a refresh of its own before its divergence is added.
+  if (params_.turbulence.on) {
+    const auto t = Clock::now();
+    kernels_->sps_stress(particles_, grid_, params_);
+    fluid += since(t);
+    refresh_halo();
+    const auto t2 = Clock::now();
+    kernels_->sps_acceleration(particles_, grid_, params_);
+    fluid += since(t2);
+  }
   const auto t1 = Clock::now();
   if (tension) kernels_->surface_tension(particles_, grid_, params_);
   if (antuono) kernels_->antuono_diffusion(particles_, grid_, params_);

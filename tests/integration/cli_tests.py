@@ -176,6 +176,39 @@ def info_reports_meshes(env):
 
 
 @test
+def run_writes_solid_geometry(env):
+    """geometry/solid_<material>.vtp for every shaped solid and moving box; the start positions and
+    ids of a moving solid's particles in solid_<material>_start.vtp (what the in-situ pipeline fits
+    the body's pose to)."""
+    solids = ("solids=[{name: breakwater, mesh: meshes/breakwater.stl},"
+              " {name: pile, cylinder: {centre: [1.25, 0.305, 0.25], radius: 0.04, length: 0.5, axis: z},"
+              "  motion: {period: 0.12, rotation: 20, axis: [0, 1, 0], centre: [1.25, 0.305, 0]}},"
+              " {name: crate, min: [0.5, 0.1, 0], max: [0.6, 0.2, 0.1], motion: {period: 1, translation: [0.01, 0, 0]}}]")
+    p = env.run("run", os.path.join(env.shipped, "dam_break_breakwater_3d.yaml"), "--set", solids, "--set", "dp=0.04",
+                "--set", "probes=[]", "--set", "output.interval=0", "--steps", "1", "--out", "run", "--quiet")
+    if p.returncode == 2 and "reads no meshes" in p.stderr:
+        print("  (built without mesh support: skipped)")
+        return
+    check(p.returncode == 0, f"exit {p.returncode}")
+    geometry = env.path("run", "geometry")
+    # Materials: water 0, tank 1, breakwater 2, pile 3, crate 4.
+    check(sorted(os.listdir(geometry)) == ["solid_2.vtp", "solid_3.vtp", "solid_3_start.vtp", "solid_4.vtp", "solid_4_start.vtp"],
+          f"geometry: {sorted(os.listdir(geometry))}")
+    with open(os.path.join(geometry, "solid_4.vtp")) as f:
+        check('NumberOfPoints="8" NumberOfPolys="6"' in f.read(), "the crate's box surface")
+    with open(os.path.join(geometry, "solid_3_start.vtp")) as f:
+        text = f.read()
+    n = int(re.search(r'NumberOfPoints="(\d+)"', text).group(1))
+    ids = [int(v) for v in re.search(r'Name="id" format="ascii">\n(.*?)</DataArray>', text, re.S).group(1).split()]
+    points = re.search(r'NumberOfComponents="3" format="ascii">\n(.*?)</DataArray>', text, re.S).group(1).split()
+    xyz = [tuple(float(v) for v in points[k:k + 3]) for k in range(0, len(points), 3)]
+    check(n > 20 and len(ids) == n == len(xyz) and len(set(ids)) == n, f"{n} points, {len(ids)} ids")
+    # The pile's particles at the start: inside its cylinder (a lattice site under its surface).
+    worst = max(((x - 1.25) ** 2 + (y - 0.305) ** 2) ** 0.5 for x, y, z in xyz)
+    check(worst <= 0.04 + 1e-6 and min(z for _, _, z in xyz) >= 0, f"a start position outside the pile: {worst}")
+
+
+@test
 def bad_yaml_not_a_map(env):
     path = env.write_case("list.yaml", "- 1\n- 2\n")
     expect_bad_input(env, [path], path, "map")
@@ -348,6 +381,15 @@ def info_json(env):
           f"fluid material {m[0]}")
     check(abs(m[0]["particle_mass"] / (1000 * 0.005 ** 2) - 1) < 1e-6 and abs(m[0]["viscosity"] / 0.001 - 1) < 1e-6, f"fluid material {m[0]}")
     check(not os.listdir(env.work), "info wrote files")
+    # SPS turbulence: off by default; on, its constants, and its fields' bytes (the stress's diagonal
+    # and shear, 2 + 2 floats in 2D, and the eddy viscosity) only in its runs.
+    check(j["turbulence"] == {"model": "none"}, f"turbulence {j.get('turbulence')}")
+    p = env.run("info", env.tiny, "--json", "--set", "turbulence.model=sps")
+    s = json.loads(p.stdout)
+    check(s["turbulence"] == {"model": "sps", "smagorinsky": 0.12, "isotropic": 0.0066}, f"turbulence {s['turbulence']}")
+    check(s["bytes_per_particle"] - j["bytes_per_particle"] == 20, f"SPS bytes {s['bytes_per_particle']} vs {j['bytes_per_particle']}")
+    p = env.run("info", env.tiny, "--set", "turbulence.model=les")
+    check(p.returncode == 2 and "turbulence.model" in p.stderr, f"bad model: exit {p.returncode}, {p.stderr}")
 
     p = env.run("info", env.tiny, "--json", "--set", "fluid.sound_speed=30", "--set", "time.dt=1e-4",
                 "--set", "tank.open_top=false")

@@ -143,5 +143,41 @@ TEST(Poiseuille, SteadyCentrelineWithinThreePercent) { expect_poiseuille({}, "po
 // is (y+ ~ 1e-3): the same profile within the same 3%.
 TEST(Poiseuille, TheLogLawWallIsNoSlipInLaminarFlow) { expect_poiseuille({"tank.wall_shear=log_law"}, "poiseuille_log_law"); }
 
+// SPS turbulence (physics/turbulence.hpp) in the laminar channel: the eddy viscosity (C_s dp)^2 |S|
+// is 4e-6 of nu here, and the profile is the laminar one within the same 3%.
+TEST(Poiseuille, SpsTurbulenceLeavesTheLaminarChannelUnchanged) {
+  expect_poiseuille({"turbulence.model=sps"}, "poiseuille_sps");
+}
+
+// The Smagorinsky model's own channel: at Re = u L / nu = 100 with C_s = 1 (mixing length l = dp),
+// the total shear stress (nu + l^2 |s|) s = F (L/2 - y), s = du/dy, has the exact solution
+// s = (sqrt(nu^2 + 4 l^2 F (L/2 - y)) - nu) / (2 l^2) below the centreline: the eddy viscosity
+// equals nu at the walls and lowers the centreline velocity by 30% from the laminar F L^2 / (8 nu).
+// The run reproduces that profile (centreline and quarter height within 4%), which checks the
+// velocity gradient next to no-slip walls, the stress and its divergence together.
+TEST(Poiseuille, SmagorinskyChannelFollowsItsExactProfile) {
+  const Case c = load_case(test::case_path("poiseuille_2d.yaml"),
+                           {"turbulence={model: sps, smagorinsky: 1}", "fluid.sound_speed=1", "fluid.body_force=[0.8, 0]",
+                            "time.end=0.35", "output.interval=0"});
+  const auto out = test::scratch("poiseuille_smagorinsky");
+  const RunResult r = test::run_case(c, out);
+  ASSERT_EQ(r.exit_code, 0) << r.message;
+  const double nu = c.fluids[0].viscosity / c.fluids[0].density, F = c.body_force[0], L = c.tank_size[1];
+  const double l2 = c.dp * c.dp;  // (C_s dp)^2 with C_s = 1
+  // u(y) = integral of s from the wall (trapezoid rule, 2000 intervals).
+  const auto exact = [&](double y) {
+    const auto s = [&](double yy) { return (std::sqrt(nu * nu + 4 * l2 * F * (L / 2 - yy)) - nu) / (2 * l2); };
+    double u = 0;
+    const int n = 2000;
+    for (int k = 0; k < n; ++k) u += 0.5 * (s(y * k / n) + s(y * (k + 1) / n)) * y / n;
+    return u;
+  };
+  const double u_centre = exact(L / 2), u_quarter = exact(L / 4);
+  EXPECT_NEAR(u_centre / (F * L * L / (8 * nu)), 0.697, 0.002);  // the model's 30% below laminar
+  const double settled = 0.25;
+  EXPECT_NEAR(test::mean_after(out / "probes" / "centreline.csv", 2, settled), u_centre, 0.04 * u_centre);
+  EXPECT_NEAR(test::mean_after(out / "probes" / "quarter.csv", 2, settled), u_quarter, 0.04 * u_quarter);
+}
+
 }  // namespace
 }  // namespace spate

@@ -105,6 +105,33 @@ class GpuOrderKernels final : public ResidentKernels {
       }
     });
   }
+  // SPS turbulence: the per-particle bodies the CUDA kernels run (visiting order), for the CPU's
+  // batched, lane-summed passes (sps_passes.cpp).
+  void sps_stress(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    per_owned_particle(P, [&]<class Kernel, int Dim>(const CellGridView& v, ParticleStore& p, std::uint32_t i, const int g[3]) {
+      update_sps_stress<Kernel, Dim>(P, v, p, i, g);
+    });
+  }
+  void sps_acceleration(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    per_owned_particle(P, [&]<class Kernel, int Dim>(const CellGridView& v, ParticleStore& p, std::uint32_t i, const int g[3]) {
+      add_sps_acceleration<Kernel, Dim>(P, v, p, i, g);
+    });
+  }
+
+ private:
+  template <class Body>
+  void per_owned_particle(const PhysicsParams& P, Body&& body) {
+    ParticleStore& p = device_store();
+    const CellGridView v = arrays().grid().view();
+    const Lattice& L = arrays().grid().lattice();
+    dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+      for (std::size_t i = 0; i < p.owned(); ++i) {
+        int g[3] = {0, 0, 0};
+        for (int a = 0; a < Dim; ++a) g[a] = L.cell_of(p.pos[a][i], a);
+        body.template operator()<Kernel, Dim>(v, p, static_cast<std::uint32_t>(i), g);
+      }
+    });
+  }
 };
 
 // Every checkpoint field of every particle, ordered by id, after `steps` fixed steps on `slabs`
@@ -117,7 +144,7 @@ std::vector<std::vector<char>> run(const Case& c, int slabs, int steps, const st
                                    const ParticleHook& hook = {}, std::vector<std::uint32_t>* removed = nullptr) {
   const Lattice L = make_lattice(c);
   const PhysicsParams P = physics_params(c);
-  const OptionalFields optional_fields(needs_optional_fields(P));  // as Simulation::run
+  const OptionalFields optional_fields(FieldGroups{optional_field_groups(P)});  // as Simulation::run
   const ParticleStore initial = generate_particles(c);
   InProcessHub hub(slabs);
   std::vector<ParticleStore> finals(slabs);
@@ -223,6 +250,8 @@ std::vector<CheckedCase> gpu_checked_cases() {
       {"two_fluids", load("two_layer_hydrostatic_2d.yaml", {"probes=[]"}), 100},
       // Surface tension: the colour-gradient and force passes (a bubble ten times lighter).
       {"surface_tension", load("bubble_rise_2d.yaml", {"probes=[]"}), 100},
+      // SPS turbulence: the stress and divergence passes (CPU: batched and lane-summed).
+      {"sps", load("dam_break_2d.yaml", {"turbulence.model=sps"}), 300},
   };
 }
 
@@ -339,6 +368,17 @@ TEST(ResidentTopology, SurfaceTensionIsSplitIndependentAndMatchesTheCpuBackend) 
   expect_same(three, run(c, 3, 12, [&] { return std::make_unique<ResidentKernels>(c.dim, true); }));
 }
 
+// SPS turbulence (the stress, refreshed to the ghosts, then its divergence): 1 and 3 slabs
+// bit-identical, the device's orchestration (host twin) the CPU backend's bits, and a different
+// answer from the laminar run.
+TEST(ResidentTopology, SpsTurbulenceIsSplitIndependentAndMatchesTheCpuBackend) {
+  const Case c = load_case(test::source_dir() + "/cases/dam_break_2d.yaml", {"tank.size=[0.16, 0.12]", "turbulence.model=sps"});
+  const auto three = run(c, 3, 12, nullptr);
+  expect_same(run(c, 1, 12, nullptr), three);
+  expect_same(three, run(c, 3, 12, [&] { return std::make_unique<ResidentKernels>(c.dim, true); }));
+  EXPECT_NE(three, run(load_case(test::source_dir() + "/cases/dam_break_2d.yaml", {"tank.size=[0.16, 0.12]"}), 3, 12, nullptr));
+}
+
 TEST(ResidentTopology, SummationDensityAndPeriodicXMatchTheCpuBackend) {
   const Case summation = load_case(test::source_dir() + "/cases/dam_break_2d.yaml",
                                    {"tank.size=[0.16, 0.12]", "density.mode=summation"});
@@ -388,7 +428,7 @@ TEST(ResidentTopology, DeviceHealthAndDomainChecksFindTheHostsFault) {
   const Case c = small_dam_break();
   const Lattice L = make_lattice(c);
   const PhysicsParams P = physics_params(c);
-  const OptionalFields optional_fields(needs_optional_fields(P));  // as Simulation::run
+  const OptionalFields optional_fields(FieldGroups{optional_field_groups(P)});  // as Simulation::run
   const ParticleStore initial = generate_particles(c);
   InProcessHub hub(1);
   auto t = hub.endpoint(0, L.periodic[0]);

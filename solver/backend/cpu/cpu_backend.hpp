@@ -36,6 +36,9 @@ void surface_tension(ParticleStore& p, const CellGrid& g, const PhysicsParams& P
 // then, after the fluid rates, the diffusion added to the owned fluid particles' density rate.
 void density_gradient(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 void antuono_diffusion(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+// SPS turbulence's passes, batched per cell (sps_passes.cpp).
+void sps_stress(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
+void sps_acceleration(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 // Particle-shifting displacement (physics/shifting.hpp) of the owned fluid particles for a step
 // dt, into `shift`; correct() then adds it to the positions (only when P.shifting.enabled).
 void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt);
@@ -105,6 +108,12 @@ class Kernels : public StepKernels {
   }
   void antuono_diffusion(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
     cpu::antuono_diffusion(store(), arrays_->grid(), P);
+  }
+  void sps_stress(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::sps_stress(store(), arrays_->grid(), P);
+  }
+  void sps_acceleration(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::sps_acceleration(store(), arrays_->grid(), P);
   }
   void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
     cpu::shifting(store(), arrays_->grid(), P, dt);

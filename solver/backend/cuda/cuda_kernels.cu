@@ -102,6 +102,18 @@ struct AntuonoDiffusionPass {
     add_antuono_diffusion<Kernel, Dim>(P, v, d, i, g);
   }
 };
+struct SpsStressPass {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
+    update_sps_stress<Kernel, Dim>(P, v, d, i, g);
+  }
+};
+struct SpsAccelerationPass {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
+    add_sps_acceleration<Kernel, Dim>(P, v, d, i, g);
+  }
+};
 struct WallTemperaturePass {
   template <class Kernel, int Dim>
   __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
@@ -197,6 +209,12 @@ class CudaKernels final : public StepKernels {
   }
   void antuono_diffusion(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
     neighbour_pass<AntuonoDiffusionPass>(P, ParticleRange{0, owned()});
+  }
+  void sps_stress(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    neighbour_pass<SpsStressPass>(P, ParticleRange{0, owned()});
+  }
+  void sps_acceleration(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    neighbour_pass<SpsAccelerationPass>(P, ParticleRange{0, owned()});
   }
   void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
     neighbour_pass<ShiftingPass>(P, ParticleRange{0, owned()}, dt);
