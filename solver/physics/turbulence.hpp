@@ -22,9 +22,8 @@
 // into the wall, as Adami's walls continue the pressure): a uniform stress then exerts no net force
 // on a particle next to a wall (zero-order consistency), and the wall takes the fluid's stress.
 //
-// Laminar flows: the term is the shear's own (Delta |S|)^2 scaled, so a resolved laminar flow
-// (|S| dp^2 << nu) is changed by (C_s dp)^2 |S| / nu: 1e-6 of the viscous stress in the shipped
-// Poiseuille channel. The eddy viscosity does not limit the time step: with |S| below U / dp,
+// Laminar flows: a resolved laminar flow (|S| dp^2 << nu) changes by (C_s dp)^2 |S| / nu, 4e-6 of
+// the viscous stress in the shipped Poiseuille channel. The eddy viscosity does not limit the time step: with |S| below U / dp,
 // 0.125 h^2 / nu_t exceeds 14 dp / U, far above the acoustic limit h / c0.
 #include "fluid_interactions.hpp"
 
