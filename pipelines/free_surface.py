@@ -9,7 +9,8 @@
 # the speed |v|. The tank floor, its outline and every solid (the column) are drawn too, from a
 # three-quarter view like the paper's Figure 4, with the simulated time in a corner; a solid of any
 # shape (a mesh, a cylinder) from the surface spate wrote for it (<run output>/geometry/), a static
-# box solid as the box its particles fill. A moving solid (prescribed or floating; its box too) is
+# box solid as the box its particles fill; a tank of any shape (tank: {mesh: ...}) from its surface
+# (geometry/tank.vtp), translucent. A moving solid (prescribed or floating; its box too) is
 # drawn where it is now: at every step the rigid motion that carries its particles from their start
 # (geometry/solid_<kind>_start.vtp) to where they are (least squares, Kabsch 1976) places its
 # surface, turned and shifted as the body is. In 2D the
@@ -243,17 +244,34 @@ def _build_scene(time):
         shown.SpecularPower = 40.0
         _colour(shown)
 
-        # Static geometry: the floor, the tank outline and the solids, from the wall particles.
-        floor = Plane(registrationName="floor")
-        floor.Origin = [wb[0], wb[2], wb[4]]
-        floor.Point1 = [wb[1], wb[2], wb[4]]
-        floor.Point2 = [wb[0], wb[3], wb[4]]
-        floor_shown = Show(floor, view)
-        floor_shown.AmbientColor = floor_shown.DiffuseColor = [0.55, 0.55, 0.5]
-        outline = Outline(registrationName="tank", Input=walls)
-        outline_shown = Show(outline, view)
-        outline_shown.AmbientColor = outline_shown.DiffuseColor = [0.15, 0.15, 0.15]
-        outline_shown.LineWidth = 2.0
+        # Static geometry: the floor, the tank outline and the solids, from the wall particles; a
+        # tank of any shape (a vessel from a mesh) from its surface, translucent, where it is now.
+        tank_file = os.path.join(run_dir, "geometry", "tank.vtp")
+        if os.path.exists(tank_file):
+            vessel = XMLPolyDataReader(registrationName="tank_surface", FileName=[tank_file])
+            tank_start = os.path.join(run_dir, "geometry", "tank_start.vtp")
+            if os.path.exists(tank_start):
+                tank_walls = Threshold(registrationName="tank_walls", Input=walls)
+                tank_walls.Scalars = ["POINTS", "kind"]
+                tank_walls.LowerThreshold = tank_walls.UpperThreshold = fluids
+                tank_walls.ThresholdMethod = "Between"
+                entry = _posed_solid(fluids, tank_walls, vessel, tank_start)
+                _place(entry, time)
+                vessel = entry[1]
+            vessel_shown = Show(vessel, view)
+            vessel_shown.AmbientColor = vessel_shown.DiffuseColor = [0.75, 0.72, 0.66]
+            vessel_shown.Opacity = 0.3
+        else:
+            floor = Plane(registrationName="floor")
+            floor.Origin = [wb[0], wb[2], wb[4]]
+            floor.Point1 = [wb[1], wb[2], wb[4]]
+            floor.Point2 = [wb[0], wb[3], wb[4]]
+            floor_shown = Show(floor, view)
+            floor_shown.AmbientColor = floor_shown.DiffuseColor = [0.55, 0.55, 0.5]
+            outline = Outline(registrationName="tank", Input=walls)
+            outline_shown = Show(outline, view)
+            outline_shown.AmbientColor = outline_shown.DiffuseColor = [0.15, 0.15, 0.15]
+            outline_shown.LineWidth = 2.0
         kinds = walls.GetDataInformation().GetPointDataInformation().GetArrayInformation("kind").GetComponentRange(0)
         for kind in range(fluids + 1, int(kinds[1]) + 1):
             solid = Threshold(registrationName="solid_%d" % kind, Input=walls)

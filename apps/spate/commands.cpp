@@ -383,9 +383,11 @@ int run_command(const RunArgs& a) {
   }
 }
 
-// Every shaped solid and fluid block of the case, named as its key ("solids[0] 'column'").
+// Every shape of the case (a shaped tank, solids, fluid blocks), named as its key ("solids[0]
+// 'column'").
 template <class Visit>
 void for_each_shape(const Case& c, Visit&& visit) {
+  if (c.tank_shape) visit(std::string("tank"), *c.tank_shape);
   for (std::size_t k = 0; k < c.solids.size(); ++k)
     if (c.solids[k].shape) visit(fmt::format("solids[{}] '{}'", k, c.solids[k].name), *c.solids[k].shape);
   for (std::size_t k = 0; k < c.fluid_blocks.size(); ++k)

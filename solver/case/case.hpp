@@ -254,6 +254,9 @@ struct Case {
   double density_min_ratio = 0.5, density_max_ratio = 2.0;  // sanity limits on rho/rho0
 
   // Tank: interior [origin, origin + size], wall_layers layers of wall particles outside it.
+  // A shaped tank (tank.mesh, cylinder, ...): the interior is inside the shape, the walls the sites
+  // within wall_layers dp outside its surface; origin and size its bounding box in whole dp.
+  ShapePtr tank_shape{};
   Vec3d tank_origin{0, 0, 0};
   Vec3d tank_size{1, 1, 1};
   int wall_layers = 3;

@@ -967,6 +967,7 @@ int face_index(const std::string& name, int dim) {
 }  // namespace
 
 std::optional<std::string> tank_wall_missing(const Case& c, int face) {
+  if (c.tank_shape) return "a shaped tank has no box faces (x-, x+, ...)";
   if (face < 0 || face >= 2 * c.dim) return "is not a face of this " + std::to_string(c.dim) + "D tank (x-, x+, y-, ...)";
   if (c.periodic[face / 2]) return "the tank has no wall here (the axis is periodic)";
   if (face / 2 == c.dim - 1 && face % 2 == 1 && c.open_top) return "the tank has no wall here (its top is open)";
@@ -1006,7 +1007,16 @@ void read_wall_sensor(Section& p, const Case& c, ProbeSpec& probe) {
     found.emplace_back(n, at);
   };
   const Vec3d tank_hi = particle_tank_max(c);
-  for (int a = 0; a < d; ++a) {
+  if (c.tank_shape) {  // on the container's surface: the normal into the fluid is minus the shape's
+    double n[3] = {0, 0, 0};
+    const double dist = c.tank_shape->distance(probe.position.data(), n);
+    if (std::fabs(dist) <= tol) {
+      Vec3d normal{0, 0, 0}, at = probe.position;
+      for (int k = 0; k < d; ++k) normal[k] = -n[k], at[k] -= dist * n[k];
+      found.emplace_back(normal, at);
+    }
+  }
+  for (int a = 0; a < d && !c.tank_shape; ++a) {
     if (c.periodic[a]) continue;
     consider(c.tank_origin, tank_hi, a, c.tank_origin[a], 1.0);
     if (!(a == d - 1 && c.open_top)) consider(c.tank_origin, tank_hi, a, tank_hi[a], -1.0);
@@ -1071,6 +1081,8 @@ bool on_moving_body(const Vec3d& x, const Case& c) {
     if (s.shape ? std::fabs(s.shape->distance(x.data(), n)) <= 1e-6 : on_box(s.box.min, s.box.max)) return true;
   }
   if (c.tank_motion < 0) return false;
+  double n[3];
+  if (c.tank_shape) return std::fabs(c.tank_shape->distance(x.data(), n)) <= 1e-6;
   return on_box(c.tank_origin, particle_tank_max(c));
 }
 
@@ -1281,13 +1293,28 @@ Case read(Section& root, const std::string& file) {
 
   auto tank = root.child("tank");
   if (!tank) root.fail(root.node(), "tank", "is required");
-  c.tank_origin = tank->vector("origin", d, Vec3d{0, 0, 0});
-  c.tank_size = tank->vector("size", d);
+  // A container of any shape (a mesh, a cylinder, ...): its inside is the tank's interior, its
+  // bounding box the lattice's box (from the box's lower corner, whole dp), its surface closed.
+  c.tank_shape = read_shape(*tank, c);
+  if (c.tank_shape) {
+    for (const char* k : {"origin", "size"})
+      if (tank->has(k)) tank->fail(tank->raw(k), k, "a shaped tank's extent is its shape's: no '" + std::string(k) + "' beside it");
+    for (int k = 0; k < d; ++k) {
+      c.tank_origin[k] = c.tank_shape->lo[k];
+      // A mesh stored in float32 (STL) is rounded to 1e-7 of its size: a face on a whole dp stays there.
+      c.tank_size[k] = std::max(1.0, std::ceil((c.tank_shape->hi[k] - c.tank_shape->lo[k]) / c.dp - 1e-4)) * c.dp;
+    }
+  } else {
+    c.tank_origin = tank->vector("origin", d, Vec3d{0, 0, 0});
+    c.tank_size = tank->vector("size", d);
+  }
   for (int k = 0; k < d; ++k)
     if (!(c.tank_size[k] > 0)) tank->fail(tank->raw("size"), "size", "every extent must be > 0");
   c.wall_layers = tank->integer("wall_layers", 3);
   if (c.wall_layers < 1 || c.wall_layers > 8) tank->fail(tank->raw("wall_layers"), "wall_layers", "must be between 1 and 8");
-  c.open_top = tank->boolean("open_top", true);
+  c.open_top = tank->boolean("open_top", !c.tank_shape);
+  if (c.tank_shape && c.open_top)
+    tank->fail(tank->raw("open_top"), "open_top", "a shaped tank is a closed surface (make it taller than the water for an open vessel)");
   c.headroom = tank->number("headroom", 0.5);
   if (c.headroom < 0 || c.headroom > 10) tank->fail(tank->raw("headroom"), "headroom", "must be >= 0 and <= 10 (a fraction of the tank height)");
   c.max_removed_fraction = tank->number("max_removed_fraction", 0.05);
@@ -1311,6 +1338,11 @@ Case read(Section& root, const std::string& file) {
   for (int k = 0; k < d; ++k)
     if (c.periodic[k] && c.free_slip[k]) tank->fail(tank->raw("free_slip"), "free_slip", "an axis cannot be periodic and have walls");
   c.wall_shear = tank->choice<WallShear>("wall_shear", WallShear::Laminar, {{"laminar", WallShear::Laminar}, {"log_law", WallShear::LogLaw}});
+  if (c.tank_shape) {  // these are a box tank's, face by face
+    for (const char* k : {"periodic", "free_slip"})
+      if (tank->has(k)) tank->fail(tank->raw(k), k, "is for a box tank's faces, not a shaped tank");
+    if (c.wall_shear == WallShear::LogLaw) tank->fail(tank->raw("wall_shear"), "wall_shear", "the log law is for a box tank's faces, not a shaped tank");
+  }
   if (auto t = thermal_section(*tank, c)) {
     c.tank_thermal = read_thermal(*t, c, /*wall=*/true, /*solid=*/false);
     read_tank_faces(*t, c);
@@ -1398,8 +1430,9 @@ Case read(Section& root, const std::string& file) {
   for (auto& f : root.list("fluid_blocks")) {
     const FluidBlock b = read_fluid_block(f, c);
     f.finish();
-    if (b.shape) check_shape_in_tank(f, b.shape, c, tank_hi, "the fluid block");
-    if (!b.shape && !inside(b, c.tank_origin, tank_hi, d, tol))
+    // A shaped tank cuts every block to its inside (a box filling a vessel to a level).
+    if (b.shape && !c.tank_shape) check_shape_in_tank(f, b.shape, c, tank_hi, "the fluid block");
+    if (!b.shape && !c.tank_shape && !inside(b, c.tank_origin, tank_hi, d, tol))
       f.fail(f.node(), b.radius > 0 ? "radius" : "max", "fluid block lies (partly) outside the tank");
     c.fluid_blocks.push_back(b);
   }
@@ -1683,6 +1716,7 @@ double highest_fluid_column(const Case& c) {
   const int v = c.dim - 1;
   double h = c.wet_bed;
   for (auto& b : c.fluid_blocks) h = std::max(h, b.max[v] - c.tank_origin[v]);
+  if (c.tank_shape) h = std::min(h, c.tank_shape->hi[v] - c.tank_origin[v]);  // blocks cut to the vessel
   return h;
 }
 

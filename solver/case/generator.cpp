@@ -71,6 +71,7 @@ class ColumnDistance {
 // One per shaped solid and fluid block, for the site loop.
 struct SiteMemo {
   std::vector<ColumnDistance> solids, blocks;
+  ColumnDistance tank;
   explicit SiteMemo(const Case& c) : solids(c.solids.size()), blocks(c.fluid_blocks.size()) {}
 };
 
@@ -119,14 +120,26 @@ bool in_shaped_solid(const Case& c, const SolidSpec& solid, const double x[3], b
 // an empty site.
 bool classify(const Case& c, const MaterialTable& M, const Sites& s, const int idx[3], std::uint8_t& kind, SiteMemo& memo) {
   const int d = c.dim;
-  bool interior = true;
-  for (int a = 0; a < d; ++a) interior = interior && idx[a] >= 0 && idx[a] < s.n[a];
-  if (!interior) {
-    kind = M.tank();
-    return true;
-  }
   double x[3] = {0, 0, 0};
   for (int a = 0; a < d; ++a) x[a] = s.coord(a, idx[a]);
+  if (c.tank_shape) {
+    // A shaped tank: the sites outside its surface, within wall_layers dp of it, are its walls (as
+    // a box tank's layers at dp/2, 3dp/2, ...), a site on the surface too (kOnSurface, as for a
+    // solid); farther out nothing.
+    const double dist = memo.tank.at(*c.tank_shape, x, d, (c.wall_layers + 1) * c.dp);
+    if (dist > c.wall_layers * c.dp) return false;
+    if (dist > -kOnSurface * c.dp) {
+      kind = M.tank();
+      return true;
+    }
+  } else {
+    bool interior = true;
+    for (int a = 0; a < d; ++a) interior = interior && idx[a] >= 0 && idx[a] < s.n[a];
+    if (!interior) {
+      kind = M.tank();
+      return true;
+    }
+  }
   for (std::size_t k = 0; k < c.solids.size(); ++k) {
     const SolidSpec& solid = c.solids[k];
     if (solid.shape) {
@@ -250,6 +263,7 @@ std::string geometry_signature(const Case& c) {
   s += "tank.origin: " + vec(c.tank_origin) + "\ntank.size: " + vec(c.tank_size) + "\n";
   s += fmt::format("tank.wall_layers: {}\ntank.open_top: {}\n", c.wall_layers, c.open_top);
   s += fmt::format("tank.periodic: [{}, {}, {}]\n", c.periodic[0], c.periodic[1], c.periodic[2]);
+  if (c.tank_shape) s += "tank.shape: " + c.tank_shape->signature + "\n";
   for (std::size_t k = 0; k < c.fluid_blocks.size(); ++k) {
     s += fmt::format("fluid_blocks[{}]: {} to {}\n", k, vec(c.fluid_blocks[k].min), vec(c.fluid_blocks[k].max));
     if (c.fluid_blocks[k].shape) s += fmt::format("fluid_blocks[{}].shape: {}\n", k, c.fluid_blocks[k].shape->signature);
@@ -373,6 +387,7 @@ void count_first_match(const std::vector<const IndexBox*>& rules, const IndexBox
 }  // namespace
 
 bool has_shapes(const Case& c) {
+  if (c.tank_shape) return true;
   for (const SolidSpec& solid : c.solids)
     if (solid.shape) return true;
   for (const FluidBlock& b : c.fluid_blocks)
@@ -509,6 +524,8 @@ double rest_surface(const Case& c, const float* x) {
     for (int a = 0; a < v; ++a) over = over && x[a] >= b.min[a] && x[a] <= b.max[a];
     if (over) top = std::max(top, b.max[v]);
   }
+  // A shaped tank cuts a block that reaches beyond it: the water stands at most to its top.
+  if (c.tank_shape) top = std::min(top, c.tank_shape->hi[v]);
   return top;
 }
 

@@ -31,7 +31,7 @@ double face_depth(const Box& b, const double x[3], int face);
 // Heat transfer: the starting temperature of a particle of material `kind` at x: its fluid block's
 // (the first of its fluid that holds x), the tank's or its solid's, else heat.initial_temperature.
 double initial_temperature(const Case& c, const MaterialTable& M, std::uint8_t kind, const double x[3]);
-// Whether a solid or fluid block has a shape other than a box (shape.hpp).
+// Whether the tank, a solid or a fluid block has a shape other than a box (shape.hpp).
 bool has_shapes(const Case& c);
 // Counts without allocating: in closed form for boxes (spate info answers at once at any dp), by
 // visiting every site when a solid or fluid block has a shape.

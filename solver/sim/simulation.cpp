@@ -59,22 +59,16 @@ bool balancing_pass_due(std::int64_t taken, std::int64_t step, std::int64_t ever
 
 std::string step_name(std::int64_t step) { return fmt::format("step_{:08d}", step); }
 
-// geometry/solid_<material>.vtp and, for moving solids, solid_<material>_start.vtp (Simulation::run
+// geometry/solid_<material>.vtp and, for moving solids, solid_<material>_start.vtp; a shaped tank's
+// geometry/tank.vtp (and tank_start.vtp when it moves) (Simulation::run
 // says what for). `initial`: the particles at t = 0, or null on a restart, when they are generated
 // again if some solid moves (its particles' start is what the pipeline fits to).
 void write_solid_geometry(const Case& c, const std::filesystem::path& out, const ParticleStore* initial) {
   const MaterialTable M = physics_params(c).materials;
   std::optional<ParticleStore> generated;
-  for (std::size_t k = 0; k < c.solids.size(); ++k) {
-    const SolidSpec& solid = c.solids[k];
-    const bool moves = solid.motion >= 0;
-    if (!solid.shape && !(moves && c.dim == 3)) continue;
-    const int material = M.solid(static_cast<int>(k));
-    const std::filesystem::path folder = out / "geometry";
-    create_output_folder(folder);
-    write_file_atomically(folder / fmt::format("solid_{}.vtp", material),
-                          solid.shape ? surface_vtp(*solid.shape) : box_surface_vtp(solid.box.min, solid.box.max));
-    if (!moves) continue;
+  const std::filesystem::path folder = out / "geometry";
+  // The start positions and ids of a moving body's particles, <name>_start.vtp.
+  auto write_start = [&](const std::string& name, int material) {
     if (!initial) initial = &generated.emplace(generate_particles(c));
     std::vector<std::array<double, 3>> points;
     std::vector<std::uint32_t> ids;
@@ -83,7 +77,22 @@ void write_solid_geometry(const Case& c, const std::filesystem::path& out, const
       points.push_back({initial->pos[0][i], initial->pos[1][i], c.dim == 3 ? initial->pos[2][i] : 0.0f});
       ids.push_back(initial->id[i]);
     }
-    write_file_atomically(folder / fmt::format("solid_{}_start.vtp", material), points_vtp(points, ids));
+    write_file_atomically(folder / (name + "_start.vtp"), points_vtp(points, ids));
+  };
+  if (c.tank_shape) {  // a shaped tank's surface: the pipeline draws the vessel (where it is, if it moves)
+    create_output_folder(folder);
+    write_file_atomically(folder / "tank.vtp", surface_vtp(*c.tank_shape));
+    if (c.tank_motion >= 0) write_start("tank", M.tank());
+  }
+  for (std::size_t k = 0; k < c.solids.size(); ++k) {
+    const SolidSpec& solid = c.solids[k];
+    const bool moves = solid.motion >= 0;
+    if (!solid.shape && !(moves && c.dim == 3)) continue;
+    const int material = M.solid(static_cast<int>(k));
+    create_output_folder(folder);
+    write_file_atomically(folder / fmt::format("solid_{}.vtp", material),
+                          solid.shape ? surface_vtp(*solid.shape) : box_surface_vtp(solid.box.min, solid.box.max));
+    if (moves) write_start(fmt::format("solid_{}", material), material);
   }
 }
 

@@ -293,5 +293,114 @@ TEST(ShapedSolids, AWallSensorTakesItsNormalFromTheShape) {
   EXPECT_NEAR(std::hypot(c.probes[0].position[0] - 0.3, c.probes[0].position[1] - 0.2), 0.1, 1e-9);  // moved onto the surface
 }
 
+// A tank of any shape (tank: {disc: ...}, {mesh: ...}, ...): its inside is the interior, its walls
+// the lattice sites within wall_layers dp outside its surface.
+std::string disc_tank_case(const std::string& extra = "") {
+  return R"(name: canal
+dimensions: 2
+dp: 0.01
+time: {end: 0.1}
+tank:
+  disc: {centre: [0.2, 0.2], radius: 0.2}
+)" + extra + R"(fluid_blocks:
+  - {min: [0, 0], max: [0.4, 0.2]}
+)";
+}
+
+TEST(ShapedTanks, ADiscTankIsItsInsideWithWallLayersOutside) {
+  const Case c = parse_case(disc_tank_case(), "canal.yaml");
+  EXPECT_FALSE(c.open_top);
+  EXPECT_DOUBLE_EQ(c.tank_origin[0], 0.0);
+  EXPECT_NEAR(c.tank_size[1], 0.4, 1e-12);
+  const ParticleStore p = generate_particles(c);
+  EXPECT_EQ(static_cast<std::int64_t>(p.size()), count_particles(c).total());
+  std::int64_t fluid = 0, wall = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double r = std::hypot(p.pos[0][i] - 0.2, p.pos[1][i] - 0.2);
+    if (p.material[i] == 0) {
+      ++fluid;
+      EXPECT_LT(r, 0.2) << "fluid outside the tank";
+      EXPECT_LE(p.pos[1][i], 0.2);
+    } else {
+      ++wall;
+      EXPECT_EQ(p.material[i], 1);  // the tank
+      EXPECT_GE(r, 0.2 - 1e-6 * c.dp);
+      EXPECT_LE(r, 0.2 + 3 * c.dp + 1e-9);
+    }
+  }
+  // Counted by hand on the lattice (i + 1/2) dp from the disc's bounding box.
+  std::int64_t inside = 0, ring = 0;
+  for (int i = -5; i < 45; ++i)
+    for (int j = -5; j < 45; ++j) {
+      const double x = (i + 0.5) * 0.01, y = (j + 0.5) * 0.01, r = std::hypot(x - 0.2, y - 0.2);
+      inside += r < 0.2 && y <= 0.2;
+      ring += r >= 0.2 && r <= 0.23;
+    }
+  EXPECT_EQ(fluid, inside);
+  EXPECT_EQ(wall, ring);
+  EXPECT_NEAR(fluid * 1e-4, 0.5 * M_PI * 0.04, 0.01 * 0.5 * M_PI * 0.04);  // the half disc's area within 1%
+}
+
+// A tank from a mesh of a box is the box tank, but for the box tank's corner sites (3D: its edges
+// and corners) that lie farther than wall_layers dp from the box (a shaped tank's walls are the
+// sites within that distance of its surface).
+TEST(ShapedTanks, ABoxTankFromAnStlIsTheBoxTankButItsFarCorners) {
+  if (!mesh_support()) GTEST_SKIP() << "built without VTK";
+  const std::string base = R"(name: box
+dimensions: 3
+dp: 0.03
+time: {end: 0.1}
+fluid_blocks:
+  - {min: [0.9, 0.2, 0], max: [1.11, 0.41, 0.2]}
+)";
+  const Case box = parse_case(base + "tank: {origin: [0.9, 0.2, 0], size: [0.21, 0.21, 0.5], open_top: false}\n", test::source_dir() + "/cases/box.yaml");
+  const Case stl = parse_case(base + "tank: {mesh: meshes/column.stl}\n", test::source_dir() + "/cases/stl.yaml");
+  const ParticleStore a = generate_particles(box), b = generate_particles(stl);
+  using Key = std::tuple<int, long, long, long>;
+  auto keys = [](const ParticleStore& p) {
+    std::set<Key> out;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      out.insert(Key{p.material[i], std::lround(p.pos[0][i] / 1e-4), std::lround(p.pos[1][i] / 1e-4), std::lround(p.pos[2][i] / 1e-4)});
+    return out;
+  };
+  const std::set<Key> in_a = keys(a), in_b = keys(b);
+  for (const Key& k : in_b) EXPECT_TRUE(in_a.count(k)) << "the STL tank has a particle the box tank does not";
+  std::int64_t corners = 0;
+  for (const Key& k : in_a) {
+    if (in_b.count(k)) continue;
+    ++corners;
+    const double lo[3] = {0.9, 0.2, 0.0}, hi[3] = {1.11, 0.41, 0.5};
+    double d2 = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double x = (a == 0 ? std::get<1>(k) : a == 1 ? std::get<2>(k) : std::get<3>(k)) * 1e-4;
+      const double out = std::max({lo[a] - x, x - hi[a], 0.0});
+      d2 += out * out;
+    }
+    EXPECT_GT(std::sqrt(d2), 3 * 0.03) << "a box-tank wall site within the layers is missing";
+  }
+  EXPECT_GT(corners, 0);
+  EXPECT_NE(geometry_hash(box), geometry_hash(stl));
+}
+
+TEST(ShapedTanks, TheLoaderRefusesABoxTanksKeys) {
+  auto error = [](const std::string& extra) { return test::error_of(disc_tank_case(extra)); };
+  EXPECT_NE(error("  size: [1, 1]\n").find("tank.size"), std::string::npos);
+  EXPECT_NE(error("  origin: [0, 0]\n").find("tank.origin"), std::string::npos);
+  EXPECT_NE(error("  open_top: true\n").find("closed surface"), std::string::npos);
+  EXPECT_NE(error("  free_slip: [x]\n").find("box tank"), std::string::npos);
+  EXPECT_NE(error("  periodic: [x]\n").find("box tank"), std::string::npos);
+  EXPECT_NE(error("  wall_shear: log_law\n").find("box tank"), std::string::npos);
+  EXPECT_NE(test::error_of(disc_tank_case() + "probes:\n  - {name: w, type: wall_pressure, position: [0.5, 0.1]}\n").find("must lie on"),
+            std::string::npos);
+}
+
+TEST(ShapedTanks, AWallSensorOnTheTankFacesIntoTheFluid) {
+  const Case c = parse_case(disc_tank_case() + "probes:\n  - {name: w, type: wall_pressure, position: [0.0586, 0.0586]}\n", "w.yaml");
+  ASSERT_EQ(c.probes.size(), 1u);
+  EXPECT_NEAR(c.probes[0].normal[0], std::sqrt(0.5), 1e-3);  // towards the centre
+  EXPECT_NEAR(c.probes[0].normal[1], std::sqrt(0.5), 1e-3);
+  EXPECT_NEAR(std::hypot(c.probes[0].position[0] - 0.2, c.probes[0].position[1] - 0.2), 0.2, 1e-9);
+}
+
 }  // namespace
 }  // namespace spate
