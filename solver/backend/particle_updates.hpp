@@ -266,15 +266,12 @@ SPATE_HD void update_sps_stress(const PhysicsParams& P, const CellGridView& v, F
     v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
       for (std::uint32_t j = jb; j < je; ++j) {
         const ParticleState<Dim> sj = load_state<Dim>(f, j);
-        const float mass_j = P.is_fluid(sj.material) ? P.materials.of(sj.material).mass : mass_i;
-        accumulate_velocity_gradient<Kernel, Dim>(P, si, sj, mass_j / sj.rho, grad);
+        accumulate_velocity_gradient<Kernel, Dim>(P, si, sj, sps_neighbour_mass(P, sj.material, mass_i) / sj.rho, grad);
       }
     });
     T = sps_stress<Dim>(P, grad, si.rho, nu_t);
   }
-  SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.sps_stress[k][i] = T.diagonal[k];
-  SPATE_UNROLL for (int k = 0; k < Dim * (Dim - 1) / 2; ++k) f.sps_shear[k][i] = T.shear[k];
-  f.eddy_viscosity[i] = nu_t;
+  store_sps_stress<Dim>(f, i, T, nu_t);
 }
 
 // SPS turbulence, pass 2: the divergence of the SPS stress, added to fluid particle i's
@@ -291,8 +288,7 @@ SPATE_HD void add_sps_acceleration(const PhysicsParams& P, const CellGridView& v
     for (std::uint32_t j = jb; j < je; ++j) {
       const bool fluid = P.is_fluid(f.material[j]);
       const SpsStress<Dim> Tj = fluid ? load_sps_stress<Dim>(f, j) : Ti;
-      const float mass_j = fluid ? P.materials.of(f.material[j]).mass : mass_i;
-      acc = acc + sps_pair_acceleration<Kernel, Dim>(P, xi, Ti, load_vec<Dim>(f.pos, j), Tj, mass_j);
+      acc = acc + sps_pair_acceleration<Kernel, Dim>(P, xi, Ti, load_vec<Dim>(f.pos, j), Tj, sps_neighbour_mass(P, f.material[j], mass_i));
     }
   });
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] += acc[k];

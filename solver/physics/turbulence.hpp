@@ -47,6 +47,21 @@ struct SpsStress {
   SPATE_HD float at(int a, int b) const { return a == b ? diagonal[a] : shear[shear_index(a, b)]; }
 };
 
+// The mass a neighbour of material m_j brings to fluid particle i's SPS sums: its own for a fluid,
+// i's for a wall, which stands in for i's fluid (as in the fluid pass).
+SPATE_HD float sps_neighbour_mass(const PhysicsParams& P, std::uint8_t m_j, float mass_i) {
+  return P.is_fluid(m_j) ? P.materials.of(m_j).mass : mass_i;
+}
+
+// Stores particle i's T and eddy viscosity (the fields `sps_stress`, `sps_shear`,
+// `eddy_viscosity`); load_sps_stress (backend/particle_updates.hpp) reads T back.
+template <int Dim, class Fields>
+SPATE_HD void store_sps_stress(Fields& f, std::uint32_t i, const SpsStress<Dim>& T, float nu_t) {
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.sps_stress[k][i] = T.diagonal[k];
+  SPATE_UNROLL for (int k = 0; k < Dim * (Dim - 1) / 2; ++k) f.sps_shear[k][i] = T.shear[k];
+  f.eddy_viscosity[i] = nu_t;
+}
+
 // Neighbour j's term of particle i's velocity gradient, V_j (v_j - v_i) (x) grad_i W_ij into
 // t[a][b] (volume_j = m_j / rho_j; v_j a wall's extrapolated no-slip velocity). Branch-free (beyond
 // the support F = 0), for the CPU backend's vectorised loop over neighbours inside the support.

@@ -91,11 +91,6 @@ void sum_lanes(const float (&lanes)[Count][kLanes], float (&out)[Count]) {
 
 template <class Kernel, int Dim>
 void sps_stress_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& P) {
-  const auto store = [&](std::uint32_t i, const SpsStress<Dim>& T, float nu_t) {
-    SPATE_UNROLL for (int k = 0; k < Dim; ++k) ps.sps_stress[k][i] = T.diagonal[k];
-    SPATE_UNROLL for (int k = 0; k < Dim * (Dim - 1) / 2; ++k) ps.sps_shear[k][i] = T.shear[k];
-    ps.eddy_viscosity[i] = nu_t;
-  };
   for_each_particle_with_candidates<Dim>(
       ps, grid, P,
       [&](SpsCandidates<Dim>& c, std::uint32_t i) {
@@ -110,7 +105,7 @@ void sps_stress_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
             const std::uint32_t j = c.index[c.inside[s0 + q]];
             SPATE_UNROLL for (int k = 0; k < Dim; ++k) jx[k][q] = ps.pos[k][j], jv[k][q] = ps.vel[k][j];
             const std::uint8_t m = ps.material[j];
-            jvolume[q] = (P.is_fluid(m) ? P.materials.of(m).mass : mass_i) / ps.density[j];
+            jvolume[q] = sps_neighbour_mass(P, m, mass_i) / ps.density[j];
           }
           float t[Dim * Dim][kChunk];
           for (int q = 0; q < len; ++q) {  // the pair terms, vectorised over neighbours
@@ -132,9 +127,9 @@ void sps_stress_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
         }
         float nu_t = 0.0f;
         const SpsStress<Dim> T = sps_stress<Dim>(P, grad, ps.density[i], nu_t);
-        store(i, T, nu_t);
+        store_sps_stress<Dim>(ps, i, T, nu_t);
       },
-      [&](std::uint32_t i) { store(i, SpsStress<Dim>{}, 0.0f); });
+      [&](std::uint32_t i) { store_sps_stress<Dim>(ps, i, SpsStress<Dim>{}, 0.0f); });
 }
 
 template <class Kernel, int Dim>
@@ -161,7 +156,7 @@ void sps_acceleration_batched(ParticleStore& ps, const CellGrid& grid, const Phy
               jdiag[k][q] = fluid ? ps.sps_stress[k][j] : Ti.diagonal[k];
             }
             SPATE_UNROLL for (int k = 0; k < kShear; ++k) jshear[k][q] = fluid ? ps.sps_shear[k][j] : Ti.shear[k];
-            jmass[q] = fluid ? P.materials.of(m).mass : mass_i;
+            jmass[q] = sps_neighbour_mass(P, m, mass_i);
           }
           float t[Dim][kChunk];
           for (int q = 0; q < len; ++q) {  // the pair terms, vectorised over neighbours
