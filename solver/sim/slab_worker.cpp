@@ -35,12 +35,18 @@ void SlabWorker::take_share(const ParticleStore& global, const SlabLayout& layou
   // the whole generated set is still alive, so an extra copy would be a full set more at the peak.
   particles_ = ParticleStore(lattice_.dim);
   particles_.resize(mine.size());
+  // Matched by registry entry and component, not by position: a store made under other
+  // OptionalFields (relax_particles' worker carries `shift`, the generated set may not) lists other
+  // fields; a field the global set lacks stays zero here.
   auto from = const_cast<ParticleStore&>(global).fields();
   auto to = particles_.fields();
-  for (std::size_t k = 0; k < to.size(); ++k) {
-    const std::size_t size = to[k].elem_size;
-    const char* src = from[k].bytes();
-    char* dst = to[k].bytes();
+  for (const FieldRef& field : to) {
+    const auto source = std::find_if(from.begin(), from.end(),
+                                     [&](const FieldRef& f) { return f.spec == field.spec && f.component == field.component; });
+    if (source == from.end()) continue;
+    const std::size_t size = field.elem_size;
+    const char* src = source->bytes();
+    char* dst = field.bytes();
     if (!src || !dst) continue;  // components beyond dim
     for (std::size_t i = 0; i < mine.size(); ++i) std::memcpy(dst + i * size, src + mine[i] * size, size);
   }

@@ -88,6 +88,33 @@ TEST(FieldRegistry, AnOptionalFieldIsOnlyInTheStoresOfRunsThatNeedIt) {
   EXPECT_TRUE(after.colour_gradient[0].empty());
 }
 
+// A slab takes its share of a set made under other optional fields (relaxation's worker carries
+// `shift`; the generated set of a run without optional fields does not): each field comes from
+// the field of the same name, never from the one at the same position. (Copied by position, a
+// heat run's temperatures landed in the colour gradient, and Buchner's case with `relax:` crashed.)
+TEST(FieldRegistry, ASlabTakesItsShareFieldByFieldWhateverFieldsTheSetCarries) {
+  const Case c = load_case(test::source_dir() + "/cases/conduction_2d.yaml");
+  const OptionalFields run(FieldGroups{kThermal});  // the run's fields: thermal, not kOptional
+  ParticleStore initial = generate_particles(c);
+  ASSERT_EQ(initial.temperature.size(), initial.size());
+  ASSERT_TRUE(initial.shift[0].empty());
+  for (std::size_t i = 0; i < initial.size(); ++i) initial.temperature[i] = 280.0f + 0.01f * static_cast<float>(initial.id[i]);
+  const OptionalFields worker_fields(FieldGroups{static_cast<std::uint16_t>(kThermal | kOptional)});
+  const Lattice L = make_lattice(c);
+  InProcessHub hub(1);
+  auto t = hub.endpoint(0, c.periodic[0]);
+  SlabWorker w(L, physics_params(c), *t);
+  w.take_share(initial, SlabLayout::uniform(L.cells[0], 1));
+  ParticleStore& p = w.particles();
+  ASSERT_EQ(p.owned(), initial.size());
+  ASSERT_EQ(p.shift[0].size(), p.size());
+  for (std::size_t i = 0; i < p.owned(); ++i) {
+    ASSERT_EQ(p.temperature[i], 280.0f + 0.01f * static_cast<float>(p.id[i])) << "particle " << p.id[i];
+    ASSERT_EQ(p.shift[0][i], 0.0f);
+    ASSERT_EQ(p.colour_gradient[1][i], 0.0f);
+  }
+}
+
 // Two slabs run the dam break with a registered test-only field: after steps in which particles
 // cross the face, every ghost, every migrated particle, the checkpoint, the snapshot piece and the
 // in-situ view carry each particle's own value.
