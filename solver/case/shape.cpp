@@ -80,6 +80,55 @@ class Ball final : public Shape {
   int dim_;
 };
 
+// An axis-aligned box (2D: a rectangle): a box solid's surface where something needs its distance
+// (floating bodies' contact, sim/rigid_bodies.cpp); the generator shells box solids itself.
+class Box final : public Shape {
+ public:
+  Box(const std::array<double, 3>& lo_corner, const std::array<double, 3>& hi_corner, int dim) : dim_(dim) {
+    lo = lo_corner, hi = hi_corner;
+    for (int a = dim; a < 3; ++a) lo[a] = hi[a] = 0.0;
+    area = dim == 2 ? 2 * (hi[0] - lo[0] + hi[1] - lo[1])
+                    : 2 * ((hi[0] - lo[0]) * (hi[1] - lo[1]) + (hi[1] - lo[1]) * (hi[2] - lo[2]) + (hi[2] - lo[2]) * (hi[0] - lo[0]));
+    signature = fmt::format("box {} {}", vec_text(lo, dim), vec_text(hi, dim));
+    description = fmt::format("box from {} to {}", vec_text(lo, dim, false), vec_text(hi, dim, false));
+  }
+  // Outside: the distance to the nearest point of the box; inside: minus that to the nearest face.
+  double distance(const double x[3], double normal[3]) const override {
+    double out[3] = {0, 0, 0}, outside = 0.0, deepest = -1e300;
+    int face = 0;
+    for (int a = 0; a < dim_; ++a) {
+      const double below = lo[a] - x[a], above = x[a] - hi[a];
+      out[a] = below > 0 ? -below : above > 0 ? above : 0.0;
+      outside += out[a] * out[a];
+      const double q = std::max(below, above);  // <= 0 inside: minus the distance to this axis' nearer face
+      if (q > deepest) deepest = q, face = above >= below ? a + 1 : -(a + 1);
+    }
+    for (int a = 0; a < dim_; ++a) normal[a] = 0.0;
+    if (outside > 0) {
+      const double s = std::sqrt(outside);
+      for (int a = 0; a < dim_; ++a) normal[a] = out[a] / s;
+      return s;
+    }
+    normal[std::abs(face) - 1] = face > 0 ? 1.0 : -1.0;
+    return deepest;
+  }
+  void surface(std::vector<std::array<double, 3>>& points, std::vector<std::vector<long long>>& polygons) const override {
+    const long long base = static_cast<long long>(points.size());
+    if (dim_ == 2) {
+      points.insert(points.end(), {{lo[0], lo[1], 0.0}, {hi[0], lo[1], 0.0}, {hi[0], hi[1], 0.0}, {lo[0], hi[1], 0.0}});
+      polygons.push_back({base, base + 1, base + 2, base + 3});
+      return;
+    }
+    for (int k = 0; k < 8; ++k) points.push_back({k & 1 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1], k & 4 ? hi[2] : lo[2]});
+    // Corners numbered by bits x, y, z; each face counter-clockwise seen from outside.
+    for (const auto& f : {std::array<int, 4>{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}})
+      polygons.push_back({base + f[0], base + f[1], base + f[2], base + f[3]});
+  }
+
+ private:
+  int dim_;
+};
+
 class Cylinder final : public Shape {
  public:
   Cylinder(const std::array<double, 3>& centre, const std::array<double, 3>& axis, double radius, double length)
@@ -261,6 +310,8 @@ ShapePtr make_ball(const std::array<double, 3>& centre, double radius, int dim) 
   if (!(radius > 0)) throw ShapeError("the radius must be > 0");
   return std::make_shared<Ball>(centre, radius, dim);
 }
+
+ShapePtr make_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int dim) { return std::make_shared<Box>(lo, hi, dim); }
 
 ShapePtr make_cylinder(const std::array<double, 3>& centre, const std::array<double, 3>& axis, double radius, double length) {
   if (!(radius > 0)) throw ShapeError("the radius must be > 0");

@@ -47,6 +47,8 @@ std::string box_surface_vtp(const std::array<double, 3>& lo, const std::array<do
 // moving solid's particles, which the in-situ pipeline fits its motion to).
 std::string points_vtp(const std::vector<std::array<double, 3>>& points, const std::vector<std::uint32_t>& ids);
 
+// An axis-aligned box (2D: rectangle) from lo to hi.
+ShapePtr make_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int dim);
 // A disc (2D) or sphere (3D).
 ShapePtr make_ball(const std::array<double, 3>& centre, double radius, int dim);
 // A capped circular cylinder (3D) of the given axis (unit vector), radius and length, centred at

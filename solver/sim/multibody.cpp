@@ -21,9 +21,6 @@ struct System::Impl {
   SimTK::SimbodyMatterSubsystem matter{system};
   SimTK::GeneralForceSubsystem forces{system};
   SimTK::Force::DiscreteForces fluid{forces, matter};
-  // Contact with the walls (spheres and half-spaces found anew at every evaluation, Hunt &
-  // Crossley's force); none when no body has contact.
-  std::unique_ptr<SimTK::GeneralContactSubsystem> contacts;
   std::vector<SimTK::MobilizedBody> bodies;
   // A hinged body's rotational spring and damper (none for an unhinged one); the lines, owned by
   // their Force::Custom.
@@ -108,56 +105,141 @@ class Springs : public SimTK::Force::Custom::Implementation {
   std::vector<Line> lines_;
 };
 
+// Contact of the bodies' spheres with the tank's plane walls, fixed obstacles (static solids, a
+// shaped tank's outside) and the surfaces of the other bodies with contact, one Simbody custom
+// force. Simbody's own contact (GeneralContactSubsystem with HuntCrossleyForce, which spate used
+// for the walls until issue 32's contact between bodies) knows spheres and half-spaces, not
+// spate's shapes (its triangle meshes need an elastic foundation finer than the particles), and its
+// friction goes unstable in an impact (below); so the overlap here is each sphere against the
+// other side's signed distance, and the force HuntCrossleyForce's law for a sphere of radius R
+// sunk by x into a surface: f = 4/3 E sqrt(R) x^1.5 (1 + 3/2 c dx/dt) along the surface's normal,
+// and Coulomb's mu f min(v_slip / v_t, 1) against the slip (HuntCrossleyForce.h, its static and
+// dynamic coefficients equal, no viscous friction). A wall or obstacle is rigid: the contact takes
+// the body's E, c and mu; two bodies combine theirs as Simbody combines two materials,
+// E = (s1 E1^(2/3))^(3/2), s1 = E2^(2/3) / (E1^(2/3) + E2^(2/3)), c = c1 s1 + c2 (1 - s1),
+// mu = 2 mu1 mu2 / (mu1 + mu2). Each pair of bodies is met both ways (the spheres of one against
+// the other's surface, then the other's against the first's), so that a corner meets a face
+// whichever body it belongs to; an edge crossing an edge between their spheres is not seen (3D
+// boxes). Summed in a fixed order (bodies, spheres; walls and obstacles, then bodies).
+class ShapeContacts : public SimTK::Force::Custom::Implementation {
+ public:
+  struct Member {
+    SimTK::MobilizedBody body;
+    std::vector<SimTK::Vec3> points;  // body frame
+    Distance surface;                 // body frame
+    double reach, radius, stiffness, dissipation, friction, weight;
+  };
+  ShapeContacts(std::vector<Member> members, std::vector<ObstacleInput> obstacles, double transition)
+      : members_(std::move(members)), obstacles_(std::move(obstacles)), transition_(transition) {}
+
+  void calcForce(const SimTK::State& state, SimTK::Vector_<SimTK::SpatialVec>& body_forces, SimTK::Vector_<SimTK::Vec3>&,
+                 SimTK::Vector&) const override {
+    using SimTK::Vec3;
+    for (std::size_t a = 0; a < members_.size(); ++a) {
+      const Member& A = members_[a];
+      const SimTK::Transform& X_GA = A.body.getBodyTransform(state);
+      for (const Vec3& p : A.points) {
+        const Vec3 x = X_GA * p;
+        const Vec3 v = A.body.findStationVelocityInGround(state, p);
+        for (const ObstacleInput& o : obstacles_) {
+          if (!near_box(x, o.lo, o.hi, A.radius)) continue;
+          std::array<double, 3> n{};
+          const double d = o.distance({x[0], x[1], x[2]}, n);
+          const Vec3 f = force(A.radius - d, A.radius, Vec3(n[0], n[1], n[2]), v, A.stiffness, A.dissipation, A.friction, A.weight);
+          A.body.applyForceToBodyPoint(state, p, f, body_forces);
+        }
+        for (std::size_t b = 0; b < members_.size(); ++b) {
+          const Member& B = members_[b];
+          if (b == a) continue;
+          const SimTK::Transform& X_GB = B.body.getBodyTransform(state);
+          if ((x - X_GB.p()).norm() > B.reach + A.radius) continue;
+          const Vec3 q = ~X_GB * x;  // the sphere's centre in B's frame
+          std::array<double, 3> n{};
+          const double d = B.surface({q[0], q[1], q[2]}, n);
+          if (!(d < A.radius)) continue;
+          // Simbody's combination of two materials (HuntCrossleyForce.h).
+          const double e1 = std::pow(A.stiffness, 2.0 / 3.0), e2 = std::pow(B.stiffness, 2.0 / 3.0), s1 = e2 / (e1 + e2);
+          const double E = std::pow(s1 * e1, 1.5), c = A.dissipation * s1 + B.dissipation * (1 - s1);
+          const double mu = 2 * A.friction * B.friction / (A.friction + B.friction);
+          const Vec3 f = force(A.radius - d, A.radius, X_GB.R() * Vec3(n[0], n[1], n[2]), v - B.body.findStationVelocityInGround(state, q), E, c, mu,
+                               std::min(A.weight, B.weight));
+          A.body.applyForceToBodyPoint(state, p, f, body_forces);
+          B.body.applyForceToBodyPoint(state, q, -f, body_forces);
+        }
+      }
+    }
+  }
+  SimTK::Real calcPotentialEnergy(const SimTK::State&) const override { return 0.0; }
+  bool dependsOnlyOnPositions() const override { return false; }
+
+ private:
+  static bool near_box(const SimTK::Vec3& x, const std::array<double, 3>& lo, const std::array<double, 3>& hi, double margin) {
+    for (int k = 0; k < 3; ++k)
+      if (x[k] < lo[k] - margin || x[k] > hi[k] + margin) return false;
+    return true;
+  }
+  // The force on a sphere of radius R sunk by `depth` into a surface whose outward normal is n, at
+  // velocity v relative to the surface. Friction grows with the slip up to Coulomb's mu f at the
+  // transition velocity times f / W (W the lighter body's weight; at least the transition velocity
+  // itself): its slope, mu f / v_t, would otherwise grow with the normal force, and in an impact
+  // (f some hundred times the weight) its rate, slope over mass, goes far past what the explicit
+  // Runge-Kutta step can hold: a box landing on another began to rock from rounding and tumbled.
+  // Held at mu W / v_t, the rate is that of a resting body (docs/physics.md, "Contact").
+  SimTK::Vec3 force(double depth, double R, const SimTK::Vec3& n, const SimTK::Vec3& v, double E, double c, double mu, double W) const {
+    if (!(depth > 0)) return SimTK::Vec3(0);
+    const double rate = -SimTK::dot(v, n);  // dx/dt
+    const double fn = 4.0 / 3.0 * E * std::sqrt(R) * std::pow(depth, 1.5) * (1 + 1.5 * c * rate);
+    if (!(fn > 0)) return SimTK::Vec3(0);
+    const SimTK::Vec3 slip = v - SimTK::dot(v, n) * n;
+    const double vs = slip.norm();
+    SimTK::Vec3 f = fn * n;
+    const double transition = transition_ * std::max(1.0, fn / W);
+    if (vs > 0) f -= (fn * mu * std::min(vs / transition, 1.0) / vs) * slip;
+    return f;
+  }
+  std::vector<Member> members_;
+  std::vector<ObstacleInput> obstacles_;
+  double transition_;
+};
+
 namespace {
 
-// The walls' material: so much stiffer than any body's, and of so much larger friction, that a
-// contact takes the body's stiffness, dissipation and (for a body friction of mu / 2) friction mu:
-// Simbody combines two materials as E = (s1 E1^(2/3))^(3/2) with s1 = E2^(2/3) / (E1^(2/3) +
-// E2^(2/3)), c = c1 s1 + c2 (1 - s1) and mu = 2 mu1 mu2 / (mu1 + mu2) (HuntCrossleyForce.h).
-constexpr double kWallStiffnessRatio = 1e9, kWallFriction = 1e9;
 // Friction grows linearly with the slip speed up to mu N at this speed: a body held by friction
 // creeps below it. Its rate mu g / vt (2,000-5,000 1/s) times the step stays inside the explicit
 // Runge-Kutta's stability for steps up to about 5e-4 s (SPH steps are some 1e-4 s).
 constexpr double kTransitionVelocity = 2e-3;  // [m/s]
 
-// Contact between the bodies' spheres and the walls, half-spaces of the ground: Simbody's
-// GeneralContactSubsystem finds the overlaps afresh at every evaluation (its newer tracking
-// subsystem fails an assertion when a body starts in contact, e.g. resting on the floor at a
-// restart), and a HuntCrossleyForce pushes them apart with 4/3 E sqrt(R) x^1.5 (1 + 3/2 c dx/dt).
-// Nothing when no body has contact.
-void add_contact(System::Impl& m, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls, int dim) {
-  using namespace SimTK;
-  double stiffest = 0.0;
-  for (const BodyInput& b : bodies)
-    if (b.contact.on) stiffest = std::max(stiffest, b.contact.stiffness);
-  if (!(stiffest > 0) || walls.empty()) return;
-  m.contacts.reset(new GeneralContactSubsystem(m.system));
-  const ContactSetIndex set = m.contacts->createContactSet();
-  HuntCrossleyForce force(m.forces, *m.contacts, set);
-  force.setTransitionVelocity(kTransitionVelocity);
-  int surface = 0;
-  for (const WallInput& w : walls) {
-    // A HalfSpace fills x > 0 of its frame: x points into the wall, against its normal.
-    const Vec3 into(-w.normal[0], -w.normal[1], -w.normal[2]);
-    m.contacts->addBody(set, m.matter.Ground(), ContactGeometry::HalfSpace(),
-                        Transform(Rotation(UnitVec3(into), XAxis), Vec3(w.point[0], w.point[1], w.point[2])));
-    force.setBodyParameters(ContactSurfaceIndex(surface++), kWallStiffnessRatio * stiffest, 0.0, kWallFriction,
-                            kWallFriction, 0.0);
-  }
+// Contact: every body with contact gets its spheres pressed against the tank's plane walls, the
+// obstacles and the other bodies by ShapeContacts. Nothing when no body has contact.
+void add_contact(System::Impl& m, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls,
+                 const std::vector<ObstacleInput>& obstacles, int dim) {
+  std::vector<ShapeContacts::Member> members;
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     const ContactInput& c = bodies[b].contact;
     if (!c.on || !(c.stiffness > 0)) continue;
-    for (const auto& p : c.points) {
-      m.contacts->addBody(set, m.bodies[b], ContactGeometry::Sphere(c.radius), Transform(Vec3(p[0], p[1], dim == 2 ? 0.0 : p[2])));
-      force.setBodyParameters(ContactSurfaceIndex(surface++), c.stiffness, c.dissipation, 0.5 * c.friction,
-                              0.5 * c.friction, 0.0);
-    }
+    ShapeContacts::Member member{m.bodies[b], {}, c.surface, c.reach, c.radius, c.stiffness, c.dissipation, c.friction, c.weight};
+    for (const auto& p : c.points) member.points.push_back(vec_of(p, dim));
+    members.push_back(std::move(member));
   }
+  if (members.empty()) return;
+  // A wall: the half-space behind its plane, d = (x - point) . normal.
+  constexpr double kFar = 1e300;
+  std::vector<ObstacleInput> all;
+  for (const WallInput& w : walls)
+    all.push_back({[w](const std::array<double, 3>& x, std::array<double, 3>& normal) {
+                     normal = w.normal;
+                     return (x[0] - w.point[0]) * w.normal[0] + (x[1] - w.point[1]) * w.normal[1] + (x[2] - w.point[2]) * w.normal[2];
+                   },
+                   {-kFar, -kFar, -kFar}, {kFar, kFar, kFar}});
+  all.insert(all.end(), obstacles.begin(), obstacles.end());
+  if (all.empty() && members.size() < 2) return;
+  SimTK::Force::Custom(m.forces, new ShapeContacts(std::move(members), std::move(all), kTransitionVelocity));  // which owns it
 }
 
 }  // namespace
 
-System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls)
+System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls,
+               const std::vector<ObstacleInput>& obstacles)
     : impl_(new Impl) {
   using namespace SimTK;
   Impl& m = *impl_;
@@ -200,7 +282,7 @@ System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyIn
     }
     m.bodies.push_back(mob);
   }
-  add_contact(m, bodies, walls, dim);
+  add_contact(m, bodies, walls, obstacles, dim);
   if (!lines.empty()) {
     m.springs = new Springs(std::move(lines));
     Force::Custom(m.forces, m.springs);  // which owns it

@@ -4,6 +4,7 @@
 // not compile as C++20 (their index types' operator== turns ambiguous under C++20's rewritten
 // comparisons), so nothing of Simbody may reach a spate header.
 #include <array>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -26,21 +27,36 @@ struct SpringInput {
   int other = -1;
 };
 
-// Contact with the walls (Simbody's Hunt & Crossley force on Hertz's law, multibody.cpp): small
-// spheres centred at `points` (body frame: from the centre of mass, world axes at t = 0), the
-// body's outermost points, pressed against half-spaces.
+// A signed distance to a surface [m], negative inside, with the unit outward normal there.
+using Distance = std::function<double(const std::array<double, 3>& x, std::array<double, 3>& normal)>;
+
+// Contact (Hunt & Crossley's force on Hertz's law, multibody.cpp): small spheres centred at
+// `points` (body frame: from the centre of mass, world axes at t = 0), the body's outermost points,
+// pressed against the tank's plane walls (Simbody's half-spaces), and against obstacles and other
+// bodies with contact (their signed distances, ShapeContacts in multibody.cpp).
 struct ContactInput {
   bool on = false;
   std::vector<std::array<double, 3>> points;  // the spheres' centres, body frame
+  Distance surface;    // the body's own surface, body frame (other bodies' spheres press on it)
+  double reach = 0.0;  // the largest distance of a point of the body from its centre of mass [m]
   double radius = 0.0;       // of each sphere [m]
   double stiffness = 0.0;    // plane-strain modulus [Pa]: Hertz f = 4/3 E sqrt(R) x^1.5
   double dissipation = 0.0;  // Hunt & Crossley c [s/m]
   double friction = 0.0;     // Coulomb's coefficient against the walls
+  double weight = 0.0;       // the body's weight [N] (m g): ShapeContacts' friction scale
 };
 
 // A wall: the half-space behind a plane through `point` whose unit normal points into the fluid.
 struct WallInput {
   std::array<double, 3> point{}, normal{};
+};
+
+// A fixed obstacle that bodies with contact meet (a static solid; a shaped tank's outside):
+// its signed distance in world coordinates, negative where a body may not go, and its bounding box
+// (a point outside it, farther than a contact sphere's radius, is not tested).
+struct ObstacleInput {
+  Distance distance;
+  std::array<double, 3> lo{}, hi{};
 };
 
 struct BodyInput {
@@ -64,7 +80,8 @@ using Load = std::array<double, 6>;
 
 class System {
  public:
-  System(int dim, const std::array<double, 3>& gravity, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls = {});
+  System(int dim, const std::array<double, 3>& gravity, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls = {},
+         const std::vector<ObstacleInput>& obstacles = {});
   ~System();
   // The loads now: the accelerations follow.
   void set_loads(const std::vector<Load>& loads);

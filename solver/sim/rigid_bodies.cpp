@@ -38,6 +38,37 @@ std::vector<multibody::WallInput> tank_walls(const Case& c) {
   return walls;
 }
 
+// A solid's surface: its shape's, or its box's.
+ShapePtr solid_shape(const SolidSpec& s, int dim) { return s.shape ? s.shape : make_box(s.box.min, s.box.max, dim); }
+
+multibody::Distance distance_of(ShapePtr shape, const Vec3d& origin, double sign) {
+  return [shape, origin, sign](const std::array<double, 3>& x, std::array<double, 3>& normal) {
+    const double at[3] = {x[0] + origin[0], x[1] + origin[1], x[2] + origin[2]};
+    double n[3] = {0, 0, 0};
+    const double d = shape->distance(at, n);
+    normal = {sign * n[0], sign * n[1], sign * n[2]};
+    return sign * d;
+  };
+}
+
+// What a body with contact meets besides the tank's plane walls: the static solids, and a shaped
+// tank's outside (everything but the vessel's inside; not when the tank moves, since bodies then
+// have no contact). Solids moved by a prescribed motion are not among them (not modelled).
+std::vector<multibody::ObstacleInput> obstacles(const Case& c) {
+  std::vector<multibody::ObstacleInput> out;
+  constexpr double kFar = 1e30;
+  if (c.tank_shape && c.tank_motion < 0)
+    out.push_back({distance_of(c.tank_shape, {0, 0, 0}, -1.0), {-kFar, -kFar, -kFar}, {kFar, kFar, kFar}});
+  for (const SolidSpec& s : c.solids) {
+    if (s.motion >= 0) continue;
+    const ShapePtr shape = solid_shape(s, c.dim);
+    multibody::ObstacleInput o{distance_of(shape, {0, 0, 0}, 1.0), shape->lo, shape->hi};
+    if (c.dim == 2) o.lo[2] = -kFar, o.hi[2] = kFar;
+    out.push_back(o);
+  }
+  return out;
+}
+
 }  // namespace
 
 RigidBodies::RigidBodies(const Case& c) : case_(c) {
@@ -66,11 +97,15 @@ RigidBodies::RigidBodies(const Case& c) : case_(c) {
       k.stiffness = 3.0 * weight / (4.0 * std::sqrt(k.radius) * std::pow(b.contact.penetration, 1.5));
       k.dissipation = b.contact.dissipation;
       k.friction = b.contact.friction;
+      k.weight = weight;
       k.points = b.contact.points;
+      // Its surface in its own frame (from the centre of mass, world axes at t = 0).
+      k.surface = distance_of(solid_shape(c.solids[b.solid], c.dim), b.centre_of_mass, 1.0);
+      for (const Vec3d& p : b.contact.points) k.reach = std::max(k.reach, std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]));
     }
     in.push_back(body);
   }
-  impl_.reset(new Impl{multibody::System(c.dim, c.gravity, in, tank_walls(c))});
+  impl_.reset(new Impl{multibody::System(c.dim, c.gravity, in, tank_walls(c), obstacles(c))});
   loads_.assign(c.bodies.size(), BodyLoad{});
   read_state();
   previous_ = states_;

@@ -250,6 +250,110 @@ TEST(RigidBodies, ABoxDroppedOnTheFloorComesToRestOnIt) {
   EXPECT_NEAR(s.angles[2], 0.0, 1e-6);
 }
 
+// The mean and the spread of body b's centre height over the last `tail` of `steps` steps of dt.
+struct Settled {
+  double mean = 0.0, low = 1e9, high = -1e9, lowest = 1e9;
+};
+Settled settle(RigidBodies& b, int body, int steps, int tail, double dt, double bottom_offset) {
+  Settled s;
+  for (int k = 0; k < steps; ++k) {
+    b.advance(k * dt, (k + 1) * dt);
+    const double y = b.state(body).centre[1];
+    s.lowest = std::min(s.lowest, y - bottom_offset);
+    if (k >= steps - tail) s.mean += y / tail, s.low = std::min(s.low, y), s.high = std::max(s.high, y);
+  }
+  return s;
+}
+
+// Contact with a static solid (ShapeContacts in multibody.cpp): the box dropped 0.1 m onto a shelf
+// (a static box solid, top at y = 0.14) neither passes into it (its corners at most dp/2 deep)
+// nor bounces off for good: it rests on its two lower corners on the shelf as on the floor, each
+// sunk by penetration (1/2)^(2/3), level and in place.
+TEST(RigidBodies, ABoxDroppedOnAStaticSolidComesToRestOnIt) {
+  const Case c = parse_case(case_2d() + "  - name: shelf\n    min: [0.45, 0.1]\n    max: [0.75, 0.14]\n", "case.yaml");
+  ASSERT_EQ(c.solids.size(), 2u);
+  const double penetration = c.bodies[0].contact.penetration, radius = 0.01 * c.dp;
+  RigidBodies b(c);
+  b.set_loads({BodyLoad{}});
+  const Settled s = settle(b, 0, 10000, 1000, 2e-4, 0.05 + 0.14);
+  EXPECT_GT(s.lowest, -0.5 * c.dp);
+  EXPECT_LT(s.lowest, -penetration);  // it did reach the shelf
+  EXPECT_NEAR(s.mean, 0.14 + 0.05 + radius - penetration * std::pow(0.5, 2.0 / 3.0), 0.1 * penetration);
+  EXPECT_LT(s.high - s.low, 0.3 * penetration);
+  EXPECT_NEAR(b.state(0).centre[0], 0.6, 1e-6);
+  EXPECT_NEAR(b.state(0).angles[2], 0.0, 1e-6);
+}
+
+// Contact between bodies: a narrow box (0.1 x 0.1 m, 5 kg) dropped onto a wide one (0.2 x 0.1 m,
+// 10 kg) that rests on the floor comes to rest on it: its two lower corners on the wide box's top
+// face, each carrying half its weight on the two bodies' combined stiffness (Simbody's rule,
+// E = (s1 E1^(2/3))^(3/2)), and the wide box's corners on the floor carry both weights. Neither
+// passes into the other; both stay level and in place.
+TEST(RigidBodies, ABoxDroppedOnAnotherComesToRestOnIt) {
+  const Case c = parse_case(case_2d("density: 500", "min: [0.5, 0.0]\n    max: [0.7, 0.1]") +
+                                "  - name: top\n    min: [0.55, 0.2]\n    max: [0.65, 0.3]\n    motion: floating\n    density: 500\n",
+                            "case.yaml");
+  ASSERT_EQ(c.bodies.size(), 2u);
+  const double R = 0.01 * c.dp, g = 9.81;
+  const double W1 = c.bodies[0].mass * g, W2 = c.bodies[1].mass * g;
+  RigidBodies b(c);
+  b.set_loads({BodyLoad{}, BodyLoad{}});
+  double deepest = 1.0;
+  const double dt = 2e-4;
+  Settled s1, s2;
+  const int steps = 10000, tail = 1000;
+  for (int k = 0; k < steps; ++k) {
+    b.advance(k * dt, (k + 1) * dt);
+    const double y1 = b.state(0).centre[1], y2 = b.state(1).centre[1];
+    deepest = std::min(deepest, (y2 - 0.05) - (y1 + 0.05));  // the top box's bottom over the wide box's top
+    if (k >= steps - tail) {
+      s1.mean += y1 / tail, s2.mean += y2 / tail;
+      s2.low = std::min(s2.low, y2), s2.high = std::max(s2.high, y2);
+    }
+  }
+  // Each body's stiffness carries its own weight on one sphere at `penetration` (rigid_bodies.cpp).
+  auto E = [&](double W, double p) { return 3.0 * W / (4.0 * std::sqrt(R) * std::pow(p, 1.5)); };
+  const double p1 = c.bodies[0].contact.penetration, p2 = c.bodies[1].contact.penetration;
+  const double e1 = std::pow(E(W2, p2), 2.0 / 3.0), e2 = std::pow(E(W1, p1), 2.0 / 3.0), s = e2 / (e1 + e2);
+  const double Ec = std::pow(s * e1, 1.5);
+  const double sunk_top = std::pow(3.0 * (W2 / 2) / (4.0 * Ec * std::sqrt(R)), 2.0 / 3.0);
+  const double sunk_floor = p1 * std::pow((W1 + W2) / (2 * W1), 2.0 / 3.0);
+  EXPECT_GT(deepest, -0.5 * c.dp);
+  EXPECT_LT(deepest, R - sunk_top);  // it did land
+  EXPECT_NEAR(s1.mean, 0.05 + R - sunk_floor, 0.1 * p1);
+  EXPECT_NEAR(s2.mean - s1.mean, 0.1 + R - sunk_top, 0.1 * p2);
+  EXPECT_LT(s2.high - s2.low, 0.3 * p2);
+  // In place and level: the landing's rounding grows, through the contacts' friction, to some
+  // 0.07 mm sideways (dp/100 allowed).
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_NEAR(b.state(k).centre[0], 0.6, 0.01 * c.dp);
+    EXPECT_NEAR(b.state(k).angles[2], 0.0, 1e-4);
+  }
+}
+
+// Contact with a shaped tank: a disc (radius 5 cm) released at the middle of a circular canal
+// (radius 0.2 m) falls to its bottom and rests there, its lowest contact sphere on the vessel's
+// wall, sunk by `penetration` under its whole weight (the canal's curvature, 4 times the disc's,
+// leaves one sphere in contact).
+TEST(RigidBodies, ADiscInACircularTankRestsAtItsBottom) {
+  const std::string text = "name: t\ndimensions: 2\ndp: 0.01\ngravity: [0, -9.81]\ntime: {end: 1}\n"
+                           "tank: {disc: {centre: [0.2, 0.2], radius: 0.2}}\n"
+                           "fluid_blocks: [{min: [0, 0], max: [0.4, 0.05]}]\n"
+                           "solids:\n  - name: ball\n    disc: {centre: [0.2, 0.2], radius: 0.05}\n    motion: floating\n    density: 500\n";
+  const Case c = parse_case(text, "case.yaml");
+  ASSERT_TRUE(c.bodies[0].contact.on);
+  const double penetration = c.bodies[0].contact.penetration, R = 0.01 * c.dp;
+  RigidBodies b(c);
+  b.set_loads({BodyLoad{}});
+  const Settled s = settle(b, 0, 10000, 1000, 2e-4, 0.05);
+  EXPECT_GT(s.lowest, -0.5 * c.dp);
+  EXPECT_LT(s.lowest, -penetration);
+  // Its neighbouring spheres, 8e-5 m higher on the 96-gon, take a little of the weight.
+  EXPECT_NEAR(s.mean, 0.05 + R - penetration, 0.15 * penetration);
+  EXPECT_LT(s.high - s.low, 0.5 * penetration);  // a faint ringing on the contact's stiffness
+  EXPECT_NEAR(b.state(0).centre[0], 0.2, 1e-6);
+}
+
 // Friction against the floor: a push below mu W leaves the resting box all but still (Simbody's
 // continuous friction creeps below its transition velocity, 2 mm/s), one of 1.5 mu W slides it
 // at (1.5 - 1) mu g; and a side wall stops it. The box (x from 0.9 to 1.1) settles from 1 cm above
