@@ -924,8 +924,6 @@ MotionSpec read_floating(Section& m, Case& c, const SolidSpec& solid, int index)
   b.contact.on = !b.hinge.on;
   if (m.has("contact")) {
     const YAML::Node n = m.raw("contact");
-    if (c.tank_motion >= 0)
-      m.fail(n, "contact", "the tank moves: contact with moving walls is not modelled (leave 'contact' out; the body then has none)");
     if (n.IsScalar()) {
       b.contact.on = m.boolean("contact", true);
     } else if (auto k = m.child("contact")) {
@@ -941,7 +939,6 @@ MotionSpec read_floating(Section& m, Case& c, const SolidSpec& solid, int index)
       k->finish();
     }
   }
-  if (c.tank_motion >= 0) b.contact.on = false;
   if (b.contact.on)
     for (Vec3d p : contact_points(solid, d)) {
       for (int a = 0; a < 3; ++a) p[a] -= b.centre_of_mass[a];

@@ -129,6 +129,43 @@ Jet MotionSet::envelope(int k, double t) const {
   return e * scale;
 }
 
+namespace {
+
+// Rodrigues: r turned by `angle` about the unit axis n.
+Vec3 rotated(const Vec3& n, double angle, const Vec3& r) {
+  const double cs = std::cos(angle), sn = std::sin(angle);
+  const double n_dot_r = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
+  const double cross[3] = {n[1] * r[2] - n[2] * r[1], n[2] * r[0] - n[0] * r[2], n[0] * r[1] - n[1] * r[0]};
+  Vec3 out{0, 0, 0};
+  for (int k = 0; k < 3; ++k) out[k] = r[k] * cs + cross[k] * sn + n[k] * n_dot_r * (1.0 - cs);
+  return out;
+}
+
+}  // namespace
+
+Vec3 moved_point(const MotionSpec& m, const MotionSample& s, const Vec3& x0) {
+  const Vec3 r = rotated(m.axis, s.angle, {x0[0] - m.centre[0], x0[1] - m.centre[1], x0[2] - m.centre[2]});
+  return {m.centre[0] + s.displacement[0] + r[0], m.centre[1] + s.displacement[1] + r[1], m.centre[2] + s.displacement[2] + r[2]};
+}
+
+Vec3 start_point(const MotionSpec& m, const MotionSample& s, const Vec3& x) {
+  Vec3 r{0, 0, 0};
+  for (int k = 0; k < 3; ++k) r[k] = x[k] - m.centre[k] - s.displacement[k];
+  const Vec3 back = rotated(m.axis, -s.angle, r);
+  return {m.centre[0] + back[0], m.centre[1] + back[1], m.centre[2] + back[2]};
+}
+
+Vec3 turned(const MotionSpec& m, const MotionSample& s, const Vec3& v) { return rotated(m.axis, s.angle, v); }
+
+Vec3 point_velocity(const MotionSpec& m, const MotionSample& s, const Vec3& x) {
+  Vec3 r{0, 0, 0};
+  for (int k = 0; k < 3; ++k) r[k] = x[k] - m.centre[k] - s.displacement[k];
+  const Vec3& n = m.axis;
+  const double w = s.angular_velocity;
+  return {s.velocity[0] + w * (n[1] * r[2] - n[2] * r[1]), s.velocity[1] + w * (n[2] * r[0] - n[0] * r[2]),
+          s.velocity[2] + w * (n[0] * r[1] - n[1] * r[0])};
+}
+
 MotionSample MotionSet::sample(int k, double t) const {
   const MotionSpec& s = specs_[k];
   const Jet e = envelope(k, t);

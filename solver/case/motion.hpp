@@ -57,6 +57,16 @@ struct MotionSample {
   double angle = 0.0, angular_velocity = 0.0, angular_acceleration = 0.0;
 };
 
+// Where the body's point x0 (at t = 0) is at the sample's time: x = centre + d + R(theta) (x0 -
+// centre), R about the motion's unit axis (Rodrigues).
+Vec3 moved_point(const MotionSpec& m, const MotionSample& s, const Vec3& x0);
+// The inverse: where the body's point now at x was at t = 0.
+Vec3 start_point(const MotionSpec& m, const MotionSample& s, const Vec3& x);
+// A vector of the body's (a normal) turned as the body has turned: R(theta) v.
+Vec3 turned(const MotionSpec& m, const MotionSample& s, const Vec3& v);
+// The velocity of the body's point now at x: d' + theta' axis x (x - centre - d).
+Vec3 point_velocity(const MotionSpec& m, const MotionSample& s, const Vec3& x);
+
 class MotionSet {
  public:
   MotionSet() = default;

@@ -135,6 +135,7 @@ class ShapeContacts : public SimTK::Force::Custom::Implementation {
   void calcForce(const SimTK::State& state, SimTK::Vector_<SimTK::SpatialVec>& body_forces, SimTK::Vector_<SimTK::Vec3>&,
                  SimTK::Vector&) const override {
     using SimTK::Vec3;
+    const double t = state.getTime();
     for (std::size_t a = 0; a < members_.size(); ++a) {
       const Member& A = members_[a];
       const SimTK::Transform& X_GA = A.body.getBodyTransform(state);
@@ -143,9 +144,11 @@ class ShapeContacts : public SimTK::Force::Custom::Implementation {
         const Vec3 v = A.body.findStationVelocityInGround(state, p);
         for (const ObstacleInput& o : obstacles_) {
           if (!near_box(x, o.lo, o.hi, A.radius)) continue;
-          std::array<double, 3> n{};
-          const double d = o.distance({x[0], x[1], x[2]}, n);
-          const Vec3 f = force(A.radius - d, A.radius, Vec3(n[0], n[1], n[2]), v, A.stiffness, A.dissipation, A.friction, A.weight);
+          std::array<double, 3> n{}, u{};
+          const double d = o.distance(t, {x[0], x[1], x[2]}, n, u);
+          if (!(d < A.radius)) continue;
+          const Vec3 f = force(A.radius - d, A.radius, Vec3(n[0], n[1], n[2]), v - Vec3(u[0], u[1], u[2]), A.stiffness, A.dissipation,
+                               A.friction, A.weight);
           A.body.applyForceToBodyPoint(state, p, f, body_forces);
         }
         for (std::size_t b = 0; b < members_.size(); ++b) {
@@ -209,10 +212,9 @@ namespace {
 // Runge-Kutta's stability for steps up to about 5e-4 s (SPH steps are some 1e-4 s).
 constexpr double kTransitionVelocity = 2e-3;  // [m/s]
 
-// Contact: every body with contact gets its spheres pressed against the tank's plane walls, the
-// obstacles and the other bodies by ShapeContacts. Nothing when no body has contact.
-void add_contact(System::Impl& m, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls,
-                 const std::vector<ObstacleInput>& obstacles, int dim) {
+// Contact: the spheres of every body with contact against the obstacles and the other bodies
+// (ShapeContacts). Nothing when no body has contact, or nothing to meet.
+void add_contact(System::Impl& m, const std::vector<BodyInput>& bodies, const std::vector<ObstacleInput>& obstacles, int dim) {
   std::vector<ShapeContacts::Member> members;
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     const ContactInput& c = bodies[b].contact;
@@ -221,24 +223,13 @@ void add_contact(System::Impl& m, const std::vector<BodyInput>& bodies, const st
     for (const auto& p : c.points) member.points.push_back(vec_of(p, dim));
     members.push_back(std::move(member));
   }
-  if (members.empty()) return;
-  // A wall: the half-space behind its plane, d = (x - point) . normal.
-  constexpr double kFar = 1e300;
-  std::vector<ObstacleInput> all;
-  for (const WallInput& w : walls)
-    all.push_back({[w](const std::array<double, 3>& x, std::array<double, 3>& normal) {
-                     normal = w.normal;
-                     return (x[0] - w.point[0]) * w.normal[0] + (x[1] - w.point[1]) * w.normal[1] + (x[2] - w.point[2]) * w.normal[2];
-                   },
-                   {-kFar, -kFar, -kFar}, {kFar, kFar, kFar}});
-  all.insert(all.end(), obstacles.begin(), obstacles.end());
-  if (all.empty() && members.size() < 2) return;
-  SimTK::Force::Custom(m.forces, new ShapeContacts(std::move(members), std::move(all), kTransitionVelocity));  // which owns it
+  if (members.empty() || (obstacles.empty() && members.size() < 2)) return;
+  SimTK::Force::Custom(m.forces, new ShapeContacts(std::move(members), obstacles, kTransitionVelocity));  // which owns it
 }
 
 }  // namespace
 
-System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls,
+System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyInput>& bodies,
                const std::vector<ObstacleInput>& obstacles)
     : impl_(new Impl) {
   using namespace SimTK;
@@ -282,7 +273,7 @@ System::System(int dim, const std::array<double, 3>& g, const std::vector<BodyIn
     }
     m.bodies.push_back(mob);
   }
-  add_contact(m, bodies, walls, obstacles, dim);
+  add_contact(m, bodies, obstacles, dim);
   if (!lines.empty()) {
     m.springs = new Springs(std::move(lines));
     Force::Custom(m.forces, m.springs);  // which owns it

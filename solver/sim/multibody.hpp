@@ -30,10 +30,10 @@ struct SpringInput {
 // A signed distance to a surface [m], negative inside, with the unit outward normal there.
 using Distance = std::function<double(const std::array<double, 3>& x, std::array<double, 3>& normal)>;
 
-// Contact (Hunt & Crossley's force on Hertz's law, multibody.cpp): small spheres centred at
-// `points` (body frame: from the centre of mass, world axes at t = 0), the body's outermost points,
-// pressed against the tank's plane walls (Simbody's half-spaces), and against obstacles and other
-// bodies with contact (their signed distances, ShapeContacts in multibody.cpp).
+// Contact (Hunt & Crossley's force on Hertz's law, ShapeContacts in multibody.cpp): small spheres
+// centred at `points` (body frame: from the centre of mass, world axes at t = 0), the body's
+// outermost points, pressed against the obstacles and the other bodies with contact, found by their
+// signed distances.
 struct ContactInput {
   bool on = false;
   std::vector<std::array<double, 3>> points;  // the spheres' centres, body frame
@@ -46,16 +46,13 @@ struct ContactInput {
   double weight = 0.0;       // the body's weight [N] (m g): ShapeContacts' friction scale
 };
 
-// A wall: the half-space behind a plane through `point` whose unit normal points into the fluid.
-struct WallInput {
-  std::array<double, 3> point{}, normal{};
-};
-
-// A fixed obstacle that bodies with contact meet (a static solid; a shaped tank's outside):
-// its signed distance in world coordinates, negative where a body may not go, and its bounding box
-// (a point outside it, farther than a contact sphere's radius, is not tested).
+// What bodies with contact meet besides each other (a tank's wall, a solid, a shaped tank's
+// outside), fixed or moved by a prescribed motion: at time t, the signed distance of the world
+// point x (negative where a body may not go), the unit outward normal and the surface's velocity
+// there; and a box it stays inside at all times (a point outside it, farther than a contact
+// sphere's radius, is not tested).
 struct ObstacleInput {
-  Distance distance;
+  std::function<double(double t, const std::array<double, 3>& x, std::array<double, 3>& normal, std::array<double, 3>& velocity)> distance;
   std::array<double, 3> lo{}, hi{};
 };
 
@@ -80,7 +77,7 @@ using Load = std::array<double, 6>;
 
 class System {
  public:
-  System(int dim, const std::array<double, 3>& gravity, const std::vector<BodyInput>& bodies, const std::vector<WallInput>& walls = {},
+  System(int dim, const std::array<double, 3>& gravity, const std::vector<BodyInput>& bodies,
          const std::vector<ObstacleInput>& obstacles = {});
   ~System();
   // The loads now: the accelerations follow.

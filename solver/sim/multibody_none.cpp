@@ -7,7 +7,7 @@
 namespace spate::multibody {
 
 struct System::Impl {};
-System::System(int, const std::array<double, 3>&, const std::vector<BodyInput>&, const std::vector<WallInput>&, const std::vector<ObstacleInput>&) {
+System::System(int, const std::array<double, 3>&, const std::vector<BodyInput>&, const std::vector<ObstacleInput>&) {
   throw std::runtime_error("this spate was built without Simbody (libsimbody-dev), which floating solids need");
 }
 System::~System() = default;

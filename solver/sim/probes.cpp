@@ -146,18 +146,9 @@ Vec3d followed_position(const ProbeSpec& gauge, const Case& c, const MotionSet& 
   const int v = c.dim - 1;
   Vec3d at = gauge.position;
   if (gauge.type == ProbeType::Height) at[v] = c.tank_origin[v];
-  const MotionSpec& m = motions.spec(gauge.follow);
-  const MotionSample s = motions.sample(gauge.follow, time);
-  // x(t) = centre + d(t) + R(theta) (x(0) - centre), R about the motion's axis (Rodrigues).
-  double r[3] = {0, 0, 0};
-  for (int k = 0; k < c.dim; ++k) r[k] = at[k] - m.centre[k];
-  const double cs = std::cos(s.angle), sn = std::sin(s.angle);
-  const auto& n = m.axis;
-  const double n_dot_r = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
-  const double cross[3] = {n[1] * r[2] - n[2] * r[1], n[2] * r[0] - n[0] * r[2], n[0] * r[1] - n[1] * r[0]};
-  Vec3d out{0, 0, 0};
-  for (int k = 0; k < c.dim; ++k)
-    out[k] = m.centre[k] + s.displacement[k] + r[k] * cs + cross[k] * sn + n[k] * n_dot_r * (1.0 - cs);
+  if (c.dim == 2) at[2] = 0.0;
+  Vec3d out = moved_point(motions.spec(gauge.follow), motions.sample(gauge.follow, time), at);
+  for (int k = c.dim; k < 3; ++k) out[k] = 0.0;
   return out;
 }
 

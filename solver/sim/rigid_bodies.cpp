@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
 
@@ -13,7 +14,8 @@
 namespace spate {
 
 struct RigidBodies::Impl {
-  multibody::System system;
+  std::unique_ptr<MotionSet> own_motions;  // the case's, unsteered, when the caller gives none
+  std::unique_ptr<multibody::System> system;
 };
 
 namespace {
@@ -21,57 +23,90 @@ namespace {
 // The contact spheres' radius, in dp.
 constexpr double kContactRadius = 0.01;
 
-// The tank's walls, each a plane with its normal into the fluid: none along a periodic axis nor at
-// the open top.
-std::vector<multibody::WallInput> tank_walls(const Case& c) {
-  std::vector<multibody::WallInput> walls;
-  const Vec3d hi = particle_tank_max(c);
-  for (int face = 0; face < 2 * c.dim; ++face) {
-    if (tank_wall_missing(c, face)) continue;
-    const int axis = face / 2;
-    multibody::WallInput w;
-    for (int k = 0; k < c.dim; ++k) w.point[k] = c.tank_origin[k];
-    w.point[axis] = face % 2 ? hi[axis] : c.tank_origin[axis];
-    w.normal[axis] = face % 2 ? -1.0 : 1.0;
-    walls.push_back(w);
-  }
-  return walls;
-}
+// A surface's signed distance (negative inside) and outward normal at a point, world frame at t = 0.
+using StartDistance = std::function<double(const Vec3d& x, Vec3d& normal)>;
 
-// A solid's surface: its shape's, or its box's.
-ShapePtr solid_shape(const SolidSpec& s, int dim) { return s.shape ? s.shape : make_box(s.box.min, s.box.max, dim); }
-
-multibody::Distance distance_of(ShapePtr shape, const Vec3d& origin, double sign) {
-  return [shape, origin, sign](const std::array<double, 3>& x, std::array<double, 3>& normal) {
-    const double at[3] = {x[0] + origin[0], x[1] + origin[1], x[2] + origin[2]};
+StartDistance shape_distance(ShapePtr shape, double sign) {
+  return [shape, sign](const Vec3d& x, Vec3d& normal) {
     double n[3] = {0, 0, 0};
-    const double d = shape->distance(at, n);
+    const double d = shape->distance(x.data(), n);
     normal = {sign * n[0], sign * n[1], sign * n[2]};
     return sign * d;
   };
 }
 
-// What a body with contact meets besides the tank's plane walls: the static solids, and a shaped
-// tank's outside (everything but the vessel's inside; not when the tank moves, since bodies then
-// have no contact). Solids moved by a prescribed motion are not among them (not modelled).
-std::vector<multibody::ObstacleInput> obstacles(const Case& c) {
+// A body's own surface in its frame (from its centre of mass at t = 0, world axes).
+multibody::Distance body_surface(ShapePtr shape, const Vec3d& centre) {
+  const StartDistance at = shape_distance(shape, 1.0);
+  return [at, centre](const std::array<double, 3>& x, std::array<double, 3>& normal) {
+    return at({x[0] + centre[0], x[1] + centre[1], x[2] + centre[2]}, normal);
+  };
+}
+
+// An obstacle from its surface at t = 0, fixed (motion < 0) or moved by a prescribed motion: the
+// point is taken back to where the surface was at t = 0, and the normal turned as it has turned.
+// Its box: the surface's (lo, hi), widened by how far any motion can take it.
+multibody::ObstacleInput obstacle(StartDistance at, Vec3d lo, Vec3d hi, const MotionSet& motions, int motion, int dim) {
+  multibody::ObstacleInput o;
+  constexpr double kFar = 1e300;
+  const Vec3d reach = motion >= 0 ? motions.bound() : Vec3d{0, 0, 0};
+  for (int k = 0; k < 3; ++k) {
+    o.lo[k] = k < dim ? lo[k] - reach[k] : -kFar;
+    o.hi[k] = k < dim ? hi[k] + reach[k] : kFar;
+  }
+  if (motion < 0) {
+    o.distance = [at](double, const std::array<double, 3>& x, std::array<double, 3>& normal, std::array<double, 3>& velocity) {
+      velocity = {0, 0, 0};
+      return at(x, normal);
+    };
+    return o;
+  }
+  const MotionSet* set = &motions;
+  o.distance = [at, set, motion, dim](double t, const std::array<double, 3>& x, std::array<double, 3>& normal, std::array<double, 3>& velocity) {
+    const MotionSpec& m = set->spec(motion);
+    const MotionSample s = set->sample(motion, t);
+    Vec3d n0{0, 0, 0};
+    const double d = at(start_point(m, s, x), n0);
+    normal = turned(m, s, n0);
+    velocity = point_velocity(m, s, x);
+    for (int k = dim; k < 3; ++k) normal[k] = velocity[k] = 0.0;
+    return d;
+  };
+  return o;
+}
+
+// What a body with contact meets besides the other bodies: the tank's plane walls (none along a
+// periodic axis nor at the open top; each the half-space behind its plane, whose normal points
+// into the fluid) or a shaped tank's outside (everything but the vessel's inside), and every solid
+// that does not float, each fixed or moved by its prescribed motion as the water's walls are.
+std::vector<multibody::ObstacleInput> obstacles(const Case& c, const MotionSet& motions) {
   std::vector<multibody::ObstacleInput> out;
-  constexpr double kFar = 1e30;
-  if (c.tank_shape && c.tank_motion < 0)
-    out.push_back({distance_of(c.tank_shape, {0, 0, 0}, -1.0), {-kFar, -kFar, -kFar}, {kFar, kFar, kFar}});
+  constexpr double kFar = 1e300;
+  const Vec3d everywhere_lo{-kFar, -kFar, -kFar}, everywhere_hi{kFar, kFar, kFar};
+  if (c.tank_shape) out.push_back(obstacle(shape_distance(c.tank_shape, -1.0), everywhere_lo, everywhere_hi, motions, c.tank_motion, c.dim));
+  const Vec3d hi = particle_tank_max(c);
+  for (int face = 0; face < 2 * c.dim && !c.tank_shape; ++face) {
+    if (tank_wall_missing(c, face)) continue;
+    const int axis = face / 2;
+    const double plane = face % 2 ? hi[axis] : c.tank_origin[axis], sign = face % 2 ? -1.0 : 1.0;
+    const StartDistance wall = [axis, plane, sign](const Vec3d& x, Vec3d& normal) {
+      normal = {0, 0, 0};
+      normal[axis] = sign;
+      return sign * (x[axis] - plane);
+    };
+    out.push_back(obstacle(wall, everywhere_lo, everywhere_hi, motions, c.tank_motion, c.dim));
+  }
   for (const SolidSpec& s : c.solids) {
-    if (s.motion >= 0) continue;
-    const ShapePtr shape = solid_shape(s, c.dim);
-    multibody::ObstacleInput o{distance_of(shape, {0, 0, 0}, 1.0), shape->lo, shape->hi};
-    if (c.dim == 2) o.lo[2] = -kFar, o.hi[2] = kFar;
-    out.push_back(o);
+    if (s.motion >= 0 && c.motions[s.motion].floating >= 0) continue;
+    const ShapePtr shape = s.shape ? s.shape : make_box(s.box.min, s.box.max, c.dim);
+    out.push_back(obstacle(shape_distance(shape, 1.0), shape->lo, shape->hi, motions, s.motion, c.dim));
   }
   return out;
 }
 
 }  // namespace
 
-RigidBodies::RigidBodies(const Case& c) : case_(c) {
+RigidBodies::RigidBodies(const Case& c, const MotionSet* motions) : case_(c) {
   slots_.assign(c.bodies.size(), -1);
   for (std::size_t k = 0; k < c.motions.size(); ++k)
     if (c.motions[k].floating >= 0) slots_[c.motions[k].floating] = static_cast<int>(k);
@@ -100,12 +135,15 @@ RigidBodies::RigidBodies(const Case& c) : case_(c) {
       k.weight = weight;
       k.points = b.contact.points;
       // Its surface in its own frame (from the centre of mass, world axes at t = 0).
-      k.surface = distance_of(solid_shape(c.solids[b.solid], c.dim), b.centre_of_mass, 1.0);
+      const SolidSpec& solid = c.solids[b.solid];
+      k.surface = body_surface(solid.shape ? solid.shape : make_box(solid.box.min, solid.box.max, c.dim), b.centre_of_mass);
       for (const Vec3d& p : b.contact.points) k.reach = std::max(k.reach, std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]));
     }
     in.push_back(body);
   }
-  impl_.reset(new Impl{multibody::System(c.dim, c.gravity, in, tank_walls(c), obstacles(c))});
+  impl_.reset(new Impl);
+  if (!motions) impl_->own_motions.reset(new MotionSet(c.motions, c.dim)), motions = impl_->own_motions.get();
+  impl_->system.reset(new multibody::System(c.dim, c.gravity, in, obstacles(c, *motions)));
   loads_.assign(c.bodies.size(), BodyLoad{});
   read_state();
   previous_ = states_;
@@ -115,14 +153,14 @@ RigidBodies::~RigidBodies() = default;
 
 void RigidBodies::read_state() {
   states_.clear();
-  for (const multibody::BodyOutput& o : impl_->system.state())
+  for (const multibody::BodyOutput& o : impl_->system->state())
     states_.push_back({o.centre, o.velocity, o.angular_velocity, o.acceleration, o.angular_acceleration, o.rotation, o.angles});
 }
 
 void RigidBodies::apply_loads() {
   std::vector<multibody::Load> loads;
   for (const BodyLoad& l : loads_) loads.push_back({l.force[0], l.force[1], l.force[2], l.torque[0], l.torque[1], l.torque[2]});
-  impl_->system.set_loads(loads);
+  impl_->system->set_loads(loads);
   loaded_ = true;
   read_state();
 }
@@ -136,7 +174,7 @@ void RigidBodies::set_loads(const std::vector<BodyLoad>& loads) {
 void RigidBodies::advance(double t0, double t1) {
   if (!impl_) return;
   previous_ = states_;
-  impl_->system.advance(t0, t1);
+  impl_->system->advance(t0, t1);
   read_state();
 }
 
@@ -149,7 +187,7 @@ constexpr const char* kStateParts[3] = {"q", "u", "load"};
 
 std::array<std::vector<double>, 3> RigidBodies::state_parts(int b) const {
   const BodyLoad& l = loads_[b];
-  return {impl_->system.q(b), impl_->system.u(b), {l.force[0], l.force[1], l.force[2], l.torque[0], l.torque[1], l.torque[2]}};
+  return {impl_->system->q(b), impl_->system->u(b), {l.force[0], l.force[1], l.force[2], l.torque[0], l.torque[1], l.torque[2]}};
 }
 
 std::string RigidBodies::save() const {
@@ -222,7 +260,7 @@ void RigidBodies::restore(const std::string& text) {
       parts.back().second.push_back(x);
     }
     if (parts.size() != 3 || parts[0].first != "q" || parts[1].first != "u" || parts[2].first != "load" || parts[2].second.size() != 6 ||
-        !impl_->system.set(b, parts[0].second, parts[1].second))
+        !impl_->system->set(b, parts[0].second, parts[1].second))
       throw std::runtime_error(fmt::format("floating solid '{}': expected 'q' and 'u' with this body's coordinates and speeds, "
                                            "then 'load' with 6 numbers", name));
     for (int k = 0; k < 3; ++k) loads_[b].force[k] = parts[2].second[k], loads_[b].torque[k] = parts[2].second[3 + k];
@@ -234,12 +272,12 @@ void RigidBodies::restore(const std::string& text) {
 
 void RigidBodies::set_spring(int line, const Coefficients& k) {
   springs_[line] = k;
-  impl_->system.set_spring(line, k.stiffness, k.damping);
+  impl_->system->set_spring(line, k.stiffness, k.damping);
 }
 
 void RigidBodies::set_hinge(int b, const Coefficients& k) {
   hinges_[b] = k;
-  impl_->system.set_hinge(b, k.stiffness, k.damping);
+  impl_->system->set_hinge(b, k.stiffness, k.damping);
 }
 
 void RigidBodies::set_step(PhysicsParams& P) const {

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "../case/case.hpp"
+#include "../case/motion.hpp"
 #include "../physics/params.hpp"
 
 namespace spate {
@@ -40,7 +41,9 @@ struct BodyState {
 
 class RigidBodies {
  public:
-  explicit RigidBodies(const Case& c);
+  // `motions`: the run's prescribed motions as steered (they move the walls and solids that bodies
+  // meet through contact), kept by the caller for the bodies' life; none: the case's, unsteered.
+  explicit RigidBodies(const Case& c, const MotionSet* motions = nullptr);
   ~RigidBodies();
   RigidBodies(const RigidBodies&) = delete;
   RigidBodies& operator=(const RigidBodies&) = delete;

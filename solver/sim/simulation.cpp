@@ -333,7 +333,7 @@ class Worker {
     MotionSet motions(s_.c.motions, s_.c.dim);
     // The floating solids (rigid_bodies.hpp): a restart continues from their saved state and loads
     // (checked when the run was set up), with their springs as steered.
-    RigidBodies bodies(s_.c);
+    RigidBodies bodies(s_.c, &motions);
     bodies_ = &bodies;
     SteeringTarget steer{&params, &insitu_every, &motions, &bodies};
     for (auto& change : s_.steering_history) {

@@ -354,6 +354,66 @@ TEST(RigidBodies, ADiscInACircularTankRestsAtItsBottom) {
   EXPECT_NEAR(b.state(0).centre[0], 0.2, 1e-6);
 }
 
+// A 2D tank with a box 0.2 x 0.1 m resting on its floor from x = `left`, `tank_motion` its motion
+// keys, `extra` more solids.
+std::string resting_box_case(const std::string& tank_motion, const std::string& extra = "", double left = 0.5) {
+  return "name: t\ndimensions: 2\ndp: 0.01\ngravity: [0, -9.81]\ntime: {end: 1}\n"
+         "tank: {origin: [0, 0], size: [1.2, 0.5]" + (tank_motion.empty() ? std::string() : ", motion: {" + tank_motion + "}") + "}\n"
+         "fluid_blocks: [{min: [0.9, 0], max: [1.2, 0.1]}]\n"
+         "solids:\n  - name: box\n    min: [" + std::to_string(left) + ", 0.0]\n    max: [" + std::to_string(left + 0.2) +
+         ", 0.1]\n    motion: floating\n    density: 500\n" + extra;
+}
+
+// Contact with a moving tank: the tank sways, x = A sin(omega t) with A = 1 cm and a period of 1 s,
+// ramped over one period; its floor's peak acceleration, A omega^2 = 0.39 m/s2, is far below
+// Coulomb's mu g = 4.9 m/s2, so friction carries the box resting on the floor with the tank
+// (creeping below the transition speed by some 0.03 mm); without friction it would stay put.
+TEST(RigidBodies, ABoxOnTheFloorOfASwayingTankSwaysWithIt) {
+  const Case c = parse_case(resting_box_case("translation: [0.01, 0], period: 1.0, ramp: 1.0"), "case.yaml");
+  ASSERT_TRUE(c.bodies[0].contact.on);
+  RigidBodies b(c);
+  b.set_loads({BodyLoad{}});
+  const MotionSet motions(c.motions, c.dim);
+  const double dt = 2e-4;
+  double worst = 0.0, swing = 0.0;
+  for (int k = 0; k < 15000; ++k) {  // 3 s
+    b.advance(k * dt, (k + 1) * dt);
+    const double tank = motions.sample(c.tank_motion, (k + 1) * dt).displacement[0];
+    if (k * dt > 1.0) worst = std::max(worst, std::abs(b.state(0).centre[0] - 0.6 - tank)), swing = std::max(swing, std::abs(tank));
+  }
+  EXPECT_GT(swing, 0.0099);
+  EXPECT_LT(worst, 0.01 * 0.01);  // 26 um
+  EXPECT_NEAR(b.state(0).centre[1], 0.05, 0.5 * c.dp);
+}
+
+// Contact with a solid moved by a prescribed motion: a paddle (x from 0.2 to 0.3) swings 0.1 m to
+// the right and back (period 2 s) and pushes the box resting on the floor in front of it (from
+// x = 0.35) by 5 cm; the box never goes into the paddle (dp/10 at most) and friction stops it
+// when the paddle turns back.
+TEST(RigidBodies, AMovingSolidPushesABoxWithoutPassingIntoIt) {
+  const Case c = parse_case(
+      resting_box_case("", "  - name: paddle\n    min: [0.2, 0.0]\n    max: [0.3, 0.2]\n    motion: {translation: [0.1, 0], period: 2.0}\n", 0.35),
+      "case.yaml");
+  ASSERT_EQ(c.solids.size(), 2u);
+  RigidBodies b(c);
+  b.set_loads({BodyLoad{}});
+  const MotionSet motions(c.motions, c.dim);
+  const int paddle = c.solids[1].motion;
+  const double dt = 2e-4;
+  double closest = 1.0;
+  for (int k = 0; k < 10000; ++k) {  // 2 s: out and back
+    b.advance(k * dt, (k + 1) * dt);
+    const double face = 0.3 + motions.sample(paddle, (k + 1) * dt).displacement[0];
+    closest = std::min(closest, b.state(0).centre[0] - 0.1 - face);
+  }
+  EXPECT_GT(closest, -0.1 * c.dp);  // 0.49 mm: the paddle meets it at 0.3 m/s
+  EXPECT_LT(closest, 0.0);  // it did touch
+  EXPECT_GT(b.state(0).centre[0] - 0.45, 0.04);
+  EXPECT_LT(b.state(0).centre[0] - 0.45, 0.06);
+  EXPECT_LT(std::abs(b.state(0).velocity[0]), 1e-3);
+  EXPECT_NEAR(b.state(0).angles[2], 0.0, 1e-3);
+}
+
 // Friction against the floor: a push below mu W leaves the resting box all but still (Simbody's
 // continuous friction creeps below its transition velocity, 2 mm/s), one of 1.5 mu W slides it
 // at (1.5 - 1) mu g; and a side wall stops it. The box (x from 0.9 to 1.1) settles from 1 cm above
