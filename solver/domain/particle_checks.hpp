@@ -54,12 +54,23 @@ struct OpenSides {
   float ceiling = 0.0f;  // top + headroom: the top of the domain
   float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};  // outer faces of the wall layers (periodic axes: +-infinity)
   std::uint8_t fluids = 1;  // materials [0, fluids) are fluids (MaterialTable): only they leave
+  // A moving tank: where a point now was, relative to the tank, at t = 0 (the sides above are the
+  // tank's then): p0 = centre + back (x - centre - shift); the identity while the tank stands
+  // still. Without it, water that went over a swaying tank's wall fell down outside it, beside
+  // the wall's place at t = 0, and left the domain through its floor (an instability).
+  bool moving = false;
+  float centre[3] = {0, 0, 0}, shift[3] = {0, 0, 0};
+  float back[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
 };
 
 // A fluid particle (material) above the walls that is past their outer faces, or above the
-// ceiling: gone. NaN coordinates compare false everywhere: they stay a fault.
-SPATE_HD bool escaped(const OpenSides& o, int dim, std::uint8_t material, const float pos[3]) {
+// ceiling, in the tank's frame: gone. NaN coordinates compare false everywhere: they stay a fault.
+SPATE_HD bool escaped(const OpenSides& o, int dim, std::uint8_t material, const float x[3]) {
   if (!o.open || material >= o.fluids) return false;
+  float r[3], p0[3];
+  for (int a = 0; a < 3; ++a) r[a] = x[a] - o.centre[a] - o.shift[a];
+  for (int a = 0; a < 3; ++a) p0[a] = o.centre[a] + (o.back[a][0] * r[0] + o.back[a][1] * r[1] + o.back[a][2] * r[2]);
+  const float* pos = o.moving ? p0 : x;
   const float z = pos[o.vertical];
   if (!(z > o.top)) return false;
   if (z > o.ceiling) return true;

@@ -283,6 +283,23 @@ class Progress {
   Clock::time_point last_ = Clock::now();
 };
 
+// The open sides of a moving tank at time t: the particles are taken back to where they were,
+// relative to the tank, at t = 0 (particle_checks.hpp, OpenSides).
+OpenSides tank_open_sides(OpenSides o, const MotionSet& motions, int motion, double t) {
+  const MotionSpec& m = motions.spec(motion);
+  MotionSample s = motions.sample(motion, t);
+  o.moving = true;
+  for (int a = 0; a < 3; ++a) o.centre[a] = static_cast<float>(m.centre[a]), o.shift[a] = static_cast<float>(s.displacement[a]);
+  s.angle = -s.angle;  // the turn back
+  for (int k = 0; k < 3; ++k) {
+    Vec3 e{0, 0, 0};
+    e[k] = 1.0;
+    const Vec3 column = turned(m, s, e);
+    for (int a = 0; a < 3; ++a) o.back[a][k] = static_cast<float>(column[a]);
+  }
+  return o;
+}
+
 class Worker {
  public:
   // One single-threaded worker per CPU of this process's affinity mask, when they fit: the kernel
@@ -304,7 +321,9 @@ class Worker {
       return;
     }
   }
-  Worker(Shared& s, SlabTransport& t) : s_(s), t_(t), w_(s.lattice, s.params, t) { w_.set_open_sides(open_sides(s.c)); }
+  Worker(Shared& s, SlabTransport& t) : s_(s), t_(t), w_(s.lattice, s.params, t), open_sides_(open_sides(s.c)) {
+    w_.set_open_sides(open_sides_);
+  }
 
   void run() {
     omp_set_num_threads(s_.omp_threads);
@@ -458,6 +477,7 @@ class Worker {
         imbalance_log.push_back(w_.rebalance(kMinColumnsPerSlab));
       if (motions.size() > 0) {  // the walls' rigid map over this step and their state at its end
         motions.set_step(params, time, time + dt);
+        if (s_.c.tank_motion >= 0) w_.set_open_sides(tank_open_sides(open_sides_, motions, s_.c.tank_motion, time + dt));
         bodies.advance(time, time + dt);
         bodies.set_step(params);
         w_.set_params(params);
@@ -706,6 +726,7 @@ class Worker {
   Shared& s_;
   SlabTransport& t_;
   SlabWorker w_;
+  OpenSides open_sides_;  // the tank's at t = 0 (tank_open_sides moves them with a moving tank)
   const RigidBodies* bodies_ = nullptr;  // the run's floating solids (for checkpoints)
   const FlowDrive* drive_ = nullptr;      // the run's flow drive (for checkpoints)
 };

@@ -512,6 +512,31 @@ TEST(OpenSides, EscapedFluidIsRemovedTheSameWayOnEverySplitAndPath) {
   }
 }
 
+// A swaying tank's open sides are its own: a splash is judged where the tank's walls are now, not
+// where they stood at t = 0 (the tank 3 cm to the right: a drop 1 cm past the right wall's outer
+// face at t = 0 is still above the wall; 4 cm past it, it is out; turned, its top is elsewhere).
+TEST(OpenSides, ASwayingTanksSplashIsJudgedWhereItsWallsAreNow) {
+  const Case c = small_dam_break();  // open top at y = 0.12 m, walls x in [-0.006, 0.166] m
+  OpenSides o = open_sides(c);
+  const float near_wall[3] = {0.176f, 0.13f, 0.0f}, far_out[3] = {0.206f, 0.13f, 0.0f}, left_out[3] = {-0.01f, 0.13f, 0.0f};
+  EXPECT_TRUE(escaped(o, 2, 0, near_wall));
+  EXPECT_TRUE(escaped(o, 2, 0, left_out));
+  o.moving = true;
+  EXPECT_TRUE(escaped(o, 2, 0, near_wall));  // the identity
+  o.shift[0] = 0.03f;
+  EXPECT_FALSE(escaped(o, 2, 0, near_wall));
+  EXPECT_TRUE(escaped(o, 2, 0, far_out));
+  o.shift[0] = -0.03f;  // to the left: the drop left of the left wall's place at t = 0 is above the tank
+  EXPECT_FALSE(escaped(o, 2, 0, left_out));
+  // Turned by 90 degrees about the tank's centre: the top is now to the left.
+  o.shift[0] = 0.0f;
+  o.centre[0] = 0.08f, o.centre[1] = 0.06f;
+  o.back[0][0] = 0.0f, o.back[0][1] = 1.0f, o.back[1][0] = -1.0f, o.back[1][1] = 0.0f;  // R(-90 deg)
+  const float beyond_top[3] = {0.08f - 0.19f, 0.06f, 0.0f};  // at t = 0: 0.19 m above the centre, over the ceiling
+  EXPECT_TRUE(escaped(o, 2, 0, beyond_top));
+  EXPECT_FALSE(escaped(o, 2, 0, far_out));
+}
+
 TEST(OpenSides, AParticleThroughAWallOrUnderAClosedLidIsStillAFault) {
   Case c = small_dam_break();
   const ParticleStore initial = generate_particles(c);
