@@ -67,10 +67,14 @@ struct OpenSides {
 // ceiling, in the tank's frame: gone. NaN coordinates compare false everywhere: they stay a fault.
 SPATE_HD bool escaped(const OpenSides& o, int dim, std::uint8_t material, const float x[3]) {
   if (!o.open || material >= o.fluids) return false;
-  float r[3], p0[3];
-  for (int a = 0; a < 3; ++a) r[a] = x[a] - o.centre[a] - o.shift[a];
-  for (int a = 0; a < 3; ++a) p0[a] = o.centre[a] + (o.back[a][0] * r[0] + o.back[a][1] * r[1] + o.back[a][2] * r[2]);
-  const float* pos = o.moving ? p0 : x;
+  const float* pos = x;
+  float p0[3];
+  if (o.moving) {
+    float r[3];
+    for (int a = 0; a < 3; ++a) r[a] = x[a] - o.centre[a] - o.shift[a];
+    for (int a = 0; a < 3; ++a) p0[a] = o.centre[a] + (o.back[a][0] * r[0] + o.back[a][1] * r[1] + o.back[a][2] * r[2]);
+    pos = p0;
+  }
   const float z = pos[o.vertical];
   if (!(z > o.top)) return false;
   if (z > o.ceiling) return true;
