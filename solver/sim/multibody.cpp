@@ -130,7 +130,18 @@ class ShapeContacts : public SimTK::Force::Custom::Implementation {
     double reach, radius, stiffness, dissipation, friction, weight;
   };
   ShapeContacts(std::vector<Member> members, std::vector<ObstacleInput> obstacles, double transition)
-      : members_(std::move(members)), obstacles_(std::move(obstacles)), transition_(transition) {}
+      : members_(std::move(members)), obstacles_(std::move(obstacles)), transition_(transition) {
+    // Simbody's combination of two materials (HuntCrossleyForce.h), once per pair of bodies.
+    const std::size_t n = members_.size();
+    pairs_.resize(n * n);
+    for (std::size_t a = 0; a < n; ++a)
+      for (std::size_t b = 0; b < n; ++b) {
+        const Member &A = members_[a], &B = members_[b];
+        const double e1 = std::pow(A.stiffness, 2.0 / 3.0), e2 = std::pow(B.stiffness, 2.0 / 3.0), s1 = e2 / (e1 + e2);
+        pairs_[a * n + b] = {std::pow(s1 * e1, 1.5), A.dissipation * s1 + B.dissipation * (1 - s1),
+                             2 * A.friction * B.friction / (A.friction + B.friction), std::min(A.weight, B.weight)};
+      }
+  }
 
   void calcForce(const SimTK::State& state, SimTK::Vector_<SimTK::SpatialVec>& body_forces, SimTK::Vector_<SimTK::Vec3>&,
                  SimTK::Vector&) const override {
@@ -160,12 +171,9 @@ class ShapeContacts : public SimTK::Force::Custom::Implementation {
           std::array<double, 3> n{};
           const double d = B.surface({q[0], q[1], q[2]}, n);
           if (!(d < A.radius)) continue;
-          // Simbody's combination of two materials (HuntCrossleyForce.h).
-          const double e1 = std::pow(A.stiffness, 2.0 / 3.0), e2 = std::pow(B.stiffness, 2.0 / 3.0), s1 = e2 / (e1 + e2);
-          const double E = std::pow(s1 * e1, 1.5), c = A.dissipation * s1 + B.dissipation * (1 - s1);
-          const double mu = 2 * A.friction * B.friction / (A.friction + B.friction);
-          const Vec3 f = force(A.radius - d, A.radius, X_GB.R() * Vec3(n[0], n[1], n[2]), v - B.body.findStationVelocityInGround(state, q), E, c, mu,
-                               std::min(A.weight, B.weight));
+          const Pair& m = pairs_[a * members_.size() + b];
+          const Vec3 f = force(A.radius - d, A.radius, X_GB.R() * Vec3(n[0], n[1], n[2]), v - B.body.findStationVelocityInGround(state, q), m.stiffness,
+                               m.dissipation, m.friction, m.weight);
           A.body.applyForceToBodyPoint(state, p, f, body_forces);
           B.body.applyForceToBodyPoint(state, q, -f, body_forces);
         }
@@ -200,9 +208,14 @@ class ShapeContacts : public SimTK::Force::Custom::Implementation {
     if (vs > 0) f -= (fn * mu * std::min(vs / transition, 1.0) / vs) * slip;
     return f;
   }
+  // Two bodies' combined material; weight: the lighter one's.
+  struct Pair {
+    double stiffness, dissipation, friction, weight;
+  };
   std::vector<Member> members_;
   std::vector<ObstacleInput> obstacles_;
   double transition_;
+  std::vector<Pair> pairs_;  // [a * members + b]
 };
 
 namespace {

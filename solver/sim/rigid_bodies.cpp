@@ -35,6 +35,9 @@ StartDistance shape_distance(ShapePtr shape, double sign) {
   };
 }
 
+// A solid's surface: its shape, or a box shape for a box solid.
+ShapePtr solid_surface(const SolidSpec& s, int dim) { return s.shape ? s.shape : make_box(s.box.min, s.box.max, dim); }
+
 // A body's own surface in its frame (from its centre of mass at t = 0, world axes).
 multibody::Distance body_surface(ShapePtr shape, const Vec3d& centre) {
   const StartDistance at = shape_distance(shape, 1.0);
@@ -98,7 +101,7 @@ std::vector<multibody::ObstacleInput> obstacles(const Case& c, const MotionSet& 
   }
   for (const SolidSpec& s : c.solids) {
     if (s.motion >= 0 && c.motions[s.motion].floating >= 0) continue;
-    const ShapePtr shape = s.shape ? s.shape : make_box(s.box.min, s.box.max, c.dim);
+    const ShapePtr shape = solid_surface(s, c.dim);
     out.push_back(obstacle(shape_distance(shape, 1.0), shape->lo, shape->hi, motions, s.motion, c.dim));
   }
   return out;
@@ -136,7 +139,7 @@ RigidBodies::RigidBodies(const Case& c, const MotionSet* motions) : case_(c) {
       k.points = b.contact.points;
       // Its surface in its own frame (from the centre of mass, world axes at t = 0).
       const SolidSpec& solid = c.solids[b.solid];
-      k.surface = body_surface(solid.shape ? solid.shape : make_box(solid.box.min, solid.box.max, c.dim), b.centre_of_mass);
+      k.surface = body_surface(solid_surface(solid, c.dim), b.centre_of_mass);
       for (const Vec3d& p : b.contact.points) k.reach = std::max(k.reach, std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]));
     }
     in.push_back(body);
