@@ -6,11 +6,13 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <string>
 #include <vector>
 
 #include "case/motion.hpp"
 #include "run_helpers.hpp"
+#include "wave_theory.hpp"
 
 namespace spate {
 namespace {
@@ -140,6 +142,51 @@ TEST(FloatingBodies, ADenseBoxSinksAndRestsOnTheFloor) {
   EXPECT_NEAR(rest, 0.05, 0.02 * c.dp);
   EXPECT_LT(std::fabs(angle.back().second), 0.5);
   EXPECT_NEAR(x.back().second, 1.0, 0.1 * c.dp);
+}
+
+// cases/hinged_flap_2d.yaml: a bottom-hinged flap (0.06 x 0.56 m, density 500, a 300 N m/rad spring)
+// across the piston flume's regular waves (T = 1.2 s, 0.4 m deep). Its rotation per metre of
+// incident amplitude against linear potential-flow theory, 2.910 rad/m
+// (scripts/studies/hinged_flap_theory.py cases/hinged_flap_2d.yaml: the flap wave maker's radiation
+// on both faces, the excitation of a flap held still; docs/validation.md, "Hinged flap"), within
+// 15% (issue 32's level for bodies in waves): measured -4.4% (the study, which takes the incident
+// wave from the flume without the flap at the hinge, reads -2% and a lag of 54.6 degrees against
+// 53.9). The incident amplitude is g1's (x = 2 m) before the flap's reflection reaches it; the
+// flap's, once the steady waves have reached it and before its reflection comes back from the
+// piston (windows from the group velocity). The angle column counts counter-clockwise, so the flap
+// leaning downstream reads negative.
+TEST(FloatingBodies, AHingedFlapInWavesRocksAsLinearTheorySays) {
+  if (!body_support()) GTEST_SKIP() << "built without Simbody";
+  const Case c = load_case(test::case_path("hinged_flap_2d.yaml"), {"time.end=13.5", "output.interval=0"});
+  // The theory's number is for these: a changed case needs scripts/studies/hinged_flap_theory.py again.
+  const BodySpec& flap = c.bodies.at(0);
+  ASSERT_TRUE(flap.hinge.on);
+  ASSERT_DOUBLE_EQ(flap.hinge.stiffness, 300.0);
+  ASSERT_NEAR(flap.mass, 500 * 0.06 * 0.56, 1e-9);
+  const MotionSpec& piston = c.motions[0];
+  const double omega = piston.omega, T = 2 * std::numbers::pi / omega, depth = c.fluid_blocks[0].max[1];
+  ASSERT_NEAR(T, 1.2, 1e-9);
+  ASSERT_NEAR(depth, 0.4, 1e-12);
+  constexpr double kTheory = 2.910;  // |Theta| / A [rad/m]
+  const auto out = test::scratch("hinged-flap");
+  RunOptions o;
+  o.threads = 2;
+  o.until = 13.5;
+  const RunResult r = test::run_case(c, out, o);
+  ASSERT_EQ(r.exit_code, 0) << r.message;
+  const double k = test::wavenumber(omega, depth), kd = k * depth;
+  const double cg = 0.5 * omega / k * (1 + 2 * kd / std::sinh(2 * kd));
+  const double x_flap = 5.03, x_g1 = 2.0, ramp = 2 * T;
+  const std::vector<double> harmonics{omega, 2 * omega};
+  const double incident = test::harmonic_amplitudes(test::read_probe(out / "probes" / "g1.csv", 2), ramp + x_g1 / cg + T / 2,
+                                                    (2 * x_flap - x_g1) / cg, harmonics)[0];
+  const double theta = test::harmonic_amplitudes(test::read_probe(out / "probes" / "flap.csv", 4), ramp + x_flap / cg + T / 2,
+                                                 3 * x_flap / cg, harmonics)[0] * std::numbers::pi / 180;
+  std::printf("hinged flap: incident amplitude %.4f m, rotation %.4f rad: %.3f rad/m (linear theory %.3f, %+.1f%%)\n", incident, theta,
+              theta / incident, kTheory, 100 * (theta / incident / kTheory - 1));
+  RecordProperty("rao_error", std::to_string(theta / incident / kTheory - 1));
+  EXPECT_NEAR(incident, 0.025, 0.1 * 0.025);  // Biesel's H / 2 (WaveFlume.BieselWaveHeightAndPeriodAtG1)
+  EXPECT_NEAR(theta / incident, kTheory, 0.15 * kTheory);
 }
 
 }  // namespace
