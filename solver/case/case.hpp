@@ -91,6 +91,12 @@ struct SolidSpec {
   ShapePtr shape{};
 };
 
+// The points of a solid that can touch a plane first, at t = 0: of its surface (its shape's, or
+// its box's corners), those farthest along each of a fan of directions (its convex hull's
+// vertices, a curved surface's as facets; case_loader.cpp). A floating body's contact spheres sit
+// there; a static or moving solid's press on the bodies' faces.
+std::vector<Vec3d> solid_corners(const SolidSpec& solid, int dim);
+
 // A solid the water moves (`motion: floating`, issue 32; sim/rigid_bodies.*): a rigid
 // body of Simbody's whose load each step is the fluid's force (pressure and viscous) on its particles plus gravity.
 struct BodySpec {
@@ -127,7 +133,7 @@ struct BodySpec {
   // Hunt & Crossley's c [s/m] (restitution about 1 - c v at impact speed v); `friction`: Coulomb's
   // coefficient against the walls.
   // `points`: where its contact spheres sit, relative to the centre of mass at t = 0 (the loader's
-  // contact_points: the surface points farthest along a fan of directions).
+  // solid_corners: the surface points farthest along a fan of directions).
   struct Contact {
     bool on = true;
     double penetration = 0.0, dissipation = 0.5, friction = 0.5;

@@ -703,54 +703,6 @@ MotionSpec read_motion(Section& m, const Case& c, const std::string& body, const
 // The mass, centre of mass and inertia matrix (about it) of a solid of uniform density: exact for a
 // box, else by the midpoint rule over a grid of its bounding box (dp/4 in 2D, dp/2 in 3D, coarser
 // beyond 4 million samples), the shape's signed distance saying what is inside.
-// The points of a solid that can touch a plane wall first: of its surface (the shape's, or the
-// box's corners), those farthest along each of a fan of directions (2D: 64 around the circle; 3D:
-// 256 spread over the sphere by the Fibonacci lattice, and the 6 axes). Every vertex of a polygon
-// or polyhedron whose outward normals span more than the fan's spacing (about 6 and 13 degrees) is
-// among them; a curved surface becomes that many facets. Deterministic: ties go to the first point.
-std::vector<Vec3d> contact_points(const SolidSpec& solid, int dim) {
-  std::vector<std::array<double, 3>> surface;
-  if (solid.shape) {
-    std::vector<std::vector<long long>> polygons;
-    solid.shape->surface(surface, polygons);
-  } else {
-    for (int corner = 0; corner < (1 << dim); ++corner) {
-      std::array<double, 3> p{0, 0, 0};
-      for (int k = 0; k < dim; ++k) p[k] = (corner >> k) & 1 ? solid.box.max[k] : solid.box.min[k];
-      surface.push_back(p);
-    }
-  }
-  std::vector<std::array<double, 3>> directions;
-  if (dim == 2) {
-    for (int k = 0; k < 64; ++k) directions.push_back({std::cos(2 * M_PI * k / 64), std::sin(2 * M_PI * k / 64), 0.0});
-  } else {
-    for (int k = 0; k < 3; ++k)
-      for (double sign : {-1.0, 1.0}) {
-        std::array<double, 3> e{0, 0, 0};
-        e[k] = sign;
-        directions.push_back(e);
-      }
-    const int n = 256;
-    for (int k = 0; k < n; ++k) {
-      const double z = 1.0 - (2.0 * k + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = k * M_PI * (3.0 - std::sqrt(5.0));
-      directions.push_back({r * std::cos(phi), r * std::sin(phi), z});
-    }
-  }
-  std::vector<std::size_t> chosen;
-  for (const auto& e : directions) {
-    std::size_t best = 0;
-    for (std::size_t i = 1; i < surface.size(); ++i)
-      if (e[0] * surface[i][0] + e[1] * surface[i][1] + e[2] * surface[i][2] > e[0] * surface[best][0] + e[1] * surface[best][1] + e[2] * surface[best][2])
-        best = i;
-    chosen.push_back(best);
-  }
-  std::sort(chosen.begin(), chosen.end());
-  chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
-  std::vector<std::array<double, 3>> points;
-  for (std::size_t i : chosen) points.push_back(surface[i]);
-  return points;
-}
-
 BodySpec uniform_body(const SolidSpec& solid, double density, const Case& c) {
   const int d = c.dim;
   BodySpec b;
@@ -940,7 +892,7 @@ MotionSpec read_floating(Section& m, Case& c, const SolidSpec& solid, int index)
     }
   }
   if (b.contact.on)
-    for (Vec3d p : contact_points(solid, d)) {
+    for (Vec3d p : solid_corners(solid, d)) {
       for (int a = 0; a < 3; ++a) p[a] -= b.centre_of_mass[a];
       b.contact.points.push_back(p);
     }
@@ -962,6 +914,54 @@ int face_index(const std::string& name, int dim) {
 }
 
 }  // namespace
+
+// The points of a solid that can touch a plane wall first: of its surface (the shape's, or the
+// box's corners), those farthest along each of a fan of directions (2D: 64 around the circle; 3D:
+// 256 spread over the sphere by the Fibonacci lattice, and the 6 axes). Every vertex of a polygon
+// or polyhedron whose outward normals span more than the fan's spacing (about 6 and 13 degrees) is
+// among them; a curved surface becomes that many facets. Deterministic: ties go to the first point.
+std::vector<Vec3d> solid_corners(const SolidSpec& solid, int dim) {
+  std::vector<std::array<double, 3>> surface;
+  if (solid.shape) {
+    std::vector<std::vector<long long>> polygons;
+    solid.shape->surface(surface, polygons);
+  } else {
+    for (int corner = 0; corner < (1 << dim); ++corner) {
+      std::array<double, 3> p{0, 0, 0};
+      for (int k = 0; k < dim; ++k) p[k] = (corner >> k) & 1 ? solid.box.max[k] : solid.box.min[k];
+      surface.push_back(p);
+    }
+  }
+  std::vector<std::array<double, 3>> directions;
+  if (dim == 2) {
+    for (int k = 0; k < 64; ++k) directions.push_back({std::cos(2 * M_PI * k / 64), std::sin(2 * M_PI * k / 64), 0.0});
+  } else {
+    for (int k = 0; k < 3; ++k)
+      for (double sign : {-1.0, 1.0}) {
+        std::array<double, 3> e{0, 0, 0};
+        e[k] = sign;
+        directions.push_back(e);
+      }
+    const int n = 256;
+    for (int k = 0; k < n; ++k) {
+      const double z = 1.0 - (2.0 * k + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = k * M_PI * (3.0 - std::sqrt(5.0));
+      directions.push_back({r * std::cos(phi), r * std::sin(phi), z});
+    }
+  }
+  std::vector<std::size_t> chosen;
+  for (const auto& e : directions) {
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < surface.size(); ++i)
+      if (e[0] * surface[i][0] + e[1] * surface[i][1] + e[2] * surface[i][2] > e[0] * surface[best][0] + e[1] * surface[best][1] + e[2] * surface[best][2])
+        best = i;
+    chosen.push_back(best);
+  }
+  std::sort(chosen.begin(), chosen.end());
+  chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
+  std::vector<std::array<double, 3>> points;
+  for (std::size_t i : chosen) points.push_back(surface[i]);
+  return points;
+}
 
 std::optional<std::string> tank_wall_missing(const Case& c, int face) {
   if (c.tank_shape) return "a shaped tank has no box faces (x-, x+, ...)";

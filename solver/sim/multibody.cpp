@@ -119,8 +119,10 @@ class Springs : public SimTK::Force::Custom::Implementation {
 // E = (s1 E1^(2/3))^(3/2), s1 = E2^(2/3) / (E1^(2/3) + E2^(2/3)), c = c1 s1 + c2 (1 - s1),
 // mu = 2 mu1 mu2 / (mu1 + mu2). Each pair of bodies is met both ways (the spheres of one against
 // the other's surface, then the other's against the first's), so that a corner meets a face
-// whichever body it belongs to; an edge crossing an edge between their spheres is not seen (3D
-// boxes). Summed in a fixed order (bodies, spheres; walls and obstacles, then bodies).
+// whichever body it belongs to; and the corners of the solids (ObstacleInput::corners) press on the
+// bodies' faces the same way. An edge crossing an edge or a face between corners is not seen (3D
+// boxes). Summed in a fixed order (bodies, spheres; walls and obstacles, then bodies; then the
+// solids' corners, bodies).
 class ShapeContacts : public SimTK::Force::Custom::Implementation {
  public:
   struct Member {
@@ -175,6 +177,28 @@ class ShapeContacts : public SimTK::Force::Custom::Implementation {
           const Vec3 f = force(A.radius - d, A.radius, X_GB.R() * Vec3(n[0], n[1], n[2]), v - B.body.findStationVelocityInGround(state, q), m.stiffness,
                                m.dissipation, m.friction, m.weight);
           A.body.applyForceToBodyPoint(state, p, f, body_forces);
+          B.body.applyForceToBodyPoint(state, q, -f, body_forces);
+        }
+      }
+    }
+    // The solids' corners against the bodies' surfaces: a sphere of the body's radius at each
+    // corner, pressed with the body's material, so that a body resting across a solid's edge
+    // rests on it (its own corners are beyond the edge).
+    for (const ObstacleInput& o : obstacles_) {
+      for (const auto& c0 : o.corners) {
+        std::array<double, 3> c{}, u{};
+        o.place(t, c0, c, u);
+        const Vec3 x(c[0], c[1], c[2]);
+        for (const Member& B : members_) {
+          const SimTK::Transform& X_GB = B.body.getBodyTransform(state);
+          if ((x - X_GB.p()).norm() > B.reach + B.radius) continue;
+          const Vec3 q = ~X_GB * x;
+          std::array<double, 3> n{};
+          const double d = B.surface({q[0], q[1], q[2]}, n);
+          if (!(d < B.radius)) continue;
+          const Vec3 f = force(B.radius - d, B.radius, X_GB.R() * Vec3(n[0], n[1], n[2]),
+                               Vec3(u[0], u[1], u[2]) - B.body.findStationVelocityInGround(state, q), B.stiffness, B.dissipation, B.friction,
+                               B.weight);
           B.body.applyForceToBodyPoint(state, q, -f, body_forces);
         }
       }

@@ -51,9 +51,15 @@ struct ContactInput {
 // point x (negative where a body may not go), the unit outward normal and the surface's velocity
 // there; and a box it stays inside at all times (a point outside it, farther than a contact
 // sphere's radius, is not tested).
+// A solid's corners (`corners`, world at t = 0: its convex hull's vertices) press on the bodies'
+// faces as the bodies' own corners press on it (a body resting across a step's edge rests on the
+// edge); `place` puts a corner where the solid has it at time t, with its velocity. None for the
+// tank's walls.
 struct ObstacleInput {
   std::function<double(double t, const std::array<double, 3>& x, std::array<double, 3>& normal, std::array<double, 3>& velocity)> distance;
   std::array<double, 3> lo{}, hi{};
+  std::vector<std::array<double, 3>> corners;
+  std::function<void(double t, const std::array<double, 3>& x0, std::array<double, 3>& x, std::array<double, 3>& velocity)> place;
 };
 
 struct BodyInput {

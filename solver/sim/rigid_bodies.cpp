@@ -78,6 +78,25 @@ multibody::ObstacleInput obstacle(StartDistance at, Vec3d lo, Vec3d hi, const Mo
   return o;
 }
 
+// Where a solid's corner x0 (at t = 0) is at time t and how fast it moves: fixed, or moved by its
+// prescribed motion.
+std::function<void(double, const std::array<double, 3>&, std::array<double, 3>&, std::array<double, 3>&)> corner_placement(
+    const MotionSet& motions, int motion, int dim) {
+  if (motion < 0)
+    return [](double, const std::array<double, 3>& x0, std::array<double, 3>& x, std::array<double, 3>& velocity) {
+      x = x0;
+      velocity = {0, 0, 0};
+    };
+  const MotionSet* set = &motions;
+  return [set, motion, dim](double t, const std::array<double, 3>& x0, std::array<double, 3>& x, std::array<double, 3>& velocity) {
+    const MotionSpec& m = set->spec(motion);
+    const MotionSample s = set->sample(motion, t);
+    x = moved_point(m, s, x0);
+    velocity = point_velocity(m, s, x);
+    for (int k = dim; k < 3; ++k) x[k] = x0[k], velocity[k] = 0.0;
+  };
+}
+
 // What a body with contact meets besides the other bodies: the tank's plane walls (none along a
 // periodic axis nor at the open top; each the half-space behind its plane, whose normal points
 // into the fluid) or a shaped tank's outside (everything but the vessel's inside), and every solid
@@ -102,7 +121,10 @@ std::vector<multibody::ObstacleInput> obstacles(const Case& c, const MotionSet& 
   for (const SolidSpec& s : c.solids) {
     if (s.motion >= 0 && c.motions[s.motion].floating >= 0) continue;
     const ShapePtr shape = solid_surface(s, c.dim);
-    out.push_back(obstacle(shape_distance(shape, 1.0), shape->lo, shape->hi, motions, s.motion, c.dim));
+    multibody::ObstacleInput o = obstacle(shape_distance(shape, 1.0), shape->lo, shape->hi, motions, s.motion, c.dim);
+    for (const Vec3d& p : solid_corners(s, c.dim)) o.corners.push_back(p);
+    o.place = corner_placement(motions, s.motion, c.dim);
+    out.push_back(std::move(o));
   }
   return out;
 }

@@ -284,6 +284,30 @@ TEST(RigidBodies, ABoxDroppedOnAStaticSolidComesToRestOnIt) {
   EXPECT_NEAR(b.state(0).angles[2], 0.0, 1e-6);
 }
 
+// A solid's corner under a body's face (ShapeContacts, the solids' corners): the box (0.2 m wide,
+// x = 0.5 to 0.7) let down from 1 mm onto a shelf that ends at x = 0.65 rests level on it, on its
+// own left corner and the shelf's right corner under its bottom face, which carry W/3 and 2W/3
+// (moments about its centre of mass at x = 0.6). Without the shelf's corners it tips about its
+// left corner and its right half sinks through the shelf's edge.
+TEST(RigidBodies, ABoxAcrossAShelfsEdgeRestsLevelOnIt) {
+  const Case c = parse_case(case_2d() + "  - name: shelf\n    min: [0.45, 0.1]\n    max: [0.65, 0.239]\n", "case.yaml");
+  const double penetration = c.bodies[0].contact.penetration, radius = 0.01 * c.dp, top = 0.239;
+  RigidBodies b(c);
+  b.set_loads({BodyLoad{}});
+  const Settled s = settle(b, 0, 10000, 1000, 2e-4, 0.05 + top);
+  EXPECT_GT(s.lowest, -0.1 * c.dp);
+  const BodyState& st = b.state(0);
+  // Both supports sink as their loads say (Hertz: x ~ f^(2/3)); the box tilts by their difference
+  // over the 0.15 m between them.
+  const double left = penetration * std::pow(1.0 / 3.0, 2.0 / 3.0), right = penetration * std::pow(2.0 / 3.0, 2.0 / 3.0);
+  const double tilt = (right - left) / 0.15;  // clockwise: a negative angle
+  std::printf("box across the edge: centre (%.6f, %.6f) m, angle %.3g rad (the supports' sinking: %.3g rad)\n", st.centre[0], st.centre[1],
+              st.angles[2], -tilt);
+  EXPECT_NEAR(st.angles[2], -tilt, 0.2 * tilt);
+  EXPECT_NEAR(s.mean, top + 0.05 + radius - (left + 0.1 / 0.15 * (right - left)), 0.1 * penetration);
+  EXPECT_NEAR(st.centre[0], 0.6, 1e-3);
+}
+
 // Contact between bodies: a narrow box (0.1 x 0.1 m, 5 kg) dropped onto a wide one (0.2 x 0.1 m,
 // 10 kg) that rests on the floor comes to rest on it: its two lower corners on the wide box's top
 // face, each carrying half its weight on the two bodies' combined stiffness (Simbody's rule,
