@@ -96,6 +96,8 @@ struct SolidSpec {
 // vertices, a curved surface's as facets; case_loader.cpp). A floating body's contact spheres sit
 // there; a static or moving solid's press on the bodies' faces.
 std::vector<Vec3d> solid_corners(const SolidSpec& solid, int dim);
+// A solid's surface: its shape, or a box shape for a box solid.
+ShapePtr solid_surface(const SolidSpec& solid, int dim);
 
 // A solid the water moves (`motion: floating`, issue 32; sim/rigid_bodies.*): a rigid
 // body of Simbody's whose load each step is the fluid's force (pressure and viscous) on its particles plus gravity.
@@ -134,10 +136,12 @@ struct BodySpec {
   // coefficient against the walls.
   // `points`: where its contact spheres sit, relative to the centre of mass at t = 0 (the loader's
   // solid_corners: the surface points farthest along a fan of directions).
+  // `edges` (3D): spheres along its sharp edges, dp/2 apart (sharp_edge_points), which meet the
+  // solids and the other bodies (an edge across an edge or a face), not the tank's planes.
   struct Contact {
     bool on = true;
     double penetration = 0.0, dissipation = 0.5, friction = 0.5;
-    std::vector<Vec3d> points;
+    std::vector<Vec3d> points, edges;
   } contact;
 };
 

@@ -891,11 +891,17 @@ MotionSpec read_floating(Section& m, Case& c, const SolidSpec& solid, int index)
       k->finish();
     }
   }
-  if (b.contact.on)
+  if (b.contact.on) {
     for (Vec3d p : solid_corners(solid, d)) {
       for (int a = 0; a < 3; ++a) p[a] -= b.centre_of_mass[a];
       b.contact.points.push_back(p);
     }
+    if (d == 3)
+      for (Vec3d p : sharp_edge_points(*solid_surface(solid, d), 0.5 * c.dp)) {
+        for (int a = 0; a < 3; ++a) p[a] -= b.centre_of_mass[a];
+        b.contact.edges.push_back(p);
+      }
+  }
   MotionSpec spec;
   spec.body = solid.name;
   spec.floating = static_cast<int>(c.bodies.size());
@@ -920,6 +926,8 @@ int face_index(const std::string& name, int dim) {
 // 256 spread over the sphere by the Fibonacci lattice, and the 6 axes). Every vertex of a polygon
 // or polyhedron whose outward normals span more than the fan's spacing (about 6 and 13 degrees) is
 // among them; a curved surface becomes that many facets. Deterministic: ties go to the first point.
+ShapePtr solid_surface(const SolidSpec& solid, int dim) { return solid.shape ? solid.shape : make_box(solid.box.min, solid.box.max, dim); }
+
 std::vector<Vec3d> solid_corners(const SolidSpec& solid, int dim) {
   std::vector<std::array<double, 3>> surface;
   if (solid.shape) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 #include <fmt/format.h>
 
@@ -351,5 +352,65 @@ ShapePtr make_polyhedron(const std::vector<std::array<double, 3>>&) {
   throw ShapeError("this build of spate makes no polyhedra (VTK was not found when it was configured; see docs/building.md)");
 }
 #endif
+
+// Sharp edges: where two faces meet at more than kSharpAngle (a box's 12 edges; not the seams
+// between a curved surface's facets). Edges are found by their end points' positions (a mesh's
+// triangles may not share their vertices), rounded to 1e-9 m; each is sampled once, in the order
+// of its first face, so the points are deterministic.
+std::vector<std::array<double, 3>> sharp_edge_points(const Shape& shape, double spacing) {
+  constexpr double kSharpAngle = 20.0 * M_PI / 180.0;
+  std::vector<std::array<double, 3>> points;
+  std::vector<std::vector<long long>> polygons;
+  shape.surface(points, polygons);
+  using Key = std::array<long long, 3>;
+  auto key = [&](long long v) {
+    return Key{std::llround(points[v][0] * 1e9), std::llround(points[v][1] * 1e9), std::llround(points[v][2] * 1e9)};
+  };
+  auto normal = [&](const std::vector<long long>& f) {
+    std::array<double, 3> n{0, 0, 0};  // Newell's
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      const auto &a = points[f[k]], &b = points[f[(k + 1) % f.size()]];
+      n[0] += (a[1] - b[1]) * (a[2] + b[2]), n[1] += (a[2] - b[2]) * (a[0] + b[0]), n[2] += (a[0] - b[0]) * (a[1] + b[1]);
+    }
+    const double l = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    return l > 0 ? std::array<double, 3>{n[0] / l, n[1] / l, n[2] / l} : n;
+  };
+  struct Edge {
+    long long a, b;
+    std::array<double, 3> first_normal;
+    bool sharp = false, seen_twice = false;
+  };
+  std::vector<Edge> edges;
+  std::map<std::pair<Key, Key>, std::size_t> index;
+  for (const auto& f : polygons) {
+    const std::array<double, 3> n = normal(f);
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      long long a = f[k], b = f[(k + 1) % f.size()];
+      Key ka = key(a), kb = key(b);
+      if (kb < ka) std::swap(ka, kb), std::swap(a, b);
+      const auto [it, added] = index.try_emplace({ka, kb}, edges.size());
+      if (added) {
+        edges.push_back({a, b, n});
+        continue;
+      }
+      Edge& e = edges[it->second];
+      e.seen_twice = true;
+      const double c = std::fabs(n[0] * e.first_normal[0] + n[1] * e.first_normal[1] + n[2] * e.first_normal[2]);
+      e.sharp = e.sharp || c < std::cos(kSharpAngle);
+    }
+  }
+  std::vector<std::array<double, 3>> out;
+  for (const Edge& e : edges) {
+    if (!e.sharp && e.seen_twice) continue;
+    const auto &a = points[e.a], &b = points[e.b];
+    const double length = std::sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) + (b[2] - a[2]) * (b[2] - a[2]));
+    const int pieces = static_cast<int>(std::ceil(length / spacing));
+    for (int k = 1; k < pieces; ++k) {
+      const double s = static_cast<double>(k) / pieces;
+      out.push_back({a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]), a[2] + s * (b[2] - a[2])});
+    }
+  }
+  return out;
+}
 
 }  // namespace spate

@@ -49,6 +49,10 @@ std::string points_vtp(const std::vector<std::array<double, 3>>& points, const s
 
 // An axis-aligned box (2D: rectangle) from lo to hi.
 ShapePtr make_box(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int dim);
+// Points along a 3D shape's sharp edges (where its faces meet at more than 20 degrees, and any
+// edge of a single face), at most `spacing` apart, their ends left out: floating bodies' contact
+// spheres, so that an edge crossing another edge or a face is seen (ShapeContacts).
+std::vector<std::array<double, 3>> sharp_edge_points(const Shape& shape, double spacing);
 // A disc (2D) or sphere (3D).
 ShapePtr make_ball(const std::array<double, 3>& centre, double radius, int dim);
 // A capped circular cylinder (3D) of the given axis (unit vector), radius and length, centred at

@@ -120,14 +120,16 @@ class Springs : public SimTK::Force::Custom::Implementation {
 // mu = 2 mu1 mu2 / (mu1 + mu2). Each pair of bodies is met both ways (the spheres of one against
 // the other's surface, then the other's against the first's), so that a corner meets a face
 // whichever body it belongs to; and the corners of the solids (ObstacleInput::corners) press on the
-// bodies' faces the same way. An edge crossing an edge or a face between corners is not seen (3D
-// boxes). Summed in a fixed order (bodies, spheres; walls and obstacles, then bodies; then the
+// bodies' faces the same way. In 3D a body's sharp edges carry spheres too, dp/2 apart, which meet
+// the solids and the other bodies (an edge across an edge or a face), not the tank's walls (a
+// body's corners are what meets a plane first). Summed in a fixed order (bodies, spheres; walls and obstacles, then bodies; then the
 // solids' corners, bodies).
 class ShapeContacts : public SimTK::Force::Custom::Implementation {
  public:
   struct Member {
     SimTK::MobilizedBody body;
-    std::vector<SimTK::Vec3> points;  // body frame
+    std::vector<SimTK::Vec3> points;  // body frame: the corners, then the edge spheres (3D)
+    std::size_t corners;
     Distance surface;                 // body frame
     double reach, radius, stiffness, dissipation, friction, weight;
   };
@@ -152,11 +154,13 @@ class ShapeContacts : public SimTK::Force::Custom::Implementation {
     for (std::size_t a = 0; a < members_.size(); ++a) {
       const Member& A = members_[a];
       const SimTK::Transform& X_GA = A.body.getBodyTransform(state);
-      for (const Vec3& p : A.points) {
+      for (std::size_t k = 0; k < A.points.size(); ++k) {
+        const Vec3& p = A.points[k];
         const Vec3 x = X_GA * p;
         const Vec3 v = A.body.findStationVelocityInGround(state, p);
+        const bool edge = k >= A.corners;  // edge spheres meet solids and bodies, not the tank's walls
         for (const ObstacleInput& o : obstacles_) {
-          if (!near_box(x, o.lo, o.hi, A.radius)) continue;
+          if ((edge && !o.solid) || !near_box(x, o.lo, o.hi, A.radius)) continue;
           std::array<double, 3> n{}, u{};
           const double d = o.distance(t, {x[0], x[1], x[2]}, n, u);
           if (!(d < A.radius)) continue;
@@ -256,8 +260,9 @@ void add_contact(System::Impl& m, const std::vector<BodyInput>& bodies, const st
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     const ContactInput& c = bodies[b].contact;
     if (!c.on || !(c.stiffness > 0)) continue;
-    ShapeContacts::Member member{m.bodies[b], {}, c.surface, c.reach, c.radius, c.stiffness, c.dissipation, c.friction, c.weight};
+    ShapeContacts::Member member{m.bodies[b], {}, c.points.size(), c.surface, c.reach, c.radius, c.stiffness, c.dissipation, c.friction, c.weight};
     for (const auto& p : c.points) member.points.push_back(vec_of(p, dim));
+    for (const auto& p : c.edges) member.points.push_back(vec_of(p, dim));
     members.push_back(std::move(member));
   }
   if (members.empty() || (obstacles.empty() && members.size() < 2)) return;

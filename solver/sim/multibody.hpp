@@ -37,6 +37,7 @@ using Distance = std::function<double(const std::array<double, 3>& x, std::array
 struct ContactInput {
   bool on = false;
   std::vector<std::array<double, 3>> points;  // the spheres' centres, body frame
+  std::vector<std::array<double, 3>> edges;   // more along its sharp edges (3D), for solids and bodies only
   Distance surface;    // the body's own surface, body frame (other bodies' spheres press on it)
   double reach = 0.0;  // the largest distance of a point of the body from its centre of mass [m]
   double radius = 0.0;       // of each sphere [m]
@@ -60,6 +61,7 @@ struct ObstacleInput {
   std::array<double, 3> lo{}, hi{};
   std::vector<std::array<double, 3>> corners;
   std::function<void(double t, const std::array<double, 3>& x0, std::array<double, 3>& x, std::array<double, 3>& velocity)> place;
+  bool solid = false;  // a solid (the bodies' edge spheres meet it), not a tank wall
 };
 
 struct BodyInput {

@@ -35,9 +35,6 @@ StartDistance shape_distance(ShapePtr shape, double sign) {
   };
 }
 
-// A solid's surface: its shape, or a box shape for a box solid.
-ShapePtr solid_surface(const SolidSpec& s, int dim) { return s.shape ? s.shape : make_box(s.box.min, s.box.max, dim); }
-
 // A body's own surface in its frame (from its centre of mass at t = 0, world axes).
 multibody::Distance body_surface(ShapePtr shape, const Vec3d& centre) {
   const StartDistance at = shape_distance(shape, 1.0);
@@ -124,6 +121,7 @@ std::vector<multibody::ObstacleInput> obstacles(const Case& c, const MotionSet& 
     multibody::ObstacleInput o = obstacle(shape_distance(shape, 1.0), shape->lo, shape->hi, motions, s.motion, c.dim);
     for (const Vec3d& p : solid_corners(s, c.dim)) o.corners.push_back(p);
     o.place = corner_placement(motions, s.motion, c.dim);
+    o.solid = true;
     out.push_back(std::move(o));
   }
   return out;
@@ -159,6 +157,7 @@ RigidBodies::RigidBodies(const Case& c, const MotionSet* motions) : case_(c) {
       k.friction = b.contact.friction;
       k.weight = weight;
       k.points = b.contact.points;
+      k.edges = b.contact.edges;
       // Its surface in its own frame (from the centre of mass, world axes at t = 0).
       const SolidSpec& solid = c.solids[b.solid];
       k.surface = body_surface(solid_surface(solid, c.dim), b.centre_of_mass);

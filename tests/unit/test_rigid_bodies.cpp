@@ -308,6 +308,41 @@ TEST(RigidBodies, ABoxAcrossAShelfsEdgeRestsLevelOnIt) {
   EXPECT_NEAR(st.centre[0], 0.6, 1e-3);
 }
 
+// An edge across a face (3D; the bodies' edge spheres): a plank (0.4 x 0.1 x 0.05 m) let down from
+// 1 mm onto a static beam 0.1 m wide that spans the tank across it. None of the plank's corners is
+// over the beam and none of the beam's under the plank: only the plank's long bottom edges, where
+// they cross the beam's top, meet it. It rests there level and in place (before the edge spheres
+// it fell through the beam).
+TEST(RigidBodies, APlankAcrossABeamRestsOnItsEdges) {
+  const std::string text = "name: t\ndimensions: 3\ndp: 0.02\ngravity: [0, 0, -9.81]\ntime: {end: 1}\n"
+                           "tank: {origin: [0, 0, 0], size: [1, 1, 1]}\nfluid_blocks: [{min: [0, 0, 0], max: [0.3, 1, 0.3]}]\n"
+                           "solids:\n  - name: plank\n    min: [0.35, 0.45, 0.201]\n    max: [0.75, 0.55, 0.251]\n"
+                           "    motion: floating\n    density: 500\n"
+                           "  - name: beam\n    min: [0.5, 0, 0]\n    max: [0.6, 1, 0.2]\n";
+  const Case c = parse_case(text, "case.yaml");
+  ASSERT_GT(c.bodies[0].contact.edges.size(), 0u);
+  const double penetration = c.bodies[0].contact.penetration, top = 0.2;
+  RigidBodies b(c);
+  b.set_loads({BodyLoad{}});
+  Settled s;
+  const double dt = 2e-4;
+  for (int k = 0; k < 5000; ++k) {
+    b.advance(k * dt, (k + 1) * dt);
+    const double z = b.state(0).centre[2];
+    s.lowest = std::min(s.lowest, z - 0.025 - top);
+    if (k >= 4000) s.mean += z / 1000, s.low = std::min(s.low, z), s.high = std::max(s.high, z);
+  }
+  const BodyState& st = b.state(0);
+  std::printf("plank across the beam: centre (%.6f, %.6f, %.6f) m, angles (%.3g, %.3g, %.3g) rad\n", st.centre[0], st.centre[1],
+              st.centre[2], st.angles[0], st.angles[1], st.angles[2]);
+  EXPECT_GT(s.lowest, -0.1 * c.dp);
+  EXPECT_NEAR(s.mean, top + 0.025, 2 * penetration);
+  EXPECT_LT(s.high - s.low, 0.3 * penetration);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(st.angles[a], 0.0, 1e-3);
+  EXPECT_NEAR(st.centre[0], 0.55, 1e-3);
+  EXPECT_NEAR(st.centre[1], 0.5, 1e-3);
+}
+
 // Contact between bodies: a narrow box (0.1 x 0.1 m, 5 kg) dropped onto a wide one (0.2 x 0.1 m,
 // 10 kg) that rests on the floor comes to rest on it: its two lower corners on the wide box's top
 // face, each carrying half its weight on the two bodies' combined stiffness (Simbody's rule,
