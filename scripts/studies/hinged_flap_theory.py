@@ -73,6 +73,19 @@ def excitation(omega, h):
     return 2 * RHO * G * I0 / math.cosh(k0 * h)
 
 
+def reflection_transmission(period, h, theta):
+    """(R, T): the reflected and transmitted waves over the incident, for the flap's Theta / A. The flap
+    held still reflects the wave whole (R = 1); moving, it radiates eta_r Theta downstream and the
+    mirror, -eta_r Theta, upstream (eta = (i w / g) phi at the surface). Without damping in the hinge
+    |R|^2 + |T|^2 = 1 (a check of the signs)."""
+    omega = 2 * math.pi / period
+    k0, _ = wavenumbers(omega, h, 0)
+    N0 = (math.sinh(2 * k0 * h) / (2 * k0) + h) / 2
+    I0 = h * math.sinh(k0 * h) / k0 - (math.cosh(k0 * h) - 1) / k0**2
+    eta = (1j * omega / G) * (-1j * omega * I0) / (1j * k0 * N0) * math.cosh(k0 * h)
+    return 1 - eta * theta, eta * theta
+
+
 def response(period, h, inertia, hydrostatic, stiffness=0.0, damping=0.0):
     """Complex Theta / A [rad/m]: theta = |Theta| A cos(w t - phase) for an incident crest eta = A cos(w t) at the flap."""
     omega = 2 * math.pi / period
@@ -109,3 +122,5 @@ if __name__ == "__main__":
     print(f"T = {f['period']} s, h = {f['h']} m: added inertia {Ia:.4f} kg m, radiation damping {B:.3f} N m s, "
           f"excitation {excitation(omega, f['h']):.1f} N m per m of amplitude")
     print(f"|Theta| / A = {abs(r):.4f} rad/m, lagging the incident crest by {math.degrees(cmath.phase(r)):.1f} degrees")
+    R, T = reflection_transmission(f["period"], f["h"], r)
+    print(f"reflection |R| = {abs(R):.4f}, transmission |T| = {abs(T):.4f} (|R|^2 + |T|^2 = {abs(R)**2 + abs(T)**2:.6f})")

@@ -2,6 +2,7 @@
 // Linear water-wave theory for the moving-wall validation (test_moving_walls.cpp) and the signal
 // analysis that compares a gauge's time series with it.
 #include <cmath>
+#include <complex>
 #include <numbers>
 #include <utility>
 #include <vector>
@@ -78,9 +79,9 @@ inline Waves zero_up_crossings(const std::vector<std::pair<double, double>>& ser
 }
 
 // Least-squares fit of v(t) in [t0, t1] by c0 + sum over the given frequencies of a sin + b cos;
-// returns the amplitude sqrt(a^2 + b^2) at each frequency.
-inline std::vector<double> harmonic_amplitudes(const std::vector<std::pair<double, double>>& series, double t0, double t1,
-                                               const std::vector<double>& omegas) {
+// returns each frequency's phasor C = b + i a, so that its term is Re(C e^{-i omega t}).
+inline std::vector<std::complex<double>> harmonic_phasors(const std::vector<std::pair<double, double>>& series, double t0, double t1,
+                                                          const std::vector<double>& omegas) {
   const std::size_t n = 1 + 2 * omegas.size();
   std::vector<double> M(n * n, 0.0), r(n, 0.0), f(n);
   for (auto [t, v] : series) {
@@ -111,9 +112,27 @@ inline std::vector<double> harmonic_amplitudes(const std::vector<std::pair<doubl
     for (std::size_t j = c + 1; j < n; ++j) s -= M[c * n + j] * x[j];
     x[c] = s / M[c * n + c];
   }
-  std::vector<double> out;
-  for (std::size_t k = 0; k < omegas.size(); ++k) out.push_back(std::hypot(x[1 + 2 * k], x[2 + 2 * k]));
+  std::vector<std::complex<double>> out;
+  for (std::size_t k = 0; k < omegas.size(); ++k) out.emplace_back(x[2 + 2 * k], x[1 + 2 * k]);
   return out;
+}
+
+// The amplitude sqrt(a^2 + b^2) at each frequency of that fit.
+inline std::vector<double> harmonic_amplitudes(const std::vector<std::pair<double, double>>& series, double t0, double t1,
+                                               const std::vector<double>& omegas) {
+  std::vector<double> out;
+  for (const std::complex<double>& c : harmonic_phasors(series, t0, t1, omegas)) out.push_back(std::abs(c));
+  return out;
+}
+
+// Incident and reflected waves from two gauges (Goda & Suzuki 1976): the phasors A1, A2 at x1, x2 of
+// a_I e^{ikx} + a_R e^{-ikx}; returns (a_I, a_R). k (x2 - x1) must stay clear of multiples of pi.
+inline std::pair<std::complex<double>, std::complex<double>> incident_and_reflected(std::complex<double> A1, std::complex<double> A2,
+                                                                                   double x1, double x2, double k) {
+  const std::complex<double> i(0.0, 1.0);
+  const std::complex<double> e1 = std::exp(i * k * x1), e2 = std::exp(i * k * x2);
+  const std::complex<double> det = e1 / e2 - e2 / e1;
+  return {(A1 / e2 - A2 / e1) / det, (e1 * A2 - e2 * A1) / det};
 }
 
 }  // namespace spate::test
