@@ -735,6 +735,7 @@ int bench_command(const BenchArgs& a) {
   Case c = load(a.case_file, overrides);
   if (a.steps < 1) throw BadInput(fmt::format("--steps {}: must be >= 1", a.steps));
   check_backend(a.backend);
+  if (a.pass_times) ::setenv("SPATE_PASS_TIMERS", "1", 1);
   // Neighbour interactions per step at the initial state: every pair inside the support that the
   // step's neighbour passes evaluate (fluid rates, wall state, summation density if enabled).
   cpu::InteractionCounts interactions;
@@ -811,6 +812,18 @@ int bench_command(const BenchArgs& a) {
     j["device_busy_seconds"] = r.slab_busy_seconds;
     j["imbalance_history"] = r.imbalance_history;
     j["face_moves"] = r.face_moves;
+    // Per device, the seconds of each pass over the whole run (SPATE_PASS_TIMERS=1 or --pass-times;
+    // backend/pass_times.hpp), passes that never ran left out.
+    if (!r.slab_pass_seconds.empty()) {
+      nlohmann::ordered_json passes = nlohmann::ordered_json::array();
+      for (const PassSeconds& slab : r.slab_pass_seconds) {
+        nlohmann::ordered_json one = nlohmann::ordered_json::object();
+        for (int k = 0; k < kPassCount; ++k)
+          if (slab[k] > 0.0) one[kPassNames[k]] = slab[k];
+        passes.push_back(one);
+      }
+      j["pass_seconds"] = passes;
+    }
     std::printf("%s\n", j.dump(2).c_str());
   } else {
     std::printf("%s: %lld particles, %d threads, %d devices: %.4f s/step, %.3g particle-steps/s, %.3g interactions/s "
@@ -818,6 +831,12 @@ int bench_command(const BenchArgs& a) {
                 c.name.c_str(), static_cast<long long>(r.particles.total()), threads, a.devices, seconds / r.steps, psps,
                 ips, fluid_ips, r.bytes_per_particle, cpu::build_target().isa,
                 cpu::pair_loop_vectorised(physics_params(c)) ? "vector" : "scalar");
+    for (std::size_t d = 0; d < r.slab_pass_seconds.size(); ++d) {
+      std::printf("device %zu passes (s over %lld steps):", d, static_cast<long long>(r.steps));
+      for (int k = 0; k < kPassCount; ++k)
+        if (r.slab_pass_seconds[d][k] > 0.0) std::printf(" %s %.4g", kPassNames[k], r.slab_pass_seconds[d][k]);
+      std::printf("\n");
+    }
   }
   return 0;
 }

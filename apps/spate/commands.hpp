@@ -46,7 +46,7 @@ struct BenchArgs {
   std::string case_file, backend = "cpu";
   std::vector<std::string> overrides;
   int steps = 10, threads = 0, devices = 1;
-  bool json = false;
+  bool json = false, pass_times = false;
 };
 
 struct PostArgs {

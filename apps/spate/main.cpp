@@ -155,6 +155,8 @@ int main(int argc, char** argv) {
   bench_cmd->add_option("--devices", bench.devices, "Device workers");
   bench_cmd->add_option("--backend", bench.backend, "cpu or cuda");
   bench_cmd->add_flag("--json", bench.json, "Print one JSON object");
+  bench_cmd->add_flag("--pass-times", bench.pass_times,
+                      "Time each pass of the step (SPATE_PASS_TIMERS=1; CUDA events on a GPU): pass_seconds per device");
 
   try {
     app.parse(argc, argv);

@@ -80,45 +80,66 @@ SPATE_HD NeighbourFluid particle_neighbour_fluid(const PhysicsParams& P, const F
   return P.heat.viscosity_varies ? neighbour_fluid(P, f.material[j], f.temperature[j]) : neighbour_fluid(P, f.material[j]);
 }
 
-// Acceleration and density rate of fluid particle i (zero rates for walls). Multiphase: the pair
-// terms of multiphase_interactions.hpp with each neighbour's own fluid (and viscosity: every run
-// with a temperature table takes them, dispatch.hpp). MovingWalls: walls carry
+// Neighbour j's pair terms added to `sums` for fluid particle i of material M (viscosity mu_i).
+// Multiphase: the pair terms of multiphase_interactions.hpp with each neighbour's own fluid (and
+// viscosity: every run with a temperature table takes them, dispatch.hpp). MovingWalls: walls carry
 // their prescribed velocity into continuity (ParticleState::w), and free-slip faces slide for the
 // artificial viscosity (PairKinematics::vr_av). Riemann: the Riemann options' terms
 // (dispatch_pair_flags).
 template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann, class Fields>
+SPATE_HD void add_fluid_neighbour(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& si, float mu_i, const Fields& f,
+                                  std::uint32_t j, FluidRates<Dim>& sums) {
+  ParticleState<Dim> sj = load_state<Dim>(f, j);
+  if constexpr (MovingWalls) {
+    sj.w = boundary_velocity<Dim>(P, sj);
+    sj.w_av = sliding_velocity<Dim>(P, sj);
+  }
+  if constexpr (Multiphase) {
+    add_pair_rates(sums, multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj, particle_neighbour_fluid(P, f, j), mu_i));
+  } else {
+    (void)mu_i;
+    accumulate_fluid_pair<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj, sums);
+  }
+}
+
+// Fluid particle i's rates from its neighbour sums: finish_fluid_rates's once-per-particle terms,
+// then stored (the density rate only under continuity).
+template <int Dim, class Fields>
+SPATE_HD void store_fluid_rates(const PhysicsParams& P, const FluidMaterial& M, const ParticleState<Dim>& si, Fields& f, std::uint32_t i,
+                                FluidRates<Dim>& rates) {
+  finish_fluid_rates(P, M, si, rates);
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = rates.acc[k];
+  f.density_rate[i] = P.density_mode == DensityMode::Continuity ? rates.density_rate : 0.0f;
+}
+
+// A wall particle's rates from the fluid pass: none.
+template <int Dim, class Fields>
+SPATE_HD void zero_fluid_rates(Fields& f, std::uint32_t i) {
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = 0.0f;
+  f.density_rate[i] = 0.0f;
+}
+
+// Acceleration and density rate of fluid particle i (zero rates for walls), its neighbours summed
+// one after the other (add_fluid_neighbour). The CPU's fluid pass and the GPU's sum them in lanes
+// instead (pair_lanes.hpp); this is the GPU's per-thread loop (SPATE_GPU_PAIR_LOOP=thread).
+template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann, class Fields>
 SPATE_HD void update_fluid_rates(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
   if (!P.is_fluid(f.material[i])) {
-    SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = 0.0f;
-    f.density_rate[i] = 0.0f;
+    zero_fluid_rates<Dim>(f, i);
     return;
   }
   const ParticleState<Dim> si = load_state<Dim>(f, i);
   const FluidMaterial& M = P.materials.of(si.material);
-  [[maybe_unused]] const float mu_i = Multiphase ? particle_viscosity(P, f, i) : M.viscosity;
+  const float mu_i = Multiphase ? particle_viscosity(P, f, i) : M.viscosity;
   FluidRates<Dim> rates;
   // About 1 in 6 candidates of the 27 cells lies inside the support (3D); skip the others before
   // paying for the pair terms (which would add exactly zero for them).
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
-    for (std::uint32_t j = jb; j < je; ++j) {
-      if (distance_squared<Dim>(si.x, f.pos, j) < P.support2) {
-        ParticleState<Dim> sj = load_state<Dim>(f, j);
-        if constexpr (MovingWalls) {
-          sj.w = boundary_velocity<Dim>(P, sj);
-          sj.w_av = sliding_velocity<Dim>(P, sj);
-        }
-        if constexpr (Multiphase) {
-          add_pair_rates(rates, multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj,
-                                                                                                particle_neighbour_fluid(P, f, j), mu_i));
-        } else {
-          accumulate_fluid_pair<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj, rates);
-        }
-      }
-    }
+    for (std::uint32_t j = jb; j < je; ++j)
+      if (distance_squared<Dim>(si.x, f.pos, j) < P.support2)
+        add_fluid_neighbour<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, M, si, mu_i, f, j, rates);
   });
-  finish_fluid_rates(P, M, si, rates);
-  SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] = rates.acc[k];
-  f.density_rate[i] = P.density_mode == DensityMode::Continuity ? rates.density_rate : 0.0f;
+  store_fluid_rates<Dim>(P, M, si, f, i, rates);
 }
 
 // Adami pressure, density and no-slip velocity of wall particle w (fluid particles are skipped).
@@ -127,9 +148,12 @@ SPATE_HD void update_wall_state(const PhysicsParams& P, const CellGridView& v, F
   if (P.is_fluid(f.material[w])) return;
   const Vec<Dim> xw = load_vec<Dim>(f.pos, w);
   WallSums<Dim> sums;
+  // Only the fluid inside the support, tested before its state is loaded (the terms beyond it are
+  // exactly zero; the CPU's batched pass selects the same neighbours, so the sums are the same).
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
     for (std::uint32_t j = jb; j < je; ++j)
-      if (P.is_fluid(f.material[j])) accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(f, j), sums);
+      if (P.is_fluid(f.material[j]) && distance_squared<Dim>(xw, f.pos, j) < P.support2)
+        accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(f, j), sums);
   });
   WallState<Dim> s = finish_wall(P, sums, f.material[w], xw);
   apply_wall_shear<Dim>(P, xw, f.material[w], sums, s);

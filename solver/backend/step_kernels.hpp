@@ -17,6 +17,7 @@
 #include "../particles/particle_store.hpp"
 #include "../physics/params.hpp"
 #include "../physics/timestep.hpp"
+#include "pass_times.hpp"
 
 namespace spate {
 
@@ -90,6 +91,20 @@ class StepKernels {
   virtual SlabArrays& arrays() = 0;
   // Bytes the backend holds for this slab outside the host store (device memory).
   virtual std::size_t device_bytes() const { return 0; }
+
+  // Per-pass times (pass_times.hpp), when the worker times its passes: the stretch from
+  // begin_pass to end_pass, added to pass p. Here the host's clock (the pass is done when it
+  // returns); a device backend measures on its own timeline. pass_seconds() waits for what it
+  // measured and returns the sums so far.
+  virtual void begin_pass(Pass) { host_clock_.begin(); }
+  virtual void end_pass(Pass p) { host_clock_.end(p, pass_seconds_); }
+  virtual PassSeconds pass_seconds() { return pass_seconds_; }
+
+ protected:
+  PassSeconds pass_seconds_{};
+
+ private:
+  HostPassClock host_clock_;
 };
 
 }  // namespace spate

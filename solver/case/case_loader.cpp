@@ -1179,7 +1179,7 @@ Case read(Section& root, const std::string& file) {
       for (const char* key : {"name", "density", "viscosity", "sound_speed", "tait_exponent", "background_pressure", "thermal"})
         if (f.has(key))
           f.fail(f.raw(key), key, "with a 'fluids' list each fluid's properties go in its entry; 'fluid' keeps only "
-                                  "artificial_viscosity, wall_artificial_viscosity, body_force and tension");
+                                  "artificial_viscosity, wall_artificial_viscosity, body_force, tension and portable_eos");
     }
     c.artificial_viscosity = f.number("artificial_viscosity", 0.0);
     if (c.artificial_viscosity < 0) f.fail(f.raw("artificial_viscosity"), "artificial_viscosity", "must be >= 0");
@@ -1188,6 +1188,7 @@ Case read(Section& root, const std::string& file) {
       f.fail(f.raw("wall_artificial_viscosity"), "wall_artificial_viscosity", "must be between 0 and 1");
     c.body_force = f.vector("body_force", d, Vec3d{0, 0, 0});
     c.tension = f.boolean("tension", true);
+    c.portable_eos = f.boolean("portable_eos", false);
     f.finish();
   }
   // Surface tension: `surface_tension: [{between: [a, b], coefficient: sigma}, ...]`.
@@ -1833,6 +1834,7 @@ PhysicsParams physics_params(const Case& c) {
     P.surface_tension.on = P.surface_tension.on || sigma > 0.0f;
   }
   P.tension = c.tension;
+  P.portable_eos = c.portable_eos;
   for (int k = 0; k < 3; ++k) {
     P.tank_lo[k] = static_cast<float>(c.tank_origin[k]);
     P.tank_hi[k] = static_cast<float>(c.tank_origin[k] + c.tank_size[k]);

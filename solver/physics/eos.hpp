@@ -3,6 +3,9 @@
 //   p = c0^2 rho0 / gamma ((rho/rho0)^gamma - 1) + p_b
 // with p_b the material's background pressure (0 unless a light phase needs one).
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 
 #include "host_device.hpp"
 #include "materials.hpp"
@@ -19,6 +22,43 @@ SPATE_HD float pow7(float x) {
 
 // x^gamma with the exact product for the usual gamma = 7.
 SPATE_HD float tait_power(float x, float gamma) { return gamma == 7.0f ? pow7(x) : powf(x, gamma); }
+
+// x^(1/7) for the usual gamma = 7, from + - * / alone (each IEEE-rounded on the CPU and the GPU),
+// so that both round it to the same bits: powf's last bit differs between glibc and CUDA's
+// library, and the wall state (tait_density with fluid.portable_eos) runs every step. NaN below
+// 0, as powf.
+SPATE_HD float seventh_root(float x) {
+  if (x == 0.0f || !(x < std::numeric_limits<float>::infinity())) return x > 0.0f || x == 0.0f ? x : std::numeric_limits<float>::quiet_NaN();
+  if (!(x > 0.0f)) return std::numeric_limits<float>::quiet_NaN();
+  // The start: the exponent divided by 7 on the float's bits (a few percent off); then Newton's
+  // iteration y <- (6 y + x / y^6) / 7 in double precision, five times (the relative error goes
+  // 5e-2, 8e-3, 2e-4, 1e-7, 2e-14, rounding), rounded once to float: the correctly rounded root but
+  // where it lies within about 1e-7 ulp of a rounding boundary.
+  std::int32_t bits;
+#if defined(__CUDA_ARCH__)
+  bits = __float_as_int(x);
+#else
+  std::memcpy(&bits, &x, sizeof bits);
+#endif
+  bits = (bits - 0x3f800000) / 7 + 0x3f800000;
+  float start;
+#if defined(__CUDA_ARCH__)
+  start = __int_as_float(bits);
+#else
+  std::memcpy(&start, &bits, sizeof start);
+#endif
+  double y = start;
+  const double xd = x;
+  for (int n = 0; n < 5; ++n) {
+    const double y2 = y * y;
+    const double y6 = y2 * y2 * y2;
+    y = (6.0 * y + xd / y6) / 7.0;
+  }
+  return static_cast<float>(y);
+}
+
+// x^(1/gamma) with seventh_root for the usual gamma = 7.
+SPATE_HD float tait_root(float x, float gamma, float inv_gamma) { return gamma == 7.0f ? seventh_root(x) : powf(x, inv_gamma); }
 
 SPATE_HD float tait_pressure(float rho, const FluidMaterial& m) {
   return m.tait_b * (tait_power(rho / m.rho0, m.gamma) - 1.0f) + m.background_pressure;
@@ -38,8 +78,13 @@ SPATE_HD float fluid_pressure(const PhysicsParams& P, const FluidMaterial& m, fl
 SPATE_HD float density_floor(const PhysicsParams& P, std::uint8_t m) { return P.tension ? 0.0f : P.materials.of(m).rho0; }
 
 // Inverse of eq. 9, used to give wall particles the density that matches their pressure.
-SPATE_HD float tait_density(float p, const FluidMaterial& m) {
-  return m.rho0 * powf((p - m.background_pressure) / m.tait_b + 1.0f, m.inv_gamma);
+// portable (fluid.portable_eos): the root by tait_root, the same bits on the CPU and the GPU;
+// otherwise the C library's powf, as before it: every shipped result was computed that way, and the
+// impact cases' first peaks are one draw of a chaotic splash that a last-bit change redraws
+// (docs/gpu.md), so the default stays until their tests stand on more than one draw.
+SPATE_HD float tait_density(float p, const FluidMaterial& m, bool portable = false) {
+  const float x = (p - m.background_pressure) / m.tait_b + 1.0f;
+  return m.rho0 * (portable ? tait_root(x, m.gamma, m.inv_gamma) : powf(x, m.inv_gamma));
 }
 
 // (c / c0)^2 = (rho / rho0)^(gamma - 1): the Tait sound speed at density ratio s, squared and

@@ -88,7 +88,7 @@ SPATE_HD WallState<Dim> finish_wall(const PhysicsParams& P, const WallSums<Dim>&
   const Vec<Dim> a_w = motion ? rigid_acceleration<Dim>(*motion, x) : zero_vec<Dim>();
   const float p = adami_pressure(P, s, a_w);
   out.p = p > 0.0f ? p : 0.0f;
-  out.rho = tait_density(out.p, M);
+  out.rho = tait_density(out.p, M, P.portable_eos);
   if (motion) {
     const Vec<Dim> v_w = rigid_velocity<Dim>(*motion, x);
     for (int k = 0; k < Dim; ++k) out.v[k] = 2.0f * v_w[k] - s.v_w[k] / s.w;

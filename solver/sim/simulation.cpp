@@ -567,6 +567,18 @@ class Worker {
         busy.push_back(v);
       }
     }
+    // Per-pass seconds of every slab (zeros unless SPATE_PASS_TIMERS=1; backend/pass_times.hpp).
+    std::vector<PassSeconds> pass_seconds;
+    {
+      const PassSeconds mine = w_.pass_seconds();
+      Bytes b(sizeof mine);
+      std::memcpy(b.data(), mine.data(), sizeof mine);
+      for (auto& part : t_.allgather(b)) {
+        PassSeconds v{};
+        std::memcpy(v.data(), part.data(), std::min(sizeof v, part.size()));
+        pass_seconds.push_back(v);
+      }
+    }
     const std::int64_t solver_bytes = t_.sum(static_cast<std::int64_t>(w_.allocated_bytes()));
     const std::int64_t ghosts = t_.sum(static_cast<std::int64_t>(w_.particles().ghosts()));
     if (reporter) {
@@ -580,6 +592,7 @@ class Worker {
       r.last_checkpoint = last_checkpoint;
       r.slab_particles = counts;
       r.slab_busy_seconds = busy;
+      if (pass_timers_enabled()) r.slab_pass_seconds = pass_seconds;
       r.imbalance = imbalance(counts);
       r.ghosts = ghosts;
       r.bytes_per_particle = static_cast<double>(solver_bytes) / static_cast<double>(std::max<std::int64_t>(1, total_particles));

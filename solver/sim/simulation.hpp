@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "../case/case.hpp"
+#include "../backend/pass_times.hpp"
 #include "../case/generator.hpp"
 #include "steering.hpp"
 #include "insitu.hpp"
@@ -47,6 +48,7 @@ struct RunResult {
   std::filesystem::path last_checkpoint;
   std::vector<std::int64_t> slab_particles;
   std::vector<double> slab_busy_seconds;    // per slab: time in its own neighbour loops
+  std::vector<PassSeconds> slab_pass_seconds;  // per slab and pass (SPATE_PASS_TIMERS=1; else empty)
   double imbalance = 1.0;
   std::int64_t ghosts = 0;
   double bytes_per_particle = 0.0;         // solver arrays (owned + ghosts + cell grid) / particles

@@ -67,7 +67,7 @@ void SlabWorker::sync_host() {
 
 void SlabWorker::rebuild() {
   const double sorting = topology_.sort_seconds();
-  (faces_moved_ ? handovers_ : crossings_) += topology_.rebuild(arrays(), grid_, layout_, transport_);
+  timed(Pass::Rebuild, [&] { (faces_moved_ ? handovers_ : crossings_) += topology_.rebuild(arrays(), grid_, layout_, transport_); });
   faces_moved_ = false;
   host_stale_ = true;
   // The sorts: per-particle work in the same stretch as the loops (not the waits for the neighbours).
@@ -77,20 +77,22 @@ void SlabWorker::rebuild() {
 }
 
 void SlabWorker::refresh_halo() {
-  topology_.begin_refresh(arrays());
-  topology_.finish_refresh(arrays(), transport_);
+  timed(Pass::HaloRefresh, [&] {
+    topology_.begin_refresh(arrays());
+    topology_.finish_refresh(arrays(), transport_);
+  });
 }
 
 void SlabWorker::compute_rates() {
   if (params_.density_mode == DensityMode::Summation) {
     const auto t = Clock::now();
-    kernels_->summation_density(particles_, grid_, params_);
+    timed(Pass::SummationDensity, [&] { kernels_->summation_density(particles_, grid_, params_); });
     window_fluid_seconds_ += since(t);
     refresh_halo();
   }
   const auto t0 = Clock::now();
-  kernels_->equation_of_state(particles_, params_);
-  kernels_->wall_state(particles_, grid_, params_);
+  timed(Pass::EquationOfState, [&] { kernels_->equation_of_state(particles_, params_); });
+  timed(Pass::WallState, [&] { kernels_->wall_state(particles_, grid_, params_); });
   // Surface tension: the colour gradient rides on the refresh below to the ghosts, whose normals
   // the force pass after the fluid rates reads (physics/surface_tension.hpp).
   // Antuono's diffusion: the same for the renormalised density gradient (density_gradient.hpp).
@@ -98,9 +100,9 @@ void SlabWorker::compute_rates() {
   const bool antuono = uses_antuono_diffusion(params_);
   const bool heat = params_.heat.on;
   // Heat transfer: the temperatures behind the tank faces ride on the same refresh.
-  if (heat) kernels_->wall_temperature(particles_, grid_, params_);
-  if (tension) kernels_->colour_gradient(particles_, grid_, params_);
-  if (antuono) kernels_->density_gradient(particles_, grid_, params_);
+  if (heat) timed(Pass::WallTemperature, [&] { kernels_->wall_temperature(particles_, grid_, params_); });
+  if (tension) timed(Pass::ColourGradient, [&] { kernels_->colour_gradient(particles_, grid_, params_); });
+  if (antuono) timed(Pass::DensityGradient, [&] { kernels_->density_gradient(particles_, grid_, params_); });
   const double wall = since(t0);
   // The fluid phase excludes the wait for the halo (on a GPU: host time around the launches).
   double fluid = fluid_rates_overlapping_refresh();
@@ -109,17 +111,17 @@ void SlabWorker::compute_rates() {
   // by a refresh of its own before its divergence is added.
   if (params_.turbulence.on) {
     const auto t = Clock::now();
-    kernels_->sps_stress(particles_, grid_, params_);
+    timed(Pass::SpsStress, [&] { kernels_->sps_stress(particles_, grid_, params_); });
     fluid += since(t);
     refresh_halo();
     const auto t2 = Clock::now();
-    kernels_->sps_acceleration(particles_, grid_, params_);
+    timed(Pass::SpsAcceleration, [&] { kernels_->sps_acceleration(particles_, grid_, params_); });
     fluid += since(t2);
   }
   const auto t1 = Clock::now();
-  if (tension) kernels_->surface_tension(particles_, grid_, params_);
-  if (antuono) kernels_->antuono_diffusion(particles_, grid_, params_);
-  if (heat) kernels_->heat_rates(particles_, grid_, params_);
+  if (tension) timed(Pass::SurfaceTension, [&] { kernels_->surface_tension(particles_, grid_, params_); });
+  if (antuono) timed(Pass::AntuonoDiffusion, [&] { kernels_->antuono_diffusion(particles_, grid_, params_); });
+  if (heat) timed(Pass::HeatRates, [&] { kernels_->heat_rates(particles_, grid_, params_); });
   fluid += since(t1);
   busy_seconds_ += wall + fluid;
   window_wall_seconds_ += wall;
@@ -136,12 +138,14 @@ double SlabWorker::fluid_rates_overlapping_refresh() {
   SlabArrays& a = arrays();
   const auto t0 = Clock::now();
   topology_.begin_refresh(a);
-  kernels_->fluid_rates_range(grid_, params_, topology_.split().interior);
+  timed(Pass::FluidRates, [&] { kernels_->fluid_rates_range(grid_, params_, topology_.split().interior); });
   double seconds = since(t0);
-  topology_.finish_refresh(a, transport_);
+  timed(Pass::HaloRefresh, [&] { topology_.finish_refresh(a, transport_); });
   const auto t1 = Clock::now();
-  kernels_->fluid_rates_range(grid_, params_, topology_.split().before);
-  kernels_->fluid_rates_range(grid_, params_, topology_.split().after);
+  timed(Pass::FluidRates, [&] {
+    kernels_->fluid_rates_range(grid_, params_, topology_.split().before);
+    kernels_->fluid_rates_range(grid_, params_, topology_.split().after);
+  });
   return seconds + since(t1);
 }
 
@@ -150,7 +154,7 @@ double SlabWorker::fluid_rates_overlapping_refresh() {
 void SlabWorker::shift(float dt) {
   if (!params_.shifting.enabled) return;
   const auto t = Clock::now();
-  kernels_->shifting(particles_, grid_, params_, dt);
+  timed(Pass::Shifting, [&] { kernels_->shifting(particles_, grid_, params_, dt); });
   const double seconds = since(t);
   busy_seconds_ += seconds;
   window_fluid_seconds_ += seconds;
@@ -216,7 +220,7 @@ std::optional<ParticleFault> SlabWorker::position_fault_message(std::uint32_t id
 // the message is the host's). Between steps the arrays hold the owned particles' whole state.
 std::optional<ParticleFault> SlabWorker::step(float dt) {
   SlabArrays& a = arrays();
-  kernels_->predict(particles_, params_, dt);
+  timed(Pass::Predict, [&] { kernels_->predict(particles_, params_, dt); });
   host_stale_ = true;
   removed_ = a.remove_escaped(open_);
   const std::uint32_t bad = a.wrap_and_find_position_fault(lattice_);
@@ -224,7 +228,7 @@ std::optional<ParticleFault> SlabWorker::step(float dt) {
   rebuild();
   compute_rates();
   shift(dt);
-  kernels_->correct(particles_, params_, dt);
+  timed(Pass::Correct, [&] { kernels_->correct(particles_, params_, dt); });
   return std::nullopt;
 }
 
@@ -256,7 +260,13 @@ std::optional<ParticleFault> SlabWorker::health(float min_ratio, float max_ratio
   return fault;
 }
 
-float SlabWorker::local_time_step(const TimeStepControl& c) const { return kernels_->min_time_step(particles_, params_, c); }
+float SlabWorker::local_time_step(const TimeStepControl& c) const {
+  float dt = 0.0f;
+  timed(Pass::TimeStep, [&] { dt = kernels_->min_time_step(particles_, params_, c); });
+  return dt;
+}
+
+PassSeconds SlabWorker::pass_seconds() const { return pass_timers_ ? kernels_->pass_seconds() : PassSeconds{}; }
 
 std::vector<std::int64_t> SlabWorker::slab_particle_counts() {
   std::vector<std::int64_t> counts(transport_.slab_count(), 0);

@@ -92,8 +92,23 @@ class SlabWorker {
   std::size_t allocated_bytes() const;
   // Wall-clock seconds this slab spent in its neighbour loops and its sort (not waiting for others).
   double busy_seconds() const { return busy_seconds_; }
+  // Seconds per pass of this slab's steps so far (backend/pass_times.hpp): zeros unless
+  // SPATE_PASS_TIMERS=1. On a device, waits for the passes it timed.
+  PassSeconds pass_seconds() const;
 
  private:
+  // `body` (a pass, or the topology's part of the step), timed as pass p when the timers are on.
+  template <class Body>
+  void timed(Pass p, Body&& body) const {
+    if (!pass_timers_) {
+      body();
+      return;
+    }
+    kernels_->begin_pass(p);
+    body();
+    kernels_->end_pass(p);
+  }
+
   void rebuild();        // migrate, sort, halos
   void compute_rates();  // EOS, walls, fluid rates
   void shift(float dt);  // particle shifting, when enabled (before the corrector applies it)
@@ -111,6 +126,7 @@ class SlabWorker {
   CellGrid grid_;
   SlabTopology topology_;
   bool host_stale_ = false;
+  bool pass_timers_ = pass_timers_enabled();
   double busy_seconds_ = 0.0;
   // Loop seconds since the last balancing pass, per synchronised phase (see PhaseCosts).
   double window_wall_seconds_ = 0.0, window_fluid_seconds_ = 0.0, window_sort_seconds_ = 0.0;

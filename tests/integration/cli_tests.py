@@ -453,6 +453,27 @@ def bench_json_reports_the_build(env):
 
 
 @test
+def bench_times_each_pass(env):
+    """spate bench --pass-times --json reports, per device, the seconds of each pass of the step
+    (issue 34): the passes every step runs are there and took time, none that the case does not
+    run, and together they fit in the run's time; without the flag, no pass times."""
+    p = env.run("bench", env.tiny, "--steps", "3", "--threads", "1", "--json", "--pass-times")
+    check(p.returncode == 0, f"exit {p.returncode}: {p.stderr}")
+    j = json.loads(p.stdout)
+    passes = j.get("pass_seconds")
+    check(isinstance(passes, list) and len(passes) == 1, f"one device's passes: {passes}")
+    every_step = {"predict", "rebuild", "equation_of_state", "wall_state", "fluid_rates", "halo_refresh", "correct", "time_step"}
+    check(every_step <= set(passes[0]), f"passes {sorted(passes[0])}")
+    check(not set(passes[0]) & {"sps_stress", "heat_rates", "shifting", "surface_tension"}, f"passes the case does not run: {sorted(passes[0])}")
+    check(all(v > 0 for v in passes[0].values()), f"times {passes[0]}")
+    check(sum(passes[0].values()) <= j["wall_seconds"], f"passes {sum(passes[0].values())} s within the run's {j['wall_seconds']} s")
+    p = env.run("bench", env.tiny, "--steps", "2", "--threads", "1", "--json")
+    check(p.returncode == 0 and "pass_seconds" not in json.loads(p.stdout), "no pass times unless asked")
+    p = env.run("bench", env.tiny, "--steps", "2", "--threads", "1", "--pass-times")
+    check(p.returncode == 0 and re.search(r"device 0 passes \(s over \d+ steps\): .*fluid_rates", p.stdout), f"text bench lists passes:\n{p.stdout}")
+
+
+@test
 def info_shipped_cases(env):
     for name in sorted(os.listdir(env.shipped)):
         if not name.endswith(".yaml"):

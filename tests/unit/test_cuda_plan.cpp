@@ -223,6 +223,17 @@ TEST(CudaVisibleDevices, ParsedAsTheRuntimeDoes) {
   EXPECT_NE(no_device_reason(nullptr).find("no GPU"), std::string::npos);
 }
 
+TEST(CudaPairLoop, TheHalfWarpLoopUnlessThePerThreadOneIsAskedFor) {
+  EXPECT_FALSE(per_thread_pair_loop(nullptr));
+  EXPECT_FALSE(per_thread_pair_loop(""));
+  EXPECT_FALSE(per_thread_pair_loop("lanes"));
+  EXPECT_TRUE(per_thread_pair_loop("thread"));
+  EXPECT_THROW(per_thread_pair_loop("threads"), std::invalid_argument);
+  // The half-warp pass launches 16 threads per particle in whole warps, so a half-warp never
+  // straddles two blocks.
+  EXPECT_EQ(kThreadsPerBlock % 32u, 0u);
+}
+
 TEST(CudaDeviceAssignment, WorkersTakeConsecutiveDevicesPerNodeRank) {
   EXPECT_EQ(device_for_worker(0, 1, 0, 4), 0);
   EXPECT_EQ(device_for_worker(3, 4, 0, 4), 3);

@@ -1,6 +1,7 @@
 // Tait equation of state (eq. 9, solver/physics/eos.hpp) and its inverse.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "physics/eos.hpp"
@@ -18,6 +19,38 @@ TEST(Eos, ZeroPressureAtReferenceDensity) { EXPECT_EQ(tait_pressure(kRho0, kWate
 TEST(Eos, Pow7IsTheSeventhPower) {
   for (float x : {0.0f, 0.5f, 0.99f, 1.0f, 1.01f, 1.3f, 2.0f})
     EXPECT_NEAR(pow7(x), std::pow(static_cast<double>(x), 7.0), 4e-7 * std::pow(static_cast<double>(x), 7.0)) << x;
+}
+
+TEST(Eos, SeventhRootIsCorrectlyRoundedFromPlainArithmetic) {
+  // The wall state's inverse EOS takes x^(1/7) from + - * / alone, so that the CPU and the GPU
+  // round it alike (powf's last bit is the library's); it must still be the correctly rounded
+  // root: within half an ulp of double precision's over twelve decades.
+  double worst = 0.0;
+  for (float x = 1e-6f; x < 1e6f; x *= 1.0001f) {
+    const double exact = std::pow(static_cast<double>(x), 1.0 / 7.0);
+    const float r = static_cast<float>(exact);
+    const double ulp = std::nextafter(r, INFINITY) - r;
+    worst = std::max(worst, std::fabs(seventh_root(x) - exact) / ulp);
+  }
+  EXPECT_LE(worst, 0.5 + 1e-6);
+  EXPECT_EQ(seventh_root(1.0f), 1.0f);
+  EXPECT_EQ(seventh_root(128.0f), 2.0f);
+  EXPECT_EQ(seventh_root(0.0f), 0.0f);
+  EXPECT_TRUE(std::isnan(seventh_root(-1.0f)));
+  EXPECT_TRUE(std::isnan(seventh_root(NAN)));
+  EXPECT_EQ(seventh_root(INFINITY), INFINITY);
+}
+
+TEST(Eos, PortableWallDensityTakesTheSeventhRoot) {
+  // fluid.portable_eos: the inverse EOS by seventh_root, within an ulp of powf's; other exponents
+  // keep powf.
+  for (float p : {-1000.0f, 0.0f, 5.0e3f, 4.0e4f, 3.0e5f}) {
+    const float x = p / kWater.tait_b + 1.0f;
+    EXPECT_EQ(tait_density(p, kWater, true), kRho0 * seventh_root(x)) << p;
+    EXPECT_NEAR(tait_density(p, kWater, true), tait_density(p, kWater), 2e-7f * kRho0 * seventh_root(x)) << p;
+  }
+  const FluidMaterial air = make_fluid(1.2f, 30.0f, 1.4f, 1.8e-5f, 1.0f);
+  EXPECT_EQ(tait_density(200.0f, air, true), tait_density(200.0f, air));
 }
 
 TEST(Eos, GammaSevenAgainstDoublePrecision) {

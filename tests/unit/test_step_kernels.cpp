@@ -20,6 +20,7 @@
 #include "../source_dir.hpp"
 #include "backend/cpu/cpu_backend.hpp"
 #include "backend/cuda/device_plan.hpp"
+#include "backend/pair_lanes.hpp"
 #include "backend/particle_updates.hpp"
 #include "backend/cuda/device_runtime.hpp"
 #include "backend/cuda/halo_exchange.hpp"
@@ -54,6 +55,36 @@ class ResidentKernels : public cpu::Kernels {
   int ranges = 0;
 
  protected:
+  // A pass as a device runs it: `body` once per owned particle with its cell coordinates, one
+  // particle after the other.
+  template <class Body>
+  void per_owned_particle(const PhysicsParams& P, Body&& body) {
+    ParticleStore& p = device_store();
+    const CellGridView v = arrays().grid().view();
+    const Lattice& L = arrays().grid().lattice();
+    dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+      for (std::size_t i = 0; i < p.owned(); ++i) {
+        int g[3] = {0, 0, 0};
+        for (int a = 0; a < Dim; ++a) g[a] = L.cell_of(p.pos[a][i], a);
+        body.template operator()<Kernel, Dim>(v, p, static_cast<std::uint32_t>(i), g);
+      }
+    });
+  }
+  // The same for the fluid pass over `range`, with the pair loop's compile-time choices.
+  template <class Body>
+  void fluid_pass_per_particle(const PhysicsParams& P, ParticleRange range, Body&& body) {
+    ParticleStore& p = device_store();
+    const CellGridView v = arrays().grid().view();
+    const Lattice& L = arrays().grid().lattice();
+    dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>() {
+      for (std::size_t i = range.first; i < range.end(); ++i) {
+        int g[3] = {0, 0, 0};
+        for (int a = 0; a < Dim; ++a) g[a] = L.cell_of(p.pos[a][i], a);
+        body.template operator()<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(v, p, static_cast<std::uint32_t>(i), g);
+      }
+    });
+  }
+
   // Poisons the Refresh fields of the halo ghosts and of their images as soon as a refresh is
   // staged: whatever the interior pass reads of them is NaN, which then shows in the results.
   class PoisoningArrays final : public HostSlabArrays {
@@ -94,15 +125,9 @@ class GpuOrderKernels final : public ResidentKernels {
  public:
   explicit GpuOrderKernels(int dim) : ResidentKernels(dim, true) {}
   void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
-    ParticleStore& p = device_store();
-    const CellGridView v = arrays().grid().view();
-    const Lattice& L = arrays().grid().lattice();
-    dispatch_pair_loop(P, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>() {
-      for (std::size_t i = range.first; i < range.end(); ++i) {
-        int g[3] = {0, 0, 0};
-        for (int a = 0; a < Dim; ++a) g[a] = L.cell_of(p.pos[a][i], a);
-        update_fluid_rates<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, v, p, static_cast<std::uint32_t>(i), g);
-      }
+    fluid_pass_per_particle(P, range, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>(
+                                          const CellGridView& v, ParticleStore& p, std::uint32_t i, const int g[3]) {
+      update_fluid_rates<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, v, p, i, g);
     });
   }
   // SPS turbulence: the per-particle bodies the CUDA kernels run (visiting order), for the CPU's
@@ -117,19 +142,27 @@ class GpuOrderKernels final : public ResidentKernels {
       add_sps_acceleration<Kernel, Dim>(P, v, p, i, g);
     });
   }
+};
 
- private:
-  template <class Body>
-  void per_owned_particle(const PhysicsParams& P, Body&& body) {
-    ParticleStore& p = device_store();
-    const CellGridView v = arrays().grid().view();
-    const Lattice& L = arrays().grid().lattice();
-    dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-      for (std::size_t i = 0; i < p.owned(); ++i) {
-        int g[3] = {0, 0, 0};
-        for (int a = 0; a < Dim; ++a) g[a] = L.cell_of(p.pos[a][i], a);
-        body.template operator()<Kernel, Dim>(v, p, static_cast<std::uint32_t>(i), g);
-      }
+// The GPU's half-warp schedule on the CPU: the resident path with the fluid pass run as the CUDA
+// backend's HalfWarp team runs it (pair_lanes.hpp), its 16 lanes one after the other (HostLanes):
+// the candidates tested 16 at a time, the in-support ones dealt to the lanes in order, the lanes
+// added in order; and the wall pass as the GPU runs it (update_wall_state per particle). The other
+// passes are the same bodies on both. It must give the CPU backend's bits (PairLanes.*).
+class HostLaneKernels final : public ResidentKernels {
+ public:
+  explicit HostLaneKernels(int dim) : ResidentKernels(dim, true) {}
+  void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
+    fluid_pass_per_particle(P, range, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>(
+                                          const CellGridView& v, ParticleStore& p, std::uint32_t i, const int g[3]) {
+      update_fluid_rates_in_lanes<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, v, p, i, g, HostLanes{});
+    });
+  }
+  // The GPU's wall pass: the per-particle body, each wall particle summing its in-support fluid
+  // neighbours in visiting order (the CPU's batched pass selects and sums the same ones).
+  void wall_state(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    per_owned_particle(P, [&]<class Kernel, int Dim>(const CellGridView& v, ParticleStore& p, std::uint32_t i, const int g[3]) {
+      update_wall_state<Kernel, Dim>(P, v, p, i, g);
     });
   }
 };
@@ -605,6 +638,40 @@ TEST(GpuOrder, TheGpusSummationOrderStaysWellWithinTheGpuCheckTolerance) {
   }
 }
 
+TEST(PairLanes, EachLaneTakesTheInSupportNeighbourOfItsNumberModuloSixteen) {
+  // Every group of 16 candidates (each inside mask) after every count of earlier neighbours: the
+  // lanes take the group's in-support candidates one each, neighbour n by lane n mod 16, in order.
+  for (unsigned base = 0; base < 40; base += 3)
+    for (unsigned inside = 0; inside < (1u << kPairLanes); inside += 7) {
+      int taken = 0;
+      for (int lane = 0; lane < kPairLanes; ++lane) {
+        const int q = lane_candidate(inside, base, lane);
+        if (q < 0) continue;
+        ASSERT_TRUE((inside >> q) & 1u);
+        const unsigned n = base + static_cast<unsigned>(__builtin_popcount(inside & ((1u << q) - 1u)));  // q's neighbour number
+        ASSERT_EQ(n % kPairLanes, static_cast<unsigned>(lane)) << "inside " << inside << " base " << base;
+        ++taken;
+      }
+      ASSERT_EQ(taken, __builtin_popcount(inside));
+    }
+}
+
+TEST(PairLanes, TheGpusHalfWarpScheduleGivesTheCpusBits) {
+  // The CUDA backend's fluid pass (HalfWarp, one lane per thread) emulated on the host with the
+  // same body (HostLaneKernels) against the CPU backend, on every case the GPU check runs: every
+  // checkpoint field and every time step bit for bit. So the GPU's results are the CPU's wherever
+  // the device's arithmetic is IEEE: with fluid.portable_eos (the walls' inverse EOS by
+  // seventh_root, not powf) and gamma 7.
+  for (const auto& k : gpu_checked_cases()) {
+    SCOPED_TRACE(k.name);
+    std::vector<float> dt_cpu, dt_lanes;
+    const auto cpu = run(k.c, 1, k.steps, nullptr, &dt_cpu);
+    const auto lanes = run(k.c, 1, k.steps, [&] { return std::make_unique<HostLaneKernels>(k.c.dim); }, &dt_lanes);
+    EXPECT_EQ(dt_cpu, dt_lanes);
+    expect_same(cpu, lanes);
+  }
+}
+
 // The real thing: the CUDA kernels against the CPU loops. Skips, visibly, on machines without a GPU
 // (the CI machine has none; scripts/gpu-check runs them on one and fails if any is skipped).
 namespace {
@@ -626,6 +693,25 @@ TEST(CudaBackend, MatchesTheCpuBackendWithinTheGpuCheckTolerance) {
     EXPECT_LE(d.worst, gpu::kGpuCpuScaledTolerance) << d.field;
     ASSERT_EQ(dt_cpu.size(), dt_gpu.size());
     for (std::size_t n = 0; n < dt_cpu.size(); ++n) EXPECT_NEAR(dt_gpu[n], dt_cpu[n], gpu::kGpuCpuScaledTolerance * dt_cpu[n]);
+  }
+}
+
+TEST(CudaBackend, TheHalfWarpFluidPassGivesTheCpusBits) {
+  // What PairLanes.TheGpusHalfWarpScheduleGivesTheCpusBits proves on the host, on the device: every
+  // checked case whose passes all sum in the CPU's order on the GPU (SPS's two passes still sum per
+  // thread there) gives the CPU backend's bits, time steps included, with fluid.portable_eos (the
+  // walls' inverse EOS by seventh_root, which rounds alike on both; powf's last bit is the library's).
+  if (no_gpu()) GTEST_SKIP() << why_no_gpu();
+  for (const auto& k : gpu_checked_cases()) {
+    if (k.name == "sps") continue;
+    SCOPED_TRACE(k.name);
+    Case c = k.c;
+    c.portable_eos = true;
+    std::vector<float> dt_cpu, dt_gpu;
+    const auto cpu = run(c, 1, k.steps, nullptr, &dt_cpu);
+    const auto gpu = run(c, 1, k.steps, cuda_kernels(c.dim), &dt_gpu);
+    EXPECT_EQ(dt_cpu, dt_gpu);
+    expect_same(cpu, gpu);
   }
 }
 

@@ -13,6 +13,7 @@
 #include "parallel.hpp"
 #include "../../grid/cell_grid.hpp"
 #include "../../particles/particle_access.hpp"
+#include "../pair_lanes.hpp"
 #include "../particle_updates.hpp"
 #include "../../physics/fluid_interactions.hpp"
 #include "../../physics/multiphase_interactions.hpp"
@@ -51,8 +52,9 @@ namespace {
 //  4. neighbour number n (in the visiting order) added to partial sum n mod kLanes, the partial
 //     sums added in lane order.
 // Which lane a neighbour lands in depends only on the neighbour sequence, which is the same
-// whatever the split, so results stay bit-identical across devices, ranks and threads.
-constexpr int kLanes = 16;
+// whatever the split, so results stay bit-identical across devices, ranks and threads; the GPU's
+// half-warp pass sums in the same lanes (pair_lanes.hpp), so it gives the same bits as this one.
+constexpr int kLanes = kPairLanes;
 constexpr int kChunk = 8 * kLanes;
 
 template <int Dim>

@@ -1,10 +1,12 @@
 // The CUDA driver: the same physics bodies as backend/cpu (solver/physics, SPATE_HD), one thread per
 // particle, each summing its neighbours sequentially in the (cell, id) order of CellGridView, so
 // there are no atomics and every sum is accumulated in the same order whatever the split into
-// slabs. The particles stay on the device (DeviceSlabArrays, device_arrays.cu); the worker runs
+// slabs; the fluid pass, most of a step, runs a half-warp per particle in the CPU's lane order
+// (pair_lanes.hpp), which gives the CPU's bits. The particles stay on the device (DeviceSlabArrays, device_arrays.cu); the worker runs
 // the topology on them through the SlabArrays primitives (domain/slab_topology.cpp).
 #include <cuda_runtime.h>
 
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -16,6 +18,7 @@
 #include "../../physics/fluid_interactions.hpp"
 #include "../../physics/integrator.hpp"
 #include "../../physics/wall_boundary.hpp"
+#include "../pair_lanes.hpp"
 #include "../particle_updates.hpp"
 #include "device_arrays.cuh"
 #include "device_plan.hpp"
@@ -133,6 +136,56 @@ struct SurfaceTensionPass {
   }
 };
 
+// The fluid pass's team (pair_lanes.hpp): the 16 threads of a half-warp share one fluid particle,
+// one lane each. A ballot tests 16 candidates at once; the in-support ones are dealt to the lanes
+// in order and run together once every lane holds one, so the pair terms run on full lanes; the
+// lanes' partial sums are added in lane order through shuffles.
+struct HalfWarp {
+  static constexpr int kHeld = 1;
+  int lane;          // threadIdx.x mod 16
+  unsigned members;  // the half-warp's threads in the warp's masks
+  unsigned shift;    // 0 or 16: where they sit in a ballot
+  __device__ bool leader() const { return lane == 0; }
+  template <class Predicate>
+  __device__ unsigned ballot(Predicate&& inside) const {
+    return (__ballot_sync(members, inside(lane)) >> shift) & 0xFFFFu;
+  }
+  template <class Body>
+  __device__ void for_each_lane(Body&& body) const {
+    body(lane, 0);
+  }
+  template <int Dim>
+  __device__ FluidRates<Dim> sum_in_lane_order(const FluidRates<Dim>* held) const {
+    FluidRates<Dim> total;
+    for (int l = 0; l < kPairLanes; ++l) {
+      FluidRates<Dim> t;
+      for (int k = 0; k < Dim; ++k) {
+        t.acc[k] = __shfl_sync(members, held[0].acc[k], l, kPairLanes);
+        t.wall_gradient[k] = __shfl_sync(members, held[0].wall_gradient[k], l, kPairLanes);
+      }
+      t.density_rate = __shfl_sync(members, held[0].density_rate, l, kPairLanes);
+      t.wall_weight = __shfl_sync(members, held[0].wall_weight, l, kPairLanes);
+      add_pair_rates(total, t);
+    }
+    return total;
+  }
+};
+
+// kPairLanes threads per particle of [first, first + count); blocks are whole warps, so a
+// half-warp is 16 consecutive threads that share one particle and leave together.
+template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>
+__global__ void fluid_rates_lanes_kernel(DeviceFields d, std::uint32_t first, std::uint32_t count, CellGridView v, Lattice L,
+                                         PhysicsParams P) {
+  const std::uint32_t k = thread_index() / kPairLanes;
+  if (k >= count) return;
+  const std::uint32_t i = first + k;
+  const unsigned shift = threadIdx.x & 16u;
+  const HalfWarp team{static_cast<int>(threadIdx.x & 15u), 0xFFFFu << shift, shift};
+  int g[3];
+  cell_coords<Dim>(L, d, i, g);
+  update_fluid_rates_in_lanes<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, v, d, i, g, team);
+}
+
 // Owned particles [first, first + count): the whole slab, or the interior or a boundary range.
 // Extra arguments (the shifting pass's dt) go to the pass.
 template <class Update, class Kernel, int Dim, class... Extra>
@@ -195,7 +248,15 @@ class CudaKernels final : public StepKernels {
   void fluid_rates_range(const CellGrid&, const PhysicsParams& P, ParticleRange range) override {
     // The same choices as dispatch_pair_loop on the CPU.
     dispatch_pair_flags(pair_loop_flags(P), [&]<bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>() {
-      neighbour_pass<FluidRatesPass<Gamma7, Multiphase, MovingWalls, Riemann>>(P, range);
+      if (per_thread_pair_loop_) {
+        neighbour_pass<FluidRatesPass<Gamma7, Multiphase, MovingWalls, Riemann>>(P, range);
+        return;
+      }
+      arrays_.select();
+      dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+        launch(range.count * kPairLanes, fluid_rates_lanes_kernel<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>, arrays_.fields(),
+               static_cast<std::uint32_t>(range.first), static_cast<std::uint32_t>(range.count), arrays_.view(), arrays_.lattice(), P);
+      });
     });
   }
   void colour_gradient(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
@@ -237,7 +298,62 @@ class CudaKernels final : public StepKernels {
   }
   std::size_t device_bytes() const override { return arrays_.bytes(); }
 
+  // Per-pass times (backend/pass_times.hpp) on the device's timeline: an event on the compute
+  // stream at each end of a pass, resolved when asked (or, for the oldest half, when a thousand
+  // are pending: long finished by then, so resolving them does not wait). A pass's time runs from
+  // when the stream reaches its start to when it reaches its end, idle gaps included.
+  void begin_pass(Pass) override {
+    arrays_.select();
+    open_event_ = take_event();
+    check(cudaEventRecord(open_event_, arrays_.stream()), "cudaEventRecord");
+  }
+  void end_pass(Pass p) override {
+    arrays_.select();
+    cudaEvent_t end = take_event();
+    check(cudaEventRecord(end, arrays_.stream()), "cudaEventRecord");
+    timed_.push_back({p, open_event_, end});
+    if (timed_.size() >= 1024) resolve_passes(timed_.size() / 2);
+  }
+  PassSeconds pass_seconds() override {
+    arrays_.select();
+    resolve_passes(timed_.size());
+    return pass_seconds_;
+  }
+  ~CudaKernels() override {
+    arrays_.select();
+    for (const TimedPass& t : timed_) cudaEventDestroy(t.begin), cudaEventDestroy(t.end);
+    for (cudaEvent_t e : event_pool_) cudaEventDestroy(e);
+  }
+
  private:
+  struct TimedPass {
+    Pass pass;
+    cudaEvent_t begin, end;
+  };
+  cudaEvent_t take_event() {
+    if (!event_pool_.empty()) {
+      cudaEvent_t e = event_pool_.back();
+      event_pool_.pop_back();
+      return e;
+    }
+    cudaEvent_t e = nullptr;
+    check(cudaEventCreate(&e), "cudaEventCreate");
+    return e;
+  }
+  // The first n timed passes: added to pass_seconds_, their events back to the pool.
+  void resolve_passes(std::size_t n) {
+    for (std::size_t k = 0; k < n; ++k) {
+      const TimedPass& t = timed_[k];
+      check(cudaEventSynchronize(t.end), "cudaEventSynchronize");
+      float ms = 0.0f;
+      check(cudaEventElapsedTime(&ms, t.begin, t.end), "cudaEventElapsedTime");
+      pass_seconds_[static_cast<int>(t.pass)] += 1e-3 * ms;
+      event_pool_.push_back(t.begin);
+      event_pool_.push_back(t.end);
+    }
+    timed_.erase(timed_.begin(), timed_.begin() + static_cast<std::ptrdiff_t>(n));
+  }
+
   std::size_t owned() const { return arrays_.owned(); }
   std::uint32_t owned32() const { return static_cast<std::uint32_t>(arrays_.owned()); }
 
@@ -259,6 +375,13 @@ class CudaKernels final : public StepKernels {
   }
 
   DeviceSlabArrays arrays_;
+  // SPATE_GPU_PAIR_LOOP=thread: the fluid pass one thread per particle, its neighbours summed in
+  // one sequence (the GPU's first loop, for comparison; within the GPU check's tolerance of the
+  // CPU, not its bits). Otherwise the half-warp pass.
+  bool per_thread_pair_loop_ = per_thread_pair_loop(std::getenv("SPATE_GPU_PAIR_LOOP"));
+  cudaEvent_t open_event_ = nullptr;
+  std::vector<TimedPass> timed_;
+  std::vector<cudaEvent_t> event_pool_;
 };
 
 }  // namespace

@@ -120,6 +120,13 @@ std::string no_device_reason(const char* env) {
   return "the CUDA runtime found no device (no GPU, or no NVIDIA driver)";
 }
 
+bool per_thread_pair_loop(const char* env) {
+  const std::string v = env ? env : "";
+  if (v.empty() || v == "lanes") return false;
+  if (v == "thread") return true;
+  throw std::invalid_argument("SPATE_GPU_PAIR_LOOP='" + v + "': expected lanes or thread");
+}
+
 int device_for_worker(int worker, int workers_per_process, int local_rank, int visible) {
   if (visible < 1) throw std::invalid_argument("device_for_worker: no visible device");
   if (worker < 0 || workers_per_process < 1 || worker >= workers_per_process || local_rank < 0)

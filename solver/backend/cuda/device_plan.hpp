@@ -25,6 +25,11 @@ constexpr unsigned kThreadsPerBlock = 128;
 // Throws std::length_error beyond the 2^31 - 1 blocks a grid's x dimension allows.
 LaunchShape launch_shape(std::size_t items, unsigned threads = kThreadsPerBlock);
 
+// The environment's SPATE_GPU_PAIR_LOOP: unset, empty or "lanes" gives the fluid pass a half-warp
+// per particle in the CPU's lane order (false); "thread" one thread per particle, summing its
+// neighbours in one sequence (true). Anything else throws std::invalid_argument naming it.
+bool per_thread_pair_loop(const char* env);
+
 // Device arrays grow with headroom (particles migrate in, ghosts vary step to step) so that a
 // reallocation, which costs a cudaMalloc and a copy, is rare: at least needed + needed/8, rounded
 // up to a multiple of kCapacityQuantum. They never shrink.

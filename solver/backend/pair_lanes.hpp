@@ -1,0 +1,132 @@
+#pragma once
+// The lane order of a fluid particle's neighbour sums, one source for every team of lanes that
+// runs it: in-support neighbour n of particle i (counted in CellGridView's visiting order, i
+// itself included) is added to partial sum n mod kPairLanes, each partial sum in increasing n, and
+// the partial sums are added in lane order. The CPU's vectorised fluid pass (cpu/fluid_pass.hpp,
+// kLanes) sums in this order; the GPU's half-warp pass (cuda_kernels.cu, HalfWarp) runs the body
+// below with one lane per thread; HostLanes runs it with the lanes one after the other, which is
+// how the CPU tests prove, without a GPU, that the GPU's schedule gives the CPU's bits
+// (PairLanes.*). Issue 34: the per-thread loop kept about one lane in five busy at h = 2 dp
+// (each thread branching on its own candidate's distance); here the half-warp tests 16 candidates
+// at once and every lane takes an in-support one.
+#include <cstdint>
+
+#include "particle_updates.hpp"
+
+namespace spate {
+
+constexpr int kPairLanes = 16;
+
+SPATE_HD unsigned lane_popcount(unsigned m) {
+#if defined(__CUDA_ARCH__)
+  return static_cast<unsigned>(__popc(m));
+#else
+  return static_cast<unsigned>(__builtin_popcount(m));
+#endif
+}
+
+// The rank among a group's in-support candidates of the one lane `lane` takes, when `dealt`
+// neighbours came before the group: neighbour n goes to lane n mod kPairLanes, so lane l takes
+// number dealt + ((l - dealt) mod kPairLanes), if the group has that many.
+SPATE_HD unsigned lane_rank(unsigned dealt, int lane) { return (static_cast<unsigned>(lane) - dealt) % kPairLanes; }
+
+// Which candidate of a group of at most kPairLanes consecutive candidates lane `lane` takes: the
+// group's in-support candidates are the set bits of `inside` (bit q: candidate q), numbered from
+// `dealt` on in increasing q; lane l takes the one numbered n with n mod kPairLanes = l. A group
+// has at most kPairLanes of them, so a lane takes at most one. -1 when it takes none.
+SPATE_HD int lane_candidate(unsigned inside, unsigned dealt, int lane) {
+  const unsigned rank = lane_rank(dealt, lane);
+  if (rank >= lane_popcount(inside)) return -1;
+  for (unsigned r = 0; r < rank; ++r) inside &= inside - 1;  // drop the `rank` lowest set bits
+#if defined(__CUDA_ARCH__)
+  return __ffs(static_cast<int>(inside)) - 1;
+#else
+  return __builtin_ctz(inside);
+#endif
+}
+
+// The lanes run one after the other on the host: a "ballot" asks every lane, each lane's body runs
+// in lane order on its own slot of the per-lane arrays, and the partial sums are added in lane
+// order. The GPU's team (HalfWarp, cuda_kernels.cu) has the same members with one lane per thread
+// (one slot).
+struct HostLanes {
+  static constexpr int kHeld = kPairLanes;  // the per-lane slots this team member holds
+  SPATE_HD bool leader() const { return true; }
+  template <class Predicate>
+  SPATE_HD unsigned ballot(Predicate&& inside) const {
+    unsigned m = 0;
+    for (int l = 0; l < kPairLanes; ++l) m |= (inside(l) ? 1u : 0u) << l;
+    return m;
+  }
+  template <class Body>
+  SPATE_HD void for_each_lane(Body&& body) const {
+    for (int l = 0; l < kPairLanes; ++l) body(l, l);
+  }
+  template <int Dim>
+  SPATE_HD FluidRates<Dim> sum_in_lane_order(const FluidRates<Dim>* held) const {
+    FluidRates<Dim> total;
+    for (int l = 0; l < kPairLanes; ++l) add_pair_rates(total, held[l]);
+    return total;
+  }
+};
+
+// update_fluid_rates (particle_updates.hpp) with its sums in the lane order above, on a team of
+// kPairLanes lanes. The candidates are tested kPairLanes at a time (one per lane) and the
+// in-support ones dealt to the lanes in order; a lane holds its dealt neighbour until every lane
+// holds one (a batch: neighbours 16 b to 16 b + 15), and then all lanes run their pair terms
+// together, so the pair terms run on full lanes however few candidates are inside (about 1 in 6
+// in 3D; 1 in 3 at h = 2 dp) but for the last batch. Each lane still adds its neighbours in
+// increasing number, so the sums are the CPU's. Only the team's leader stores the result.
+template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann, class Team, class Fields>
+SPATE_HD void update_fluid_rates_in_lanes(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3],
+                                          const Team& team) {
+  if (!P.is_fluid(f.material[i])) {
+    if (team.leader()) zero_fluid_rates<Dim>(f, i);
+    return;
+  }
+  const ParticleState<Dim> si = load_state<Dim>(f, i);
+  const FluidMaterial& M = P.materials.of(si.material);
+  const float mu_i = Multiphase ? particle_viscosity(P, f, i) : M.viscosity;
+  constexpr std::uint32_t kNone = 0xffffffffu;
+  FluidRates<Dim> held[Team::kHeld];
+  std::uint32_t pending[Team::kHeld];  // per lane: the neighbour dealt to it and not yet added
+  team.for_each_lane([&](int, int slot) { pending[slot] = kNone; });
+  const auto add_pending = [&]() {
+    team.for_each_lane([&](int, int slot) {
+      if (pending[slot] == kNone) return;
+      add_fluid_neighbour<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, M, si, mu_i, f, pending[slot], held[slot]);
+      pending[slot] = kNone;
+    });
+  };
+  unsigned dealt = 0;  // in-support neighbours before the current group
+  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+    for (std::uint32_t c0 = jb; c0 < je; c0 += kPairLanes) {
+      const unsigned inside = team.ballot([&](int lane) {
+        const std::uint32_t j = c0 + static_cast<std::uint32_t>(lane);
+        return j < je && distance_squared<Dim>(si.x, f.pos, j) < P.support2;
+      });
+      const unsigned count = lane_popcount(inside);
+      const unsigned open = kPairLanes - dealt % kPairLanes;  // numbers left in the open batch
+      // The group's neighbours that complete the open batch, then (when it is full) the batch's
+      // pair terms, then the neighbours that open the next one.
+      const auto deal = [&](bool completing) {
+        team.for_each_lane([&](int lane, int slot) {
+          const int q = lane_candidate(inside, dealt, lane);
+          if (q >= 0 && (lane_rank(dealt, lane) < open) == completing) pending[slot] = c0 + static_cast<std::uint32_t>(q);
+        });
+      };
+      deal(true);
+      if (count >= open) {
+        add_pending();
+        deal(false);
+      }
+      dealt += count;
+    }
+  });
+  add_pending();
+  FluidRates<Dim> rates = team.sum_in_lane_order(held);
+  if (!team.leader()) return;
+  store_fluid_rates<Dim>(P, M, si, f, i, rates);
+}
+
+}  // namespace spate
