@@ -45,6 +45,20 @@ SPATE_HD int lane_candidate(unsigned inside, unsigned dealt, int lane) {
 #endif
 }
 
+// Partial sums of N floats (the SPS passes' components); FluidRates serves the fluid pass.
+template <int N>
+struct LaneFloats {
+  float v[N] = {};
+};
+template <int N>
+SPATE_HD void add_lane_sums(LaneFloats<N>& total, const LaneFloats<N>& x) {
+  SPATE_UNROLL for (int m = 0; m < N; ++m) total.v[m] += x.v[m];
+}
+template <int Dim>
+SPATE_HD void add_lane_sums(FluidRates<Dim>& total, const FluidRates<Dim>& x) {
+  add_pair_rates(total, x);
+}
+
 // The lanes run one after the other on the host: a "ballot" asks every lane, each lane's body runs
 // in lane order on its own slot of the per-lane arrays, and the partial sums are added in lane
 // order. The GPU's team (HalfWarp, cuda_kernels.cu) has the same members with one lane per thread
@@ -62,39 +76,33 @@ struct HostLanes {
   SPATE_HD void for_each_lane(Body&& body) const {
     for (int l = 0; l < kPairLanes; ++l) body(l, l);
   }
-  template <int Dim>
-  SPATE_HD FluidRates<Dim> sum_in_lane_order(const FluidRates<Dim>* held) const {
-    FluidRates<Dim> total;
-    for (int l = 0; l < kPairLanes; ++l) add_pair_rates(total, held[l]);
+  template <class Sums>
+  SPATE_HD Sums sum_in_lane_order(const Sums* held) const {
+    Sums total;
+    for (int l = 0; l < kPairLanes; ++l) add_lane_sums(total, held[l]);
     return total;
   }
 };
 
-// update_fluid_rates (particle_updates.hpp) with its sums in the lane order above, on a team of
-// kPairLanes lanes. The candidates are tested kPairLanes at a time (one per lane) and the
-// in-support ones dealt to the lanes in order; a lane holds its dealt neighbour until every lane
-// holds one (a batch: neighbours 16 b to 16 b + 15), and then all lanes run their pair terms
-// together, so the pair terms run on full lanes however few candidates are inside (about 1 in 6
-// in 3D; 1 in 3 at h = 2 dp) but for the last batch. Each lane still adds its neighbours in
-// increasing number, so the sums are the CPU's. Only the team's leader stores the result.
-template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann, class Team, class Fields>
-SPATE_HD void update_fluid_rates_in_lanes(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3],
-                                          const Team& team) {
-  if (!P.is_fluid(f.material[i])) {
-    if (team.leader()) zero_fluid_rates<Dim>(f, i);
-    return;
-  }
-  const ParticleState<Dim> si = load_state<Dim>(f, i);
-  const FluidMaterial& M = P.materials.of(si.material);
-  const float mu_i = Multiphase ? particle_viscosity(P, f, i) : M.viscosity;
+// The sums of particle i (at xi, in cell g) over its neighbours, in the lane order above, on a team
+// of kPairLanes lanes: add(j, sums) adds neighbour j's terms to a lane's partial sums. The
+// candidates are tested kPairLanes at a time (one per lane) and the in-support ones dealt to the
+// lanes in order; a lane holds its dealt neighbour until every lane holds one (a batch: neighbours
+// 16 b to 16 b + 15), and then all lanes run their terms together, so the terms run on full lanes
+// however few candidates are inside (about 1 in 6 in 3D; 1 in 3 at h = 2 dp) but for the last
+// batch. Each lane still adds its neighbours in increasing number, so the sums are the CPU's.
+// The total is the team leader's (the other members' is partial).
+template <int Dim, class Sums, class Team, class Fields, class Add>
+SPATE_HD Sums sum_neighbours_in_lanes(const PhysicsParams& P, const CellGridView& v, const Fields& f, const Vec<Dim>& xi, const int g[3],
+                                      const Team& team, Add&& add) {
   constexpr std::uint32_t kNone = 0xffffffffu;
-  FluidRates<Dim> held[Team::kHeld];
+  Sums held[Team::kHeld];
   std::uint32_t pending[Team::kHeld];  // per lane: the neighbour dealt to it and not yet added
   team.for_each_lane([&](int, int slot) { pending[slot] = kNone; });
   const auto add_pending = [&]() {
     team.for_each_lane([&](int, int slot) {
       if (pending[slot] == kNone) return;
-      add_fluid_neighbour<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, M, si, mu_i, f, pending[slot], held[slot]);
+      add(pending[slot], held[slot]);
       pending[slot] = kNone;
     });
   };
@@ -103,12 +111,12 @@ SPATE_HD void update_fluid_rates_in_lanes(const PhysicsParams& P, const CellGrid
     for (std::uint32_t c0 = jb; c0 < je; c0 += kPairLanes) {
       const unsigned inside = team.ballot([&](int lane) {
         const std::uint32_t j = c0 + static_cast<std::uint32_t>(lane);
-        return j < je && distance_squared<Dim>(si.x, f.pos, j) < P.support2;
+        return j < je && distance_squared<Dim>(xi, f.pos, j) < P.support2;
       });
       const unsigned count = lane_popcount(inside);
       const unsigned open = kPairLanes - dealt % kPairLanes;  // numbers left in the open batch
       // The group's neighbours that complete the open batch, then (when it is full) the batch's
-      // pair terms, then the neighbours that open the next one.
+      // terms, then the neighbours that open the next one.
       const auto deal = [&](bool completing) {
         team.for_each_lane([&](int lane, int slot) {
           const int q = lane_candidate(inside, dealt, lane);
@@ -124,9 +132,72 @@ SPATE_HD void update_fluid_rates_in_lanes(const PhysicsParams& P, const CellGrid
     }
   });
   add_pending();
-  FluidRates<Dim> rates = team.sum_in_lane_order(held);
+  return team.sum_in_lane_order(held);
+}
+
+// update_fluid_rates (particle_updates.hpp) with its sums in the lane order above (the CPU's fluid
+// pass, cpu/fluid_pass.hpp). Only the team's leader stores the result.
+template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann, class Team, class Fields>
+SPATE_HD void update_fluid_rates_in_lanes(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3],
+                                          const Team& team) {
+  if (!P.is_fluid(f.material[i])) {
+    if (team.leader()) zero_fluid_rates<Dim>(f, i);
+    return;
+  }
+  const ParticleState<Dim> si = load_state<Dim>(f, i);
+  const FluidMaterial& M = P.materials.of(si.material);
+  const float mu_i = Multiphase ? particle_viscosity(P, f, i) : M.viscosity;
+  FluidRates<Dim> rates = sum_neighbours_in_lanes<Dim, FluidRates<Dim>>(P, v, f, si.x, g, team, [&](std::uint32_t j, FluidRates<Dim>& sums) {
+    add_fluid_neighbour<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, M, si, mu_i, f, j, sums);
+  });
+  if (team.leader()) store_fluid_rates<Dim>(P, M, si, f, i, rates);
+}
+
+// SPS turbulence, pass 1 (update_sps_stress) in the lane order: the velocity gradient over the
+// in-support neighbours, as the CPU's batched pass (cpu/sps_passes.cpp) sums it.
+template <class Kernel, int Dim, class Team, class Fields>
+SPATE_HD void update_sps_stress_in_lanes(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3],
+                                         const Team& team) {
+  if (!P.is_fluid(f.material[i])) {
+    if (team.leader()) store_sps_stress<Dim>(f, i, SpsStress<Dim>{}, 0.0f);
+    return;
+  }
+  const Vec<Dim> xi = load_vec<Dim>(f.pos, i), vi = load_vec<Dim>(f.vel, i);
+  const float mass_i = P.materials.of(f.material[i]).mass;
+  const auto sums = sum_neighbours_in_lanes<Dim, LaneFloats<Dim * Dim>>(P, v, f, xi, g, team, [&](std::uint32_t j, LaneFloats<Dim * Dim>& s) {
+    float term[Dim][Dim];
+    velocity_gradient_term<Kernel, Dim>(P, xi, vi, load_vec<Dim>(f.pos, j), load_vec<Dim>(f.vel, j),
+                                        sps_neighbour_mass(P, f.material[j], mass_i) / f.density[j], term);
+    SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
+      SPATE_UNROLL for (int b = 0; b < Dim; ++b) s.v[a * Dim + b] += term[a][b];
+    }
+  });
   if (!team.leader()) return;
-  store_fluid_rates<Dim>(P, M, si, f, i, rates);
+  VelocityGradient<Dim> grad;
+  SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
+    SPATE_UNROLL for (int b = 0; b < Dim; ++b) grad.g[a][b] = sums.v[a * Dim + b];
+  }
+  float nu_t = 0.0f;
+  const SpsStress<Dim> T = sps_stress<Dim>(P, grad, f.density[i], nu_t);
+  store_sps_stress<Dim>(f, i, T, nu_t);
+}
+
+// SPS turbulence, pass 2 (add_sps_acceleration) in the lane order: the stress's divergence, a wall
+// neighbour carrying i's own stress, as the CPU's batched pass sums it.
+template <class Kernel, int Dim, class Team, class Fields>
+SPATE_HD void add_sps_acceleration_in_lanes(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3],
+                                            const Team& team) {
+  if (!P.is_fluid(f.material[i])) return;
+  const Vec<Dim> xi = load_vec<Dim>(f.pos, i);
+  const SpsStress<Dim> Ti = load_sps_stress<Dim>(f, i);
+  const float mass_i = P.materials.of(f.material[i]).mass;
+  const auto acc = sum_neighbours_in_lanes<Dim, LaneFloats<Dim>>(P, v, f, xi, g, team, [&](std::uint32_t j, LaneFloats<Dim>& s) {
+    const std::uint8_t m = f.material[j];
+    const SpsStress<Dim> Tj = P.is_fluid(m) ? load_sps_stress<Dim>(f, j) : Ti;
+    const Vec<Dim> a = sps_pair_term<Kernel, Dim>(P, xi, Ti, load_vec<Dim>(f.pos, j), Tj, sps_neighbour_mass(P, m, mass_i));
+    SPATE_UNROLL for (int k = 0; k < Dim; ++k) s.v[k] += a[k];
+  });
+  if (team.leader()) SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.acc[k][i] += acc.v[k];
 }
 
 }  // namespace spate

@@ -147,8 +147,9 @@ class GpuOrderKernels final : public ResidentKernels {
 // The GPU's half-warp schedule on the CPU: the resident path with the fluid pass run as the CUDA
 // backend's HalfWarp team runs it (pair_lanes.hpp), its 16 lanes one after the other (HostLanes):
 // the candidates tested 16 at a time, the in-support ones dealt to the lanes in order, the lanes
-// added in order; and the wall pass as the GPU runs it (update_wall_state per particle). The other
-// passes are the same bodies on both. It must give the CPU backend's bits (PairLanes.*).
+// added in order; SPS turbulence's two passes the same way; and the wall pass as the GPU runs it
+// (update_wall_state per particle). The other passes are the same bodies on both. It must give the
+// CPU backend's bits (PairLanes.*).
 class HostLaneKernels final : public ResidentKernels {
  public:
   explicit HostLaneKernels(int dim) : ResidentKernels(dim, true) {}
@@ -156,6 +157,17 @@ class HostLaneKernels final : public ResidentKernels {
     fluid_pass_per_particle(P, range, [&]<class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>(
                                           const CellGridView& v, ParticleStore& p, std::uint32_t i, const int g[3]) {
       update_fluid_rates_in_lanes<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, v, p, i, g, HostLanes{});
+    });
+  }
+  // SPS turbulence's two passes on HalfWarp teams, as the GPU runs them.
+  void sps_stress(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    per_owned_particle(P, [&]<class Kernel, int Dim>(const CellGridView& v, ParticleStore& p, std::uint32_t i, const int g[3]) {
+      update_sps_stress_in_lanes<Kernel, Dim>(P, v, p, i, g, HostLanes{});
+    });
+  }
+  void sps_acceleration(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    per_owned_particle(P, [&]<class Kernel, int Dim>(const CellGridView& v, ParticleStore& p, std::uint32_t i, const int g[3]) {
+      add_sps_acceleration_in_lanes<Kernel, Dim>(P, v, p, i, g, HostLanes{});
     });
   }
   // The GPU's wall pass: the per-particle body, each wall particle summing its in-support fluid
@@ -661,8 +673,10 @@ TEST(PairLanes, TheGpusHalfWarpScheduleGivesTheCpusBits) {
   // same body (HostLaneKernels) against the CPU backend, on every case the GPU check runs: every
   // checkpoint field and every time step bit for bit. So the GPU's results are the CPU's wherever
   // the device's arithmetic is IEEE: with fluid.portable_eos (the walls' inverse EOS by
-  // seventh_root, not powf) and gamma 7.
-  for (const auto& k : gpu_checked_cases()) {
+  // seventh_root, not powf) and gamma 7. Shifting too, which amplifies any difference tenfold.
+  auto cases = gpu_checked_cases();
+  cases.push_back({"shifting", load_case(test::source_dir() + "/cases/dam_break_2d.yaml", {"shifting.enabled=true"}), 300});
+  for (const auto& k : cases) {
     SCOPED_TRACE(k.name);
     std::vector<float> dt_cpu, dt_lanes;
     const auto cpu = run(k.c, 1, k.steps, nullptr, &dt_cpu);
@@ -698,12 +712,10 @@ TEST(CudaBackend, MatchesTheCpuBackendWithinTheGpuCheckTolerance) {
 
 TEST(CudaBackend, TheHalfWarpFluidPassGivesTheCpusBits) {
   // What PairLanes.TheGpusHalfWarpScheduleGivesTheCpusBits proves on the host, on the device: every
-  // checked case whose passes all sum in the CPU's order on the GPU (SPS's two passes still sum per
-  // thread there) gives the CPU backend's bits, time steps included, with fluid.portable_eos (the
+  // checked case gives the CPU backend's bits, time steps included, with fluid.portable_eos (the
   // walls' inverse EOS by seventh_root, which rounds alike on both; powf's last bit is the library's).
   if (no_gpu()) GTEST_SKIP() << why_no_gpu();
   for (const auto& k : gpu_checked_cases()) {
-    if (k.name == "sps") continue;
     SCOPED_TRACE(k.name);
     Case c = k.c;
     c.portable_eos = true;

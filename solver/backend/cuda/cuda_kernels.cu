@@ -7,6 +7,7 @@
 #include <cuda_runtime.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -154,28 +155,50 @@ struct HalfWarp {
   __device__ void for_each_lane(Body&& body) const {
     body(lane, 0);
   }
-  template <int Dim>
-  __device__ FluidRates<Dim> sum_in_lane_order(const FluidRates<Dim>* held) const {
-    FluidRates<Dim> total;
+  // Lane l's partial sums, every float of them shuffled from l in turn and added in lane order.
+  template <class Sums>
+  __device__ Sums sum_in_lane_order(const Sums* held) const {
+    static_assert(sizeof(Sums) % sizeof(float) == 0, "partial sums are floats");
+    constexpr int kFloats = sizeof(Sums) / sizeof(float);
+    float mine[kFloats];
+    memcpy(mine, &held[0], sizeof(Sums));
+    Sums total;
     for (int l = 0; l < kPairLanes; ++l) {
-      FluidRates<Dim> t;
-      for (int k = 0; k < Dim; ++k) {
-        t.acc[k] = __shfl_sync(members, held[0].acc[k], l, kPairLanes);
-        t.wall_gradient[k] = __shfl_sync(members, held[0].wall_gradient[k], l, kPairLanes);
-      }
-      t.density_rate = __shfl_sync(members, held[0].density_rate, l, kPairLanes);
-      t.wall_weight = __shfl_sync(members, held[0].wall_weight, l, kPairLanes);
-      add_pair_rates(total, t);
+      float theirs[kFloats];
+      for (int m = 0; m < kFloats; ++m) theirs[m] = __shfl_sync(members, mine[m], l, kPairLanes);
+      Sums t;
+      memcpy(&t, theirs, sizeof(Sums));
+      add_lane_sums(total, t);
     }
     return total;
   }
 };
 
+// The passes that run on a HalfWarp team (pair_lanes.hpp), named by a tag like the per-thread ones.
+template <bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>
+struct FluidRatesLanes {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3], const HalfWarp& t) {
+    update_fluid_rates_in_lanes<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, v, d, i, g, t);
+  }
+};
+struct SpsStressLanes {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3], const HalfWarp& t) {
+    update_sps_stress_in_lanes<Kernel, Dim>(P, v, d, i, g, t);
+  }
+};
+struct SpsAccelerationLanes {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3], const HalfWarp& t) {
+    add_sps_acceleration_in_lanes<Kernel, Dim>(P, v, d, i, g, t);
+  }
+};
+
 // kPairLanes threads per particle of [first, first + count); blocks are whole warps, so a
 // half-warp is 16 consecutive threads that share one particle and leave together.
-template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>
-__global__ void fluid_rates_lanes_kernel(DeviceFields d, std::uint32_t first, std::uint32_t count, CellGridView v, Lattice L,
-                                         PhysicsParams P) {
+template <class Update, class Kernel, int Dim>
+__global__ void lanes_kernel(DeviceFields d, std::uint32_t first, std::uint32_t count, CellGridView v, Lattice L, PhysicsParams P) {
   const std::uint32_t k = thread_index() / kPairLanes;
   if (k >= count) return;
   const std::uint32_t i = first + k;
@@ -183,7 +206,7 @@ __global__ void fluid_rates_lanes_kernel(DeviceFields d, std::uint32_t first, st
   const HalfWarp team{static_cast<int>(threadIdx.x & 15u), 0xFFFFu << shift, shift};
   int g[3];
   cell_coords<Dim>(L, d, i, g);
-  update_fluid_rates_in_lanes<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, v, d, i, g, team);
+  Update::template run<Kernel, Dim>(P, v, d, i, g, team);
 }
 
 // Owned particles [first, first + count): the whole slab, or the interior or a boundary range.
@@ -252,11 +275,7 @@ class CudaKernels final : public StepKernels {
         neighbour_pass<FluidRatesPass<Gamma7, Multiphase, MovingWalls, Riemann>>(P, range);
         return;
       }
-      arrays_.select();
-      dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
-        launch(range.count * kPairLanes, fluid_rates_lanes_kernel<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>, arrays_.fields(),
-               static_cast<std::uint32_t>(range.first), static_cast<std::uint32_t>(range.count), arrays_.view(), arrays_.lattice(), P);
-      });
+      lanes_pass<FluidRatesLanes<Gamma7, Multiphase, MovingWalls, Riemann>>(P, range);
     });
   }
   void colour_gradient(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
@@ -272,10 +291,12 @@ class CudaKernels final : public StepKernels {
     neighbour_pass<AntuonoDiffusionPass>(P, ParticleRange{0, owned()});
   }
   void sps_stress(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
-    neighbour_pass<SpsStressPass>(P, ParticleRange{0, owned()});
+    if (per_thread_pair_loop_) neighbour_pass<SpsStressPass>(P, ParticleRange{0, owned()});
+    else lanes_pass<SpsStressLanes>(P, ParticleRange{0, owned()});
   }
   void sps_acceleration(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
-    neighbour_pass<SpsAccelerationPass>(P, ParticleRange{0, owned()});
+    if (per_thread_pair_loop_) neighbour_pass<SpsAccelerationPass>(P, ParticleRange{0, owned()});
+    else lanes_pass<SpsAccelerationLanes>(P, ParticleRange{0, owned()});
   }
   void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
     neighbour_pass<ShiftingPass>(P, ParticleRange{0, owned()}, dt);
@@ -366,6 +387,16 @@ class CudaKernels final : public StepKernels {
     });
   }
 
+  // A pass on HalfWarp teams: kPairLanes threads per particle of the range.
+  template <class Pass>
+  void lanes_pass(const PhysicsParams& P, ParticleRange range) {
+    arrays_.select();
+    dispatch_kernel_dim(P, [&]<class Kernel, int Dim>() {
+      launch(range.count * kPairLanes, lanes_kernel<Pass, Kernel, Dim>, arrays_.fields(), static_cast<std::uint32_t>(range.first),
+             static_cast<std::uint32_t>(range.count), arrays_.view(), arrays_.lattice(), P);
+    });
+  }
+
   template <class... KernelArgs, class... Args>
   void launch(std::size_t items, void (*kernel)(KernelArgs...), Args&&... args) {
     if (items == 0) return;
@@ -375,9 +406,9 @@ class CudaKernels final : public StepKernels {
   }
 
   DeviceSlabArrays arrays_;
-  // SPATE_GPU_PAIR_LOOP=thread: the fluid pass one thread per particle, its neighbours summed in
-  // one sequence (the GPU's first loop, for comparison; within the GPU check's tolerance of the
-  // CPU, not its bits). Otherwise the half-warp pass.
+  // SPATE_GPU_PAIR_LOOP=thread: the fluid and SPS passes one thread per particle, its neighbours
+  // summed in one sequence (the GPU's first loops, for comparison; within the GPU check's
+  // tolerance of the CPU, not its bits). Otherwise the half-warp passes.
   bool per_thread_pair_loop_ = per_thread_pair_loop(std::getenv("SPATE_GPU_PAIR_LOOP"));
   cudaEvent_t open_event_ = nullptr;
   std::vector<TimedPass> timed_;
