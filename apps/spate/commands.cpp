@@ -20,6 +20,8 @@
 #include "backend/cpu/interaction_count.hpp"
 #include "backend/cuda/device_plan.hpp"
 #include "backend/cuda/device_runtime.hpp"
+#include "backend/cuda/halo_exchange.hpp"
+#include "backend/pass_times.hpp"
 #include "case/case.hpp"
 #include "case/generator.hpp"
 #include "case/thin_features.hpp"
@@ -727,6 +729,16 @@ std::string cpu_model() {
   return "unknown";
 }
 }  // namespace
+
+void check_environment() {
+  try {
+    pass_timers_enabled();
+    gpu::per_thread_pair_loop(std::getenv("SPATE_GPU_PAIR_LOOP"));
+    gpu::staged_links_forced(std::getenv("SPATE_CUDA_HALO_LINK"));
+  } catch (const std::invalid_argument& e) {
+    throw BadInput(std::string("environment: ") + e.what());
+  }
+}
 
 int bench_command(const BenchArgs& a) {
   std::vector<std::string> overrides = a.overrides;

@@ -75,6 +75,9 @@ int bench_command(const BenchArgs& a);
 
 // Shared by the commands.
 int hardware_threads();
+// The environment variables spate reads (SPATE_PASS_TIMERS, SPATE_GPU_PAIR_LOOP,
+// SPATE_CUDA_HALO_LINK), checked before any work: a bad value is bad input (BadInput, exit 2).
+void check_environment();
 // spate's data files (pipelines/, scripts/): $SPATE_DATA_DIR, else <prefix>/share/spate for an
 // installed spate (cmake --install), else the source tree it was built from.
 std::filesystem::path data_dir();

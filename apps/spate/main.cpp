@@ -170,6 +170,7 @@ int main(int argc, char** argv) {
   spate::configure_logging(level, who());
   try {
     run.live_requested = live_opt->count() > 0;
+    spate::app::check_environment();
     if (*run_cmd) return finish(run_command(run));
     if (*info_cmd) return finish(info_command(info));
     if (*cmp_cmd) return finish(compare_command(cmp));

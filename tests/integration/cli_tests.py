@@ -471,6 +471,14 @@ def bench_times_each_pass(env):
     check(p.returncode == 0 and "pass_seconds" not in json.loads(p.stdout), "no pass times unless asked")
     p = env.run("bench", env.tiny, "--steps", "2", "--threads", "1", "--pass-times")
     check(p.returncode == 0 and re.search(r"device 0 passes \(s over \d+ steps\): .*fluid_rates", p.stdout), f"text bench lists passes:\n{p.stdout}")
+    # The environment variables spate reads are input: a bad value exits 2 naming it.
+    for name, value in (("SPATE_PASS_TIMERS", "yes"), ("SPATE_GPU_PAIR_LOOP", "threads"), ("SPATE_CUDA_HALO_LINK", "peer")):
+        os.environ[name] = value
+        try:
+            p = env.run("run", env.tiny, "--steps", "1", "--out", "bad-env")
+        finally:
+            del os.environ[name]
+        check(p.returncode == 2 and name in p.stderr, f"{name}={value}: exit {p.returncode}: {p.stderr}")
 
 
 @test
