@@ -92,7 +92,7 @@ SPATE_HD void add_fluid_neighbour(const PhysicsParams& P, const FluidMaterial& M
   ParticleState<Dim> sj = load_state<Dim>(f, j);
   if constexpr (MovingWalls) {
     sj.w = boundary_velocity<Dim>(P, sj);
-    sj.w_av = sliding_velocity<Dim>(P, sj);
+    sj.w_av = sliding_velocity<Dim>(P, f, j, sj);
   }
   if constexpr (Multiphase) {
     add_pair_rates(sums, multiphase_pair_terms<Kernel, Dim, Gamma7, MovingWalls, Riemann>(P, M, si, sj, particle_neighbour_fluid(P, f, j), mu_i));
@@ -156,7 +156,7 @@ SPATE_HD void update_wall_state(const PhysicsParams& P, const CellGridView& v, F
         accumulate_wall_pair<Kernel, Dim>(P, xw, load_state<Dim>(f, j), sums);
   });
   WallState<Dim> s = finish_wall(P, sums, f.material[w], xw);
-  apply_wall_shear<Dim>(P, xw, f.material[w], sums, s);
+  apply_wall_shear<Dim>(P, f, w, xw, sums, s);
   f.pressure[w] = s.p;
   f.density[w] = s.rho;
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.vel[k][w] = s.v[k];

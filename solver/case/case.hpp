@@ -84,6 +84,10 @@ struct SolidSpec {
   std::string name;
   Box box;  // the solid, or the bounding box of its shape
   bool hollow = true;  // only `wall_layers` layers under its surface are particles
+  // What its surface does to the fluid along it (`free_slip: true`, `wall_shear: log_law`; static
+  // solids only): through each particle's own frame (wall_boundary.hpp WallFrame).
+  bool free_slip = false;
+  WallShear wall_shear = WallShear::Laminar;
   int motion = -1;     // index into Case::motions, or -1: static
   ThermalSpec thermal{};
   // A solid of any shape (mesh, cylinder, sphere/disc, polygon, polyhedron; shape.hpp), null for
@@ -276,6 +280,7 @@ struct Case {
   bool open_top = true;
   std::array<bool, 3> periodic{false, false, false};
   std::array<bool, 3> free_slip{false, false, false};  // tank walls normal to these axes are free-slip
+  bool shaped_tank_free_slip = false;                   // a shaped tank's surface is free-slip (tank.free_slip: true)
   WallShear wall_shear = WallShear::Laminar;           // tank.wall_shear (wall_boundary.hpp)
   double headroom = 0.5;  // domain extends this fraction of the tank height above an open top
   // Fluid that leaves through the open top (over the walls, above the headroom) is removed; more

@@ -1326,11 +1326,19 @@ Case read(Section& root, const std::string& file) {
   c.max_removed_fraction = tank->number("max_removed_fraction", 0.05);
   if (!(c.max_removed_fraction >= 0 && c.max_removed_fraction <= 1))
     tank->fail(tank->raw("max_removed_fraction"), "max_removed_fraction", "must be in [0, 1] (a fraction of the fluid particles)");
-  // `periodic` and `free_slip`: lists of axes, e.g. [x].
+  // `periodic` and `free_slip`: lists of axes, e.g. [x]; `free_slip: true` for every face (of a box
+  // tank: every axis not periodic; of a shaped tank: its whole surface).
   auto axes = [&](const std::string& key, std::array<bool, 3>& out) {
     if (!tank->has(key)) return;
     YAML::Node p = tank->raw(key);
-    if (!p.IsSequence()) tank->fail(p, key, "expected a list of axes, e.g. [x]");
+    if (key == "free_slip" && p.IsScalar()) {
+      const bool all = tank->boolean(key, false);
+      if (c.tank_shape) c.shaped_tank_free_slip = all;
+      else
+        for (int k = 0; k < d; ++k) out[k] = all && !c.periodic[k];
+      return;
+    }
+    if (!p.IsSequence()) tank->fail(p, key, key == "free_slip" ? "expected a list of axes, e.g. [x], or true for every face" : "expected a list of axes, e.g. [x]");
     for (auto a : p) {
       const std::string axis = a.IsScalar() ? a.Scalar() : "";
       const int k = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;
@@ -1344,10 +1352,12 @@ Case read(Section& root, const std::string& file) {
   for (int k = 0; k < d; ++k)
     if (c.periodic[k] && c.free_slip[k]) tank->fail(tank->raw("free_slip"), "free_slip", "an axis cannot be periodic and have walls");
   c.wall_shear = tank->choice<WallShear>("wall_shear", WallShear::Laminar, {{"laminar", WallShear::Laminar}, {"log_law", WallShear::LogLaw}});
-  if (c.tank_shape) {  // these are a box tank's, face by face
-    for (const char* k : {"periodic", "free_slip"})
-      if (tank->has(k)) tank->fail(tank->raw(k), k, "is for a box tank's faces, not a shaped tank");
-    if (c.wall_shear == WallShear::LogLaw) tank->fail(tank->raw("wall_shear"), "wall_shear", "the log law is for a box tank's faces, not a shaped tank");
+  if (c.tank_shape) {  // axes are a box tank's, face by face
+    if (tank->has("periodic")) tank->fail(tank->raw("periodic"), "periodic", "is for a box tank's faces, not a shaped tank");
+    if (tank->has("free_slip") && !tank->raw("free_slip").IsScalar())
+      tank->fail(tank->raw("free_slip"), "free_slip", "a list of axes is for a box tank's faces; a shaped tank's surface takes true or false");
+    if (c.shaped_tank_free_slip && c.wall_shear == WallShear::LogLaw)
+      tank->fail(tank->raw("wall_shear"), "wall_shear", "a free-slip surface has no shear (free_slip: true and the log law together)");
   }
   if (auto t = thermal_section(*tank, c)) {
     c.tank_thermal = read_thermal(*t, c, /*wall=*/true, /*solid=*/false);
@@ -1363,7 +1373,8 @@ Case read(Section& root, const std::string& file) {
     c.tank_motion = static_cast<int>(c.motions.size());
     c.motions.push_back(read_motion(*m, c, "tank", lo, hi));
     for (int k = 0; k < d; ++k)
-      if (c.free_slip[k]) tank->fail(tank->raw("free_slip"), "free_slip", "free-slip walls are for a tank at rest (not with tank.motion)");
+      if (c.free_slip[k] || c.shaped_tank_free_slip)
+        tank->fail(tank->raw("free_slip"), "free_slip", "free-slip walls are for a tank at rest (not with tank.motion)");
     if (c.wall_shear == WallShear::LogLaw)
       tank->fail(tank->raw("wall_shear"), "wall_shear", "the log law is for a tank at rest (not with tank.motion)");
   }
@@ -1465,6 +1476,10 @@ Case read(Section& root, const std::string& file) {
       spec.box = read_box(s, d);
     }
     spec.hollow = s.boolean("hollow", true);
+    spec.free_slip = s.boolean("free_slip", false);
+    spec.wall_shear = s.choice<WallShear>("wall_shear", WallShear::Laminar, {{"laminar", WallShear::Laminar}, {"log_law", WallShear::LogLaw}});
+    if (spec.free_slip && spec.wall_shear == WallShear::LogLaw)
+      s.fail(s.raw("wall_shear"), "wall_shear", "a free-slip surface has no shear (free_slip: true and the log law together)");
     if (auto t = thermal_section(s, c)) {
       spec.thermal = read_thermal(*t, c, /*wall=*/true, /*solid=*/true);
       t->finish();
@@ -1479,6 +1494,9 @@ Case read(Section& root, const std::string& file) {
       spec.motion = static_cast<int>(c.motions.size());
       c.motions.push_back(read_motion(*m, c, spec.name, spec.box.min, spec.box.max));
     }
+    if (spec.motion >= 0)
+      for (const char* key : {"free_slip", "wall_shear"})
+        if (s.has(key)) s.fail(s.raw(key), key, "is for a solid at rest (not with a motion)");
     if (spec.motion < 0 || c.motions[spec.motion].floating < 0)
       for (const char* key : {"density", "mass", "centre_of_mass", "inertia", "free", "hinge", "springs", "contact"})
         if (s.has(key)) s.fail(s.raw(key), key, "only a floating solid (motion: floating) takes '" + std::string(key) + "'");
@@ -1840,7 +1858,18 @@ PhysicsParams physics_params(const Case& c) {
     P.tank_hi[k] = static_cast<float>(c.tank_origin[k] + c.tank_size[k]);
     if (c.free_slip[k]) P.free_slip_axes = static_cast<std::uint8_t>(P.free_slip_axes | (1u << k));
   }
-  P.wall_shear = c.wall_shear;
+  // A box tank's faces: free_slip_axes and wall_shear (box_tank_frame); a shaped tank's surface and
+  // the solids: each material's face_shear, through its particles' own frames (WallFrame).
+  P.wall_shear = c.tank_shape ? WallShear::Laminar : c.wall_shear;
+  auto set_face = [&P](std::uint8_t m, bool free_slip, WallShear shear) {
+    const FaceShear f = free_slip ? FaceShear::FreeSlip : shear == WallShear::LogLaw ? FaceShear::LogLaw : FaceShear::NoSlip;
+    P.materials.face_shear[m] = f;
+    P.materials.face_frames = P.materials.face_frames || f != FaceShear::NoSlip;
+    P.materials.faces_slide = P.materials.faces_slide || f == FaceShear::FreeSlip;
+  };
+  if (c.tank_shape) set_face(P.materials.tank(), c.shaped_tank_free_slip, c.wall_shear);
+  for (std::size_t k = 0; k < c.solids.size(); ++k)
+    set_face(P.materials.solid(static_cast<int>(k)), c.solids[k].free_slip, c.solids[k].wall_shear);
   if (c.tank_motion >= 0) P.materials.motion[P.materials.tank()] = static_cast<std::uint8_t>(c.tank_motion + 1);
   for (std::size_t k = 0; k < c.solids.size(); ++k)
     if (c.solids[k].motion >= 0) P.materials.motion[P.materials.solid(static_cast<int>(k))] = static_cast<std::uint8_t>(c.solids[k].motion + 1);

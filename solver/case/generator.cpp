@@ -616,6 +616,21 @@ std::array<double, 3> initial_velocity(const Case& c, std::uint8_t kind, const d
   return {0, 0, 0};
 }
 
+namespace {
+// The frame of a shaped wall's particle at x (params.hpp WallFrame; the kWallFrame fields): the unit
+// normal from the wall into the fluid and the particle's depth behind the surface, from the
+// surface's signed distance (shape.hpp): a solid's outward normal, a shaped tank's inward one.
+// The particles stand on the lattice, so the frame is what tells the wall treatment which way the
+// face runs under a slanted or curved face.
+void set_wall_frame(const Shape& surface, bool container, const double x[3], int dim, ParticleStore& p, std::size_t i) {
+  double normal[3] = {0, 0, 0};
+  const double dist = surface.distance(x, normal);
+  const double sign = container ? -1.0 : 1.0;  // a solid's outward normal points into the fluid
+  for (int a = 0; a < dim; ++a) p.wall_normal[a][i] = static_cast<float>(sign * normal[a]);
+  p.wall_depth[i] = static_cast<float>(std::max(0.0, sign * -dist));
+}
+}  // namespace
+
 ParticleStore generate_particles(const Case& c) {
   const bool shapes = has_shapes(c);
   // Shapes: every site's material, classified once (and no longer kept once filled from).
@@ -632,6 +647,11 @@ ParticleStore generate_particles(const Case& c) {
   g = std::sqrt(g);
   // Heat transfer: only a store made while the run carries the thermal fields has a temperature.
   const bool heat = c.heat && p.temperature.size() == p.size();
+  // Shaped walls that slide or follow the log law: each particle's frame (set_wall_frame).
+  const bool frames = P.materials.face_frames && p.wall_depth.size() == p.size();
+  std::vector<ShapePtr> solid_shapes;
+  if (frames)
+    for (const SolidSpec& solid : c.solids) solid_shapes.push_back(solid_surface(solid, c.dim));
   std::size_t i = 0;
   for_each_site(c, [&](const Sites& s, const int* idx, std::uint8_t kind) {
     if (i >= p.size()) {  // a miscount: reported below, never written past the arrays
@@ -643,6 +663,10 @@ ParticleStore generate_particles(const Case& c) {
     p.id[i] = static_cast<std::uint32_t>(i);
     const double xs[3] = {s.coord(0, idx[0]), c.dim > 1 ? s.coord(1, idx[1]) : 0.0, c.dim > 2 ? s.coord(2, idx[2]) : 0.0};
     if (heat) p.temperature[i] = static_cast<float>(initial_temperature(c, P.materials, kind, xs));
+    if (frames && P.materials.face_shear[kind] != FaceShear::NoSlip) {
+      const bool tank = kind == P.materials.tank();
+      set_wall_frame(tank ? *c.tank_shape : *solid_shapes[kind - P.materials.tank() - 1], tank, xs, c.dim, p, i);
+    }
     const FluidMaterial& fluid = P.materials.wall_fluid();
     p.density[i] = fluid.rho0;
     if (P.is_fluid(kind)) {

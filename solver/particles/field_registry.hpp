@@ -46,10 +46,12 @@ enum FieldFlag : std::uint16_t {
                          // transfer (physics/heat_transfer.hpp), which do not pay for kOptional's
   kTurbulence = 1 << 8,  // optional, its own group: only in the stores of runs with SPS turbulence
                          // (physics/turbulence.hpp)
+  kWallFrame = 1 << 9,   // optional, its own group: only in the stores of runs whose shaped walls slide
+                         // or follow the log law (physics/wall_boundary.hpp WallFrame)
 };
 // The groups of optional fields (OptionalFields): a field in a group is in the stores of the runs
 // that enable that group and no others.
-constexpr std::uint16_t kOptionalGroups = kOptional | kThermal | kTurbulence;
+constexpr std::uint16_t kOptionalGroups = kOptional | kThermal | kTurbulence | kWallFrame;
 
 struct FieldSpec {
   std::string_view member;  // C++ member of ParticleStore / DeviceFields
@@ -91,6 +93,11 @@ constexpr FieldType field_type_of() {
 // `sps_stress`, `sps_shear`: the SPS stress over density T = tau / rho of `turbulence: {model: sps}`
 // (physics/turbulence.hpp), diagonal (xx, yy, zz) and shear (xy, xz, yz; in 2D xy alone, the second
 // component unused), sent to ghosts; `eddy_viscosity` nu_t [m^2/s], exported.
+// `wall_normal`, `wall_depth`: the surface a shaped wall's particle lies under (the unit normal from
+// the wall into the fluid, the particle's distance behind the surface), from the shape's signed
+// distance at generation (case/generator.cpp), for free slip and the log law on faces that are not
+// a box tank's (physics/wall_boundary.hpp WallFrame); the normal is sent to ghosts (the artificial
+// viscosity lets a free-slip neighbour slide) and exported (to check it in ParaView).
 // `temperature_gradient`: per-step scratch of the heat pass when particles are shifted (the corrector
 // carries the temperature to the shifted position, T += grad T . dr).
 // Order matters only for readability and the neighbour record layout (kNeighbour fields in this
@@ -126,7 +133,10 @@ constexpr FieldType field_type_of() {
     "sps_stress_zz")                                                                                                  \
   F(sps_shear, float, Vector, Derived, kGhost | kRefreshed | kTurbulence, "", "sps_stress_xy", "sps_stress_xz",       \
     "sps_stress_yz")                                                                                                  \
-  F(eddy_viscosity, float, Scalar, Derived, kExported | kTurbulence, "eddy_viscosity", "eddy_viscosity")
+  F(eddy_viscosity, float, Scalar, Derived, kExported | kTurbulence, "eddy_viscosity", "eddy_viscosity")               \
+  F(wall_normal, float, Vector, State, kMigrated | kCheckpointed | kGhost | kExported | kWallFrame, "wall_normal",    \
+    "wall_normal_x", "wall_normal_y", "wall_normal_z")                                                                \
+  F(wall_depth, float, Scalar, State, kMigrated | kCheckpointed | kWallFrame, "", "wall_depth")
 // clang-format on
 
 #define SPATE_FIELD_SPEC(member, ctype, shape, role, flags, exported, ...) \

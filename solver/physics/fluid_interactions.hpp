@@ -34,17 +34,25 @@ SPATE_HD Vec<Dim> boundary_velocity(const PhysicsParams& P, const ParticleState<
 }
 
 // What the artificial viscosity sees of neighbour j (PairKinematics::vr_av), given j.w: j.w, but
-// a free-slip tank face slides with the fluid: along it the wall's tangential components are those
-// of j.v (the fluid's, apply_free_slip), so the term damps the approach and is no friction. Once
-// per neighbour, not per pair, so that the pair terms stay free of the face test.
+// a free-slip face slides with the fluid: along it the wall's velocity is the tangential part of
+// j.v (the fluid's, apply_free_slip), so the term damps the approach and is no friction. The face's
+// normal is j's frame (params.hpp WallFrame: a box tank's face, or a shaped wall's own normal);
+// free-slip walls are static (the loader refuses them on moving walls), so the normal part is j.w's,
+// zero. Once per neighbour, not per pair, so that the pair terms stay free of the face test. `f`,
+// `j`: the fields and index j.state was loaded from.
 template <int Dim>
-SPATE_HD Vec<Dim> sliding_velocity(const PhysicsParams& P, const ParticleState<Dim>& j) {
-  if (!P.free_slip_axes) return j.w;  // moving walls alone: nothing slides
-  const TankFace face = tank_face<Dim>(P, j.x, j.material);  // no face for a fluid j
-  const bool slides = is_free_slip(P, face);
+SPATE_HD Vec<Dim> sliding_velocity(const WallFrame<Dim>& face, const ParticleState<Dim>& sj) {
+  if (face.shear != FaceShear::FreeSlip) return sj.w;
+  const float vn = dot(sj.v, face.n);
   Vec<Dim> u;
-  SPATE_UNROLL for (int a = 0; a < Dim; ++a) u[a] = slides && a != face.axis ? j.v[a] : j.w[a];
+  SPATE_UNROLL for (int a = 0; a < Dim; ++a) u[a] = sj.v[a] - vn * face.n[a];
   return u;
+}
+template <int Dim, class Fields>
+SPATE_HD Vec<Dim> sliding_velocity(const PhysicsParams& P, const Fields& f, std::uint32_t j, const ParticleState<Dim>& sj) {
+  if (!P.free_slip_axes && !P.materials.faces_slide) return sj.w;  // moving walls alone: nothing slides
+  if (P.is_fluid(sj.material)) return sj.w;
+  return sliding_velocity<Dim>(wall_frame<Dim>(P, f, j, sj.x), sj);
 }
 
 // Monaghan's alpha for a pair: alpha between fluid particles, alpha times the wall factor

@@ -46,6 +46,12 @@ inline FluidMaterial make_fluid(float rho0, float c0, float gamma, float viscosi
   return m;
 }
 
+// What a shaped wall (a shaped tank, a solid) does to the fluid sliding along it, from each of its
+// particles' own surface frame (wall_boundary.hpp WallFrame): Adami's no slip, free slip, or the
+// log law's turbulent shear (`free_slip` and `wall_shear` of the tank or a solid). A box tank's
+// faces keep theirs in PhysicsParams (free_slip_axes, wall_shear) and need no frame.
+enum class FaceShear : std::uint8_t { NoSlip, FreeSlip, LogLaw };
+
 struct MaterialTable {
   std::uint8_t fluids = 1;  // materials [0, fluids) are fluids
   std::uint8_t count = 2;   // fluids, the tank, the solids
@@ -56,6 +62,11 @@ struct MaterialTable {
   FluidMaterial fluid[kMaxFluids];
   // Per wall material: 0 static, k + 1 moving with the case's motion k (PhysicsParams::motion).
   std::uint8_t motion[kMaxMaterials] = {};
+  // Per wall material: what its surface does (FaceShear); NoSlip for all, and for every fluid,
+  // unless a shaped wall slides or follows the log law.
+  FaceShear face_shear[kMaxMaterials] = {};
+  bool face_frames = false;  // some material's face_shear is not NoSlip (the kWallFrame fields)
+  bool faces_slide = false;  // some material's face_shear is FreeSlip
 
   SPATE_HD bool is_fluid(std::uint8_t m) const { return m < fluids; }
   SPATE_HD std::uint8_t tank() const { return fluids; }

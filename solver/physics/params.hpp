@@ -120,7 +120,12 @@ struct PhysicsParams {
   // artificial viscosity, fluid_interactions.hpp boundary_velocity), or free-slip tank faces, which
   // slide with the fluid for the artificial viscosity (PairKinematics::vr_av). The pair loop's
   // MovingWalls (dispatch.hpp).
-  SPATE_HD bool walls_have_velocity() const { return motions > 0 || free_slip_axes != 0; }
+  SPATE_HD bool walls_have_velocity() const { return motions > 0 || free_slip_axes != 0 || materials.faces_slide; }
+  // Whether some wall's laminar-term velocity departs from Adami's no slip (free slip, the log law):
+  // only then does the wall pass find a wall particle's frame (apply_wall_shear).
+  SPATE_HD bool walls_shear_otherwise() const {
+    return free_slip_axes != 0 || wall_shear == WallShear::LogLaw || materials.face_frames;
+  }
   // The motion wall material m follows, or null when it is static (and for fluids).
   SPATE_HD const MotionState* motion_of(std::uint8_t m) const {
     const int k = materials.motion[m];
@@ -172,6 +177,46 @@ SPATE_HD bool is_free_slip(const PhysicsParams& P, const TankFace& face) {
   return face.axis >= 0 && (P.free_slip_axes & (1u << face.axis));
 }
 
+// The surface a wall particle lies under, as the wall treatments beyond Adami's no slip need it
+// (wall_boundary.hpp: free slip, the log law; fluid_interactions.hpp: a free-slip face sliding for
+// the artificial viscosity): the unit normal n from the wall into the fluid, the particle's depth
+// behind the surface, and what the face does. A box tank's face gives it from the particle's
+// position (tank_face: n along the face's axis; corners stay no slip); a shaped tank's or solid's
+// particle carries its own (the kWallFrame fields wall_normal and wall_depth, which the generator
+// takes from the shape's signed distance), so free slip and the log law follow a slanted or curved
+// face although the particles stand on the lattice's staircase under it.
+template <int Dim>
+struct WallFrame {
+  Vec<Dim> n = zero_vec<Dim>();
+  float depth = 0.0f;
+  FaceShear shear = FaceShear::NoSlip;
+};
+
+template <int Dim>
+SPATE_HD WallFrame<Dim> box_tank_frame(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material) {
+  WallFrame<Dim> frame;
+  const TankFace face = tank_face<Dim>(P, x_wall, material);
+  if (face.axis < 0) return frame;
+  frame.n[face.axis] = face.into_fluid;
+  frame.depth = face.depth;
+  frame.shear = is_free_slip(P, face) ? FaceShear::FreeSlip : P.wall_shear == WallShear::LogLaw ? FaceShear::LogLaw : FaceShear::NoSlip;
+  return frame;
+}
+
+// Wall particle w's frame (x_wall its position): its own when its material's face has a treatment
+// (MaterialTable::face_shear), else its box tank face's.
+template <int Dim, class Fields>
+SPATE_HD WallFrame<Dim> wall_frame(const PhysicsParams& P, const Fields& f, std::uint32_t w, const Vec<Dim>& x_wall) {
+  const std::uint8_t m = f.material[w];
+  const FaceShear shear = P.materials.face_shear[m];
+  if (shear == FaceShear::NoSlip) return box_tank_frame<Dim>(P, x_wall, m);
+  WallFrame<Dim> frame;
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) frame.n[k] = f.wall_normal[k][w];
+  frame.depth = f.wall_depth[w];
+  frame.shear = shear;
+  return frame;
+}
+
 // Antuono's diffusion runs (its two passes, physics/density_gradient.hpp) only with continuity:
 // summation density has no diffusion term.
 inline bool uses_antuono_diffusion(const PhysicsParams& P) {
@@ -188,10 +233,11 @@ inline bool needs_optional_fields(const PhysicsParams& P) {
 
 // The optional field groups a run carries (OptionalFields, particle_store.hpp, as a mask of
 // kOptionalGroups): kOptional as above, kThermal (the temperature and its rates) with heat transfer,
-// kTurbulence (the SPS stress, turbulence.hpp) with SPS turbulence.
+// kTurbulence (the SPS stress, turbulence.hpp) with SPS turbulence, kWallFrame (each wall
+// particle's surface frame) when a shaped wall slides or follows the log law.
 inline std::uint16_t optional_field_groups(const PhysicsParams& P) {
   return static_cast<std::uint16_t>((needs_optional_fields(P) ? kOptional : 0) | (P.heat.on ? kThermal : 0) |
-                                    (P.turbulence.on ? kTurbulence : 0));
+                                    (P.turbulence.on ? kTurbulence : 0) | (P.materials.face_frames ? kWallFrame : 0));
 }
 
 }  // namespace spate

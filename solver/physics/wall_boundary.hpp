@@ -98,19 +98,19 @@ SPATE_HD WallState<Dim> finish_wall(const PhysicsParams& P, const WallSums<Dim>&
   return out;
 }
 
-// Free-slip tank walls (tank.free_slip; Hysing et al.'s rising bubble has free-slip sides): a tank
-// wall particle beyond the fluid region along a free-slip axis a, and inside it along every other
-// axis (corners stay no-slip), keeps Adami's mirrored normal component -v~_a (no penetration) but
-// takes the fluid's own tangential velocity v~_k, k != a, so the viscous term (eq. 8) exerts no
-// shear along the wall; the artificial viscosity sees that tangential velocity too
-// (PairKinematics::vr_av), so it exerts no friction there. Only called when some axis is free-slip.
+// Free-slip walls (tank.free_slip, a solid's free_slip; Hysing et al.'s rising bubble has free-slip
+// sides): a wall particle under a free-slip face (its frame, params.hpp WallFrame: a box tank's face
+// or a shaped wall's own normal n; a box tank's corners stay no-slip) keeps Adami's mirrored normal
+// component -(v~ . n) n (no penetration) but takes the fluid's own tangential velocity
+// v~ - (v~ . n) n, so the viscous term (eq. 8) exerts no shear along the wall: u_w = v~ - 2 (v~ . n) n
+// (free-slip walls are static). The artificial viscosity sees that tangential velocity too
+// (sliding_velocity), so it exerts no friction there.
 template <int Dim>
-SPATE_HD void apply_free_slip(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material, const WallSums<Dim>& s,
-                              WallState<Dim>& st) {
-  const TankFace face = tank_face<Dim>(P, x_wall, material);
-  if (!is_free_slip(P, face) || s.w <= 0.0f) return;
-  for (int k = 0; k < Dim; ++k)
-    if (k != face.axis) st.v[k] = s.v_w[k] / s.w;
+SPATE_HD void apply_free_slip(const WallFrame<Dim>& face, const WallSums<Dim>& s, WallState<Dim>& st) {
+  Vec<Dim> v;  // v~, the fluid's kernel-weighted velocity around the wall particle
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) v[k] = s.v_w[k] / s.w;
+  const float vn = dot(v, face.n);
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) st.v[k] = v[k] - 2.0f * vn * face.n[k];
 }
 
 // The friction velocity u* of the smooth-wall law of the wall for a tangential speed `u` at distance
@@ -132,50 +132,55 @@ SPATE_HD float log_law_u_star2(float u, float y, float nu) {
   return us * us;
 }
 
-// Turbulent wall shear on the tank walls (tank.wall_shear: log_law), a wall function in Adami's
+// Turbulent wall shear (tank.wall_shear or a solid's wall_shear: log_law), a wall function in Adami's
 // scheme: the laminar term (eq. 8) sees the wall particle's extrapolated velocity, and across the
-// distance d from the wall particle to the fluid around it (its kernel-weighted position) exerts
-// mu (u_t - v_w) / d. The wall particle takes the tangential velocity that makes that shear
-// rho u*^2 of the log law (log_law_u_star2) at the fluid's distance y = d - depth from the wall's
-// face (depth: the wall particle's own distance behind it):
+// distance d from the wall particle to the fluid around it (its kernel-weighted position, along the
+// face's normal n) exerts mu (u_t - v_w) / d. The wall particle takes the tangential velocity that
+// makes that shear rho u*^2 of the log law (log_law_u_star2) at the fluid's distance y = d - depth
+// from the face (depth: the wall particle's own distance behind it; params.hpp WallFrame):
 //   v_w,t = u_t (1 - u*^2 d / (nu |u_t|)).
 // In the viscous sublayer (u*^2 = nu |u_t| / y) that is v_w,t = -u_t depth / y, the linear
 // extrapolation of a linear profile through the face, i.e. no slip; at y+ ~ 100-1000, where the
 // particles next to a dam-break floor are, the shear is tens of times the laminar term's. The
-// normal component keeps Adami's mirror (no penetration). Tank walls at rest only (the loader
-// rejects tank.motion); corners and free-slip walls keep theirs. With several fluids nu is the
-// walls' reference fluid's (materials.hpp wall_fluid). Only runs with the key execute it.
+// normal component keeps Adami's mirror (no penetration). Walls at rest only (the loader rejects
+// it with a motion); a box tank's corners keep Adami's. With several fluids nu is the walls'
+// reference fluid's (materials.hpp wall_fluid). Only runs with the key execute it.
 template <int Dim>
-SPATE_HD void apply_log_law(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material, const WallSums<Dim>& s,
-                            WallState<Dim>& st) {
-  const TankFace face = tank_face<Dim>(P, x_wall, material);
-  if (face.axis < 0 || is_free_slip(P, face) || s.w <= 0.0f) return;  // free slip: no shear
-  const int normal = face.axis;
+SPATE_HD void apply_log_law(const PhysicsParams& P, const WallFrame<Dim>& face, const WallSums<Dim>& s, WallState<Dim>& st) {
   const FluidMaterial& M = P.materials.wall_fluid();
   // s.rho_r_w = sum rho_f (x_w - x_f) W: the fluid's mean offset from the wall particle, with rho0
   // for rho_f (within the weak compressibility's 1%).
-  const float d = -face.into_fluid * s.rho_r_w[normal] / (M.rho0 * s.w);
+  const float d = -dot(s.rho_r_w, face.n) / (M.rho0 * s.w);
   const float y = d - face.depth;
   if (y <= 0.0f) return;
-  float u2 = 0.0f;
-  for (int k = 0; k < Dim; ++k)
-    if (k != normal) u2 += (s.v_w[k] / s.w) * (s.v_w[k] / s.w);
-  const float u = sqrtf(u2);
+  Vec<Dim> v;  // v~ and its tangential part
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) v[k] = s.v_w[k] / s.w;
+  const float vn = dot(v, face.n);
+  Vec<Dim> t;
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) t[k] = v[k] - vn * face.n[k];
+  const float u = sqrtf(dot(t, t));
   if (u <= 0.0f) return;
   const float nu = M.viscosity / M.rho0;
   if (nu <= 0.0f) return;  // an inviscid fluid has no law of the wall: Adami's no slip stays
   const float factor = 1.0f - log_law_u_star2(u, y, nu) * d / (nu * u);
-  for (int k = 0; k < Dim; ++k)
-    if (k != normal) st.v[k] = factor * s.v_w[k] / s.w;
+  const float wn = dot(st.v, face.n);  // Adami's mirrored normal component, kept
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) st.v[k] = factor * t[k] + wn * face.n[k];
 }
 
-// The wall particle's velocity for the laminar term beyond Adami's no slip: free-slip walls, then
-// the log law (tank.free_slip, tank.wall_shear). The one call of the wall pass after finish_wall.
+// The wall particle's velocity for the laminar term beyond Adami's no slip: free slip or the log law,
+// as its face says (params.hpp WallFrame). The one call of the wall pass after finish_wall.
 template <int Dim>
-SPATE_HD void apply_wall_shear(const PhysicsParams& P, const Vec<Dim>& x_wall, std::uint8_t material, const WallSums<Dim>& s,
+SPATE_HD void apply_wall_shear(const PhysicsParams& P, const WallFrame<Dim>& face, const WallSums<Dim>& s, WallState<Dim>& st) {
+  if (s.w <= 0.0f) return;
+  if (face.shear == FaceShear::FreeSlip) apply_free_slip<Dim>(face, s, st);
+  else if (face.shear == FaceShear::LogLaw) apply_log_law<Dim>(P, face, s, st);
+}
+// The same for wall particle w of `f` at x_wall; nothing to do (no frame looked up) in runs where
+// every wall is Adami's no slip.
+template <int Dim, class Fields>
+SPATE_HD void apply_wall_shear(const PhysicsParams& P, const Fields& f, std::uint32_t w, const Vec<Dim>& x_wall, const WallSums<Dim>& s,
                                WallState<Dim>& st) {
-  if (P.free_slip_axes) apply_free_slip<Dim>(P, x_wall, material, s, st);
-  if (P.wall_shear == WallShear::LogLaw) apply_log_law<Dim>(P, x_wall, material, s, st);
+  if (P.walls_shear_otherwise()) apply_wall_shear<Dim>(P, wall_frame<Dim>(P, f, w, x_wall), s, st);
 }
 
 }  // namespace spate

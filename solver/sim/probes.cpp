@@ -352,7 +352,7 @@ Vec<Dim> wall_pair_reaction(const PhysicsParams& P, const ParticleStore& p, std:
   const ParticleState<Dim> sf = load_state<Dim>(p, f);
   ParticleState<Dim> sw = load_state<Dim>(p, w);
   sw.w = boundary_velocity<Dim>(P, sw);
-  sw.w_av = sliding_velocity<Dim>(P, sw);
+  sw.w_av = sliding_velocity<Dim>(P, p, w, sw);
   const FluidMaterial& M = P.materials.of(sf.material);
   FluidRates<Dim> r;
   if constexpr (Multiphase)

@@ -11,6 +11,7 @@
 #include "../source_dir.hpp"
 #include "case/case.hpp"
 #include "case/generator.hpp"
+#include "particles/particle_store.hpp"
 #include "case_errors.hpp"
 
 namespace spate {
@@ -389,9 +390,58 @@ TEST(ShapedTanks, TheLoaderRefusesABoxTanksKeys) {
   EXPECT_NE(error("  open_top: true\n").find("closed surface"), std::string::npos);
   EXPECT_NE(error("  free_slip: [x]\n").find("box tank"), std::string::npos);
   EXPECT_NE(error("  periodic: [x]\n").find("box tank"), std::string::npos);
-  EXPECT_NE(error("  wall_shear: log_law\n").find("box tank"), std::string::npos);
+  EXPECT_NE(error("  free_slip: true\n  wall_shear: log_law\n").find("no shear"), std::string::npos);
   EXPECT_NE(test::error_of(disc_tank_case() + "probes:\n  - {name: w, type: wall_pressure, position: [0.5, 0.1]}\n").find("must lie on"),
             std::string::npos);
+}
+
+// A shaped wall that slides or follows the log law (free_slip: true, wall_shear: log_law) gives each
+// of its particles its surface frame (the kWallFrame fields, params.hpp WallFrame): the unit normal
+// from the wall into the fluid and the depth behind the surface, from the shape's signed distance:
+// towards the centre of a disc tank, away from the centre of a disc solid. Other walls carry none
+// (zeros), and a run without such walls has no such fields.
+TEST(ShapedTanks, AFreeSlipTanksAndSolidsParticlesCarryTheirSurfaceFrame) {
+  const Case c = parse_case(disc_tank_case("  free_slip: true\n") +
+                                "solids:\n  - {name: post, disc: {centre: [0.2, 0.08], radius: 0.05}, wall_shear: log_law}\n",
+                            "canal.yaml");
+  const PhysicsParams P = physics_params(c);
+  EXPECT_EQ(P.materials.face_shear[P.materials.tank()], FaceShear::FreeSlip);
+  EXPECT_EQ(P.materials.face_shear[P.materials.solid(0)], FaceShear::LogLaw);
+  ASSERT_EQ(optional_field_groups(P) & kWallFrame, kWallFrame);
+  const OptionalFields fields(FieldGroups{optional_field_groups(P)});
+  const ParticleStore p = generate_particles(c);
+  ASSERT_EQ(p.wall_depth.size(), p.size());
+  std::int64_t tank = 0, post = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const bool in_tank = p.material[i] == P.materials.tank(), in_post = p.material[i] == P.materials.solid(0);
+    if (!in_tank && !in_post) {
+      EXPECT_EQ(p.wall_normal[0][i], 0.0f);
+      EXPECT_EQ(p.wall_depth[i], 0.0f);
+      continue;
+    }
+    const double cx = 0.2, cy = in_tank ? 0.2 : 0.08, radius = in_tank ? 0.2 : 0.05;
+    const double dx = p.pos[0][i] - cx, dy = p.pos[1][i] - cy, r = std::hypot(dx, dy);
+    const double sign = in_tank ? -1.0 : 1.0;  // into the fluid: inwards from the tank, outwards from the post
+    EXPECT_NEAR(p.wall_normal[0][i], sign * dx / r, 1e-5);
+    EXPECT_NEAR(p.wall_normal[1][i], sign * dy / r, 1e-5);
+    EXPECT_NEAR(p.wall_depth[i], std::max(0.0, in_tank ? r - radius : radius - r), 1e-6);
+    (in_tank ? tank : post)++;
+  }
+  EXPECT_GT(tank, 100);
+  EXPECT_GT(post, 20);
+  // Without such walls the fields are not there (no bytes paid).
+  EXPECT_EQ(optional_field_groups(physics_params(parse_case(disc_tank_case(), "canal.yaml"))) & kWallFrame, 0);
+}
+
+// Free slip and the log law need a wall at rest, and not both on one face.
+TEST(ShapedSolids, TheLoaderRefusesAMovingOrContradictoryFreeSlipSolid) {
+  auto error = [](const std::string& solid) { return test::error_of(disc_case(solid)); };
+  EXPECT_NE(error("{name: d, disc: {centre: [0.3, 0.2], radius: 0.1}, free_slip: true, motion: {translation: [0.005, 0], period: 1.6}}")
+                .find("at rest"),
+            std::string::npos);
+  EXPECT_NE(error("{name: d, disc: {centre: [0.3, 0.2], radius: 0.1}, free_slip: true, wall_shear: log_law}").find("no shear"),
+            std::string::npos);
+  EXPECT_NE(error("{name: d, disc: {centre: [0.3, 0.2], radius: 0.1}, free_slip: 3}").find("free_slip"), std::string::npos);
 }
 
 TEST(ShapedTanks, AWallSensorOnTheTankFacesIntoTheFluid) {

@@ -27,7 +27,7 @@ TEST(WallBoundary, FreeSlipWallsMirrorOnlyTheNormalVelocity) {
   s.v_w = Vec<2>{{0.6f, 0.8f}};  // kernel-weighted fluid velocity (0.3, 0.4)
   auto state = [&](float x, float y, std::uint8_t material) {
     WallState<2> st = finish_wall(P, s, material, Vec<2>{{x, y}});
-    apply_free_slip<2>(P, Vec<2>{{x, y}}, material, s, st);
+    apply_wall_shear<2>(P, box_tank_frame<2>(P, Vec<2>{{x, y}}, material), s, st);
     return st.v;
   };
   const Vec<2> side = state(-0.01f, 1.0f, P.materials.tank());
@@ -40,6 +40,47 @@ TEST(WallBoundary, FreeSlipWallsMirrorOnlyTheNormalVelocity) {
     EXPECT_FLOAT_EQ(no_slip[0], -0.3f);
     EXPECT_FLOAT_EQ(no_slip[1], -0.4f);
   }
+}
+
+// A shaped wall's particle carries its own frame (params.hpp WallFrame): the face's normal need
+// not be an axis. Free slip and the log law on a face tilted by any angle give the velocity of the
+// axis-aligned face, turned with it (the treatments are covariant), and the artificial viscosity
+// sees the free-slip face slide along itself.
+TEST(WallBoundary, ATiltedFacesFrameTurnsFreeSlipAndTheLogLawWithIt) {
+  PhysicsParams P;
+  P.dim = 2;
+  P.materials.fluid[0].rho0 = 1000.0f;
+  P.materials.fluid[0].viscosity = 1e-3f;
+  const float depth = 0.0025f, d = 0.0075f;
+  auto turn = [](const Vec<2>& v, float a) {
+    return Vec<2>{{std::cos(a) * v[0] - std::sin(a) * v[1], std::sin(a) * v[0] + std::cos(a) * v[1]}};
+  };
+  for (FaceShear shear : {FaceShear::FreeSlip, FaceShear::LogLaw})
+    for (float angle : {0.0f, 0.3f, 0.785398f, 2.0f, -1.2f}) {
+      // A floor at angle 0: the fluid d above the wall particle, moving at (2.4, 0.1) over it.
+      WallSums<2> s;
+      s.w = 2.0f;
+      s.v_w = turn(Vec<2>{{4.8f, 0.2f}}, angle);
+      s.rho_r_w = turn(Vec<2>{{0.0f, -1000.0f * 2.0f * d}}, angle);
+      WallFrame<2> face;
+      face.n = turn(Vec<2>{{0.0f, 1.0f}}, angle);
+      face.depth = depth;
+      face.shear = shear;
+      WallState<2> st = finish_wall(P, s, P.materials.tank(), Vec<2>{{0.5f, 0.5f}});
+      apply_wall_shear<2>(P, face, s, st);
+      const Vec<2> v = turn(st.v, -angle);  // back in the face's own axes
+      EXPECT_NEAR(v[1], -0.1f, 1e-5f) << "no penetration at " << angle;
+      if (shear == FaceShear::FreeSlip) {
+        EXPECT_NEAR(v[0], 2.4f, 1e-5f) << "no shear at " << angle;
+        ParticleState<2> j{{0.5f, 0.5f}, st.v, 1000.0f, 0.0f, P.materials.tank(), {0, 0}, {0, 0}};
+        const Vec<2> slide = turn(sliding_velocity<2>(face, j), -angle);
+        EXPECT_NEAR(slide[0], 2.4f, 1e-5f) << "the artificial viscosity sees the face slide";
+        EXPECT_NEAR(slide[1], 0.0f, 1e-5f) << "but not move into the fluid";
+      } else {
+        const float u_star2 = log_law_u_star2(2.4f, d - depth, 1e-6f);
+        EXPECT_NEAR(1e-6f * (2.4f - v[0]) / d, u_star2, 2e-3f * u_star2) << "the log law's shear at " << angle;
+      }
+    }
 }
 
 // u+ = ln(y+) / 0.41 + 5.2 above y+ = 11.2, u+ = y+ below: the returned u*^2 satisfies the law it
@@ -85,7 +126,7 @@ TEST(WallBoundary, LogLawWallParticleMakesTheLaminarShearTheLawOfTheWall) {
     s.rho_r_w = Vec<2>{{0.0f, -1000.0f * 2.0f * d}};  // the fluid d above the wall particle
     const Vec<2> x_wall{{x, -depth}};
     WallState<2> st = finish_wall(P, s, material, x_wall);
-    apply_wall_shear<2>(P, x_wall, material, s, st);
+    apply_wall_shear<2>(P, box_tank_frame<2>(P, x_wall, material), s, st);
     return st.v;
   };
   ASSERT_EQ(P.materials.tank(), 1);
@@ -124,7 +165,7 @@ Vec<2> floor_force(const PhysicsParams& P, float dp, Velocity velocity_at) {
     for (int col = -reach; col <= reach; ++col)
       for (int row = 0; row <= reach; ++row) accumulate_wall_pair<WendlandC2, 2>(P, x_wall, fluid_at(col, row), s);
     WallState<2> st = finish_wall(P, s, P.materials.tank(), x_wall);
-    apply_wall_shear<2>(P, x_wall, P.materials.tank(), s, st);
+    apply_wall_shear<2>(P, box_tank_frame<2>(P, x_wall, P.materials.tank()), s, st);
     wall[layer] = ParticleState<2>{x_wall, st.v, st.rho, 0.0f, P.materials.tank(), {0, 0}, {0, 0}};
   }
   Vec<2> force{{0.0f, 0.0f}};
@@ -135,7 +176,7 @@ Vec<2> floor_force(const PhysicsParams& P, float dp, Velocity velocity_at) {
         ParticleState<2> j = w;
         j.x[0] = x0 + col * dp;
         j.w = boundary_velocity<2>(P, j);  // 0: the tank is at rest
-        j.w_av = sliding_velocity<2>(P, j);
+        j.w_av = sliding_velocity<2>(box_tank_frame<2>(P, j.x, j.material), j);
         const Vec<2> a = fluid_pair_terms<WendlandC2, 2, true, true>(P, M, i, j).acc;
         for (int k = 0; k < 2; ++k) force[k] += M.mass * a[k];
       }

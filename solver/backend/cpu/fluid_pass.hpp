@@ -165,7 +165,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
           for (int q = 0; q < len; ++q) {
             ParticleState<Dim> sj = load_state<Dim>(ps, jb + q);
             sj.w = boundary_velocity<Dim>(P, sj);
-            const Vec<Dim> w_av = sliding_velocity<Dim>(P, sj);
+            const Vec<Dim> w_av = sliding_velocity<Dim>(P, ps, jb + q, sj);
             SPATE_UNROLL for (int k = 0; k < Dim; ++k) cw[k][m + q] = sj.w[k], cw_av[k][m + q] = w_av[k];
           }
         if constexpr (Multiphase) {
@@ -391,7 +391,7 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
           }
         }
         WallState<Dim> st = finish_wall(P, sums, ps.material[w], xw);
-        apply_wall_shear<Dim>(P, xw, ps.material[w], sums, st);
+        apply_wall_shear<Dim>(P, ps, w, xw, sums, st);
         ps.pressure[w] = st.p;
         ps.density[w] = st.rho;
         SPATE_UNROLL for (int k = 0; k < Dim; ++k) ps.vel[k][w] = st.v[k];
