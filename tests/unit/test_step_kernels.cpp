@@ -297,6 +297,9 @@ std::vector<CheckedCase> gpu_checked_cases() {
       {"surface_tension", load("bubble_rise_2d.yaml", {"probes=[]"}), 100},
       // SPS turbulence: the stress and divergence passes (CPU: batched and lane-summed).
       {"sps", load("dam_break_2d.yaml", {"turbulence.model=sps"}), 300},
+      // A shaped free-slip wall: each wall particle's own frame (wall_normal, wall_depth) in the
+      // wall pass and for the artificial viscosity's sliding face.
+      {"free_slip_slope", load("free_slip_slope_2d.yaml", {"probes=[]"}), 300},
   };
 }
 
