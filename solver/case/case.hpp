@@ -88,6 +88,10 @@ struct SolidSpec {
   // solids only): through each particle's own frame (wall_boundary.hpp WallFrame).
   bool free_slip = false;
   WallShear wall_shear = WallShear::Laminar;
+  // `wall_particles: surface` (2D): its wall particles in layers parallel to its surface at the
+  // lattice's spacing (shape.hpp surface_layers_2d), not the lattice sites under it; the fluid keeps
+  // kSurfaceClearance dp off its surface (generator.cpp).
+  bool surface_particles = false;
   int motion = -1;     // index into Case::motions, or -1: static
   ThermalSpec thermal{};
   // A solid of any shape (mesh, cylinder, sphere/disc, polygon, polyhedron; shape.hpp), null for

@@ -1477,6 +1477,11 @@ Case read(Section& root, const std::string& file) {
     }
     spec.hollow = s.boolean("hollow", true);
     spec.free_slip = s.boolean("free_slip", false);
+    spec.surface_particles = s.choice<bool>("wall_particles", false, {{"lattice", false}, {"surface", true}});
+    if (spec.surface_particles && d != 2)
+      s.fail(s.raw("wall_particles"), "wall_particles", "wall particles that follow the surface are for 2D cases (3D solids stay on the lattice)");
+    if (spec.surface_particles && !spec.hollow)
+      s.fail(s.raw("wall_particles"), "wall_particles", "surface layers shell the solid; a filled solid (hollow: false) stays on the lattice");
     spec.wall_shear = s.choice<WallShear>("wall_shear", WallShear::Laminar, {{"laminar", WallShear::Laminar}, {"log_law", WallShear::LogLaw}});
     if (spec.free_slip && spec.wall_shear == WallShear::LogLaw)
       s.fail(s.raw("wall_shear"), "wall_shear", "a free-slip surface has no shear (free_slip: true and the log law together)");

@@ -68,12 +68,25 @@ class ColumnDistance {
   double column_[2] = {0, 0}, along_ = 0, d_ = 0;
 };
 
-// One per shaped solid and fluid block, for the site loop.
+// One per shaped solid and fluid block, for the site loop; `surfaces`: the shape of each solid whose
+// wall particles follow its surface (a box solid's as a box shape), null for the others.
 struct SiteMemo {
   std::vector<ColumnDistance> solids, blocks;
   ColumnDistance tank;
-  explicit SiteMemo(const Case& c) : solids(c.solids.size()), blocks(c.fluid_blocks.size()) {}
+  std::vector<ShapePtr> surfaces;
+  explicit SiteMemo(const Case& c) : solids(c.solids.size()), blocks(c.fluid_blocks.size()), surfaces(c.solids.size()) {
+    for (std::size_t k = 0; k < c.solids.size(); ++k)
+      if (c.solids[k].surface_particles) surfaces[k] = solid_surface(c.solids[k], c.dim);
+  }
 };
+
+// How far off the surface of a solid with surface-following wall particles the fluid's lattice
+// sites start [dp]. Its first wall layer lies dp/2 behind the surface, and the lattice's sites lie
+// at any distance from a slanted face: a quarter of dp keeps a row of sites that runs along the
+// face itself (a 45-degree face through lattice sites) out of the first wall layer's reach (dp/2
+// from it, against dp between lattice rows), and takes the fluid's first row a quarter of dp
+// farther from the face than the lattice's own walls have it, on the mean.
+constexpr double kSurfaceClearance = 0.25;
 
 // Whether site x lies in the block: its box (boundaries included), its shape, its disc/sphere, or
 // its box under a sinusoidal top face. `memo`: the block's column distances in the site loop.
@@ -142,6 +155,14 @@ bool classify(const Case& c, const MaterialTable& M, const Sites& s, const int i
   }
   for (std::size_t k = 0; k < c.solids.size(); ++k) {
     const SolidSpec& solid = c.solids[k];
+    if (solid.surface_particles) {
+      // Its particles follow its surface (surface_particles below): its sites, and the fluid's within
+      // the clearance, stay empty.
+      Box reach = solid.box;
+      for (int a = 0; a < d; ++a) reach.min[a] -= 2 * c.dp, reach.max[a] += 2 * c.dp;
+      if (in_box(reach, x, d) && memo.solids[k].at(*memo.surfaces[k], x, d, 2 * c.dp) < kSurfaceClearance * c.dp) return false;
+      continue;
+    }
     if (solid.shape) {
       bool inside = false;
       if (in_shaped_solid(c, solid, x, inside, memo.solids[k])) {
@@ -272,6 +293,7 @@ std::string geometry_signature(const Case& c) {
   for (std::size_t k = 0; k < c.solids.size(); ++k) {
     s += fmt::format("solids[{}]: {} to {}, hollow {}\n", k, vec(c.solids[k].box.min), vec(c.solids[k].box.max), c.solids[k].hollow);
     if (c.solids[k].shape) s += fmt::format("solids[{}].shape: {}\n", k, c.solids[k].shape->signature);
+    if (c.solids[k].surface_particles) s += fmt::format("solids[{}].wall_particles: surface\n", k);
   }
   return s;
 }
@@ -389,7 +411,7 @@ void count_first_match(const std::vector<const IndexBox*>& rules, const IndexBox
 bool has_shapes(const Case& c) {
   if (c.tank_shape) return true;
   for (const SolidSpec& solid : c.solids)
-    if (solid.shape) return true;
+    if (solid.shape || solid.surface_particles) return true;
   for (const FluidBlock& b : c.fluid_blocks)
     if (b.shape) return true;
   return false;
@@ -410,6 +432,23 @@ ParticleCounts count_sites(const Case& c, std::vector<std::uint8_t>* record) {
   return n;
 }
 
+// The wall particles of the solids whose particles follow their surface (SolidSpec::surface_particles),
+// in the solids' order, after every lattice site.
+struct SurfaceParticle {
+  std::array<double, 3> x;
+  std::uint8_t kind;
+};
+std::vector<SurfaceParticle> surface_particles(const Case& c) {
+  std::vector<SurfaceParticle> out;
+  const MaterialTable M = physics_params(c).materials;
+  for (std::size_t k = 0; k < c.solids.size(); ++k) {
+    if (!c.solids[k].surface_particles) continue;
+    for (const auto& x : surface_layers_2d(*solid_surface(c.solids[k], c.dim), c.dp, c.wall_layers, /*outside=*/false))
+      out.push_back(SurfaceParticle{x, M.solid(static_cast<int>(k))});
+  }
+  return out;
+}
+
 // The materials of a shaped case's lattice sites, classified once. A run counts its particles for
 // its memory estimate, again to check the generated set, and the generator fills from the same
 // sites: a mesh case's classification (its distance queries) is most of its start-up, so the last
@@ -417,6 +456,7 @@ ParticleCounts count_sites(const Case& c, std::vector<std::uint8_t>* record) {
 struct SiteRecord {
   std::string key;
   std::vector<std::uint8_t> kinds;
+  std::vector<SurfaceParticle> surface;  // off the lattice, after its sites
   ParticleCounts counts;
 };
 std::mutex site_record_mutex;
@@ -439,6 +479,8 @@ std::shared_ptr<const SiteRecord> site_record(const Case& c) {
   auto r = std::make_shared<SiteRecord>();
   r->key = std::move(key);
   r->counts = count_sites(c, &r->kinds);
+  r->surface = surface_particles(c);
+  r->counts.wall += static_cast<std::int64_t>(r->surface.size());
   const std::lock_guard lock(site_record_mutex);
   site_record_cache = r;
   return r;
@@ -652,16 +694,16 @@ ParticleStore generate_particles(const Case& c) {
   std::vector<ShapePtr> solid_shapes;
   if (frames)
     for (const SolidSpec& solid : c.solids) solid_shapes.push_back(solid_surface(solid, c.dim));
+  // One particle of material `kind` at xs, the next in generation order.
   std::size_t i = 0;
-  for_each_site(c, [&](const Sites& s, const int* idx, std::uint8_t kind) {
+  auto make = [&](const double xs[3], std::uint8_t kind) {
     if (i >= p.size()) {  // a miscount: reported below, never written past the arrays
       ++i;
       return;
     }
-    for (int a = 0; a < c.dim; ++a) p.pos[a][i] = static_cast<float>(s.coord(a, idx[a]));
+    for (int a = 0; a < c.dim; ++a) p.pos[a][i] = static_cast<float>(xs[a]);
     p.material[i] = kind;
     p.id[i] = static_cast<std::uint32_t>(i);
-    const double xs[3] = {s.coord(0, idx[0]), c.dim > 1 ? s.coord(1, idx[1]) : 0.0, c.dim > 2 ? s.coord(2, idx[2]) : 0.0};
     if (heat) p.temperature[i] = static_cast<float>(initial_temperature(c, P.materials, kind, xs));
     if (frames && P.materials.face_shear[kind] != FaceShear::NoSlip) {
       const bool tank = kind == P.materials.tank();
@@ -681,7 +723,13 @@ ParticleStore generate_particles(const Case& c) {
       p.density[i] = tait_density(static_cast<float>(m.rho0 * g * depth), m);
     }
     ++i;
+  };
+  for_each_site(c, [&](const Sites& s, const int* idx, std::uint8_t kind) {
+    const double xs[3] = {s.coord(0, idx[0]), c.dim > 1 ? s.coord(1, idx[1]) : 0.0, c.dim > 2 ? s.coord(2, idx[2]) : 0.0};
+    make(xs, kind);
   }, nullptr, shapes ? &sites->kinds : nullptr);
+  if (shapes)
+    for (const auto& w : sites->surface) make(w.x.data(), w.kind);
   if (i != p.size()) throw std::logic_error("generate_particles: the site loop disagrees with count_particles");
   if (P.materials.multiphase()) layered_hydrostatic_density(c, P, p);
   displace_by_waves(c, P, p);  // after the column sums, which need the lattice

@@ -39,6 +39,12 @@ class Shape {
 };
 using ShapePtr = std::shared_ptr<const Shape>;
 
+// Wall particles that follow a 2D shape's surface (a solid's `wall_particles: surface`): `layers`
+// layers, layer k on the level set at (k + 1/2) dp behind the surface (inside the shape, or outside
+// it when `outside`: a container's walls), each contour resampled at even arc-length spacing as near
+// dp as a whole number of points allows (surface_layers.cpp). Points at z = 0.
+std::vector<std::array<double, 3>> surface_layers_2d(const Shape& shape, double dp, int layers, bool outside);
+
 // The surface of a shape as VTK XML polydata (a .vtp file's text; ASCII, readable by ParaView).
 std::string surface_vtp(const Shape& shape);
 // The same of a box (its six faces).

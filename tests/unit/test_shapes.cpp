@@ -195,6 +195,46 @@ TEST(ShapedSolids, ADiscIsTheLatticeSitesWithinItsLayersUnderTheSurface) {
   EXPECT_EQ(solid, ring);
 }
 
+// A 2D solid with `wall_particles: surface`: its wall particles in layers parallel to its surface
+// at dp/2, 3dp/2, ... behind it, each layer's ring at even spacing as near dp as a whole number
+// allows, none on the lattice's staircase; no fluid inside the disc or within a quarter of dp of it.
+TEST(ShapedSolids, SurfaceWallParticlesRingADiscInEvenLayers) {
+  const Case c = parse_case(disc_case("{name: disc, disc: {centre: [0.3, 0.2], radius: 0.1}, wall_particles: surface}"), "disc.yaml");
+  ASSERT_TRUE(c.solids[0].surface_particles);
+  const ParticleStore p = generate_particles(c);
+  EXPECT_EQ(static_cast<std::int64_t>(p.size()), count_particles(c).total());
+  std::map<int, std::vector<double>> layers;  // layer -> angles
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double dx = p.pos[0][i] - 0.3, dy = p.pos[1][i] - 0.2, r = std::hypot(dx, dy);
+    if (p.material[i] == kSolidMaterialForTest) {
+      const double depth = (0.1 - r) / c.dp;  // 0.5, 1.5, 2.5
+      const int k = static_cast<int>(std::lround(depth - 0.5));
+      ASSERT_GE(k, 0);
+      ASSERT_LT(k, c.wall_layers);
+      EXPECT_NEAR(depth, k + 0.5, 0.02) << "off its layer";
+      layers[k].push_back(std::atan2(dy, dx));
+    } else if (p.material[i] == 0) {
+      EXPECT_GT(r, 0.1 + 0.25 * c.dp - 1e-9) << "fluid within the clearance";
+    }
+  }
+  ASSERT_EQ(layers.size(), static_cast<std::size_t>(c.wall_layers));
+  for (auto& [k, angles] : layers) {
+    const double r = 0.1 - (k + 0.5) * c.dp;
+    EXPECT_EQ(static_cast<long>(angles.size()), std::lround(2 * M_PI * r / c.dp)) << "layer " << k;
+    std::sort(angles.begin(), angles.end());
+    for (std::size_t m = 0; m < angles.size(); ++m) {
+      const double gap = (m + 1 < angles.size() ? angles[m + 1] - angles[m] : angles[0] + 2 * M_PI - angles[m]) * r;
+      EXPECT_NEAR(gap, c.dp, 0.03 * c.dp) << "layer " << k << " at " << angles[m];
+    }
+  }
+  // The generation's geometry differs from the lattice's (a restart checks it).
+  const Case lattice = parse_case(disc_case("{name: disc, disc: {centre: [0.3, 0.2], radius: 0.1}}"), "disc.yaml");
+  EXPECT_NE(geometry_hash(c), geometry_hash(lattice));
+  EXPECT_NE(test::error_of(disc_case("{name: disc, disc: {centre: [0.3, 0.2], radius: 0.1}, wall_particles: surface, hollow: false}"))
+                .find("hollow"),
+            std::string::npos);
+}
+
 // The paper's column from an STL against today's box column (issue 31), at the case's dp = 0.01,
 // where the column's faces lie between planes of lattice sites. The two give the same fluid
 // particles and the same column particles wherever a fluid particle can reach (its support is
