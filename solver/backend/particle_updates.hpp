@@ -60,7 +60,11 @@ SPATE_HD void predict_particle(const PhysicsParams& P, Fields& f, std::uint32_t 
   const std::uint8_t m = f.material[i];
   if (!P.is_fluid(m)) {
     const int motion = P.materials.motion[m];
-    if (motion > 0) apply_motion_step(P.motion_step[motion - 1], P.dim, f.pos, i);
+    if (motion > 0) {
+      apply_motion_step(P.motion_step[motion - 1], P.dim, f.pos, i);
+      // A moving wall that slides carries its surface normal along (WallFrame).
+      if (P.materials.face_shear[m] != FaceShear::NoSlip) turn_with_motion_step(P.motion_step[motion - 1], P.dim, f.wall_normal, i);
+    }
     return;
   }
   for (int k = 0; k < P.dim; ++k) predict_component(f.pos[k][i], f.vel[k][i], f.acc_prev[k][i], dt);

@@ -35,15 +35,14 @@ SPATE_HD Vec<Dim> boundary_velocity(const PhysicsParams& P, const ParticleState<
 
 // What the artificial viscosity sees of neighbour j (PairKinematics::vr_av), given j.w: j.w, but
 // a free-slip face slides with the fluid: along it the wall's velocity is the tangential part of
-// j.v (the fluid's, apply_free_slip), so the term damps the approach and is no friction. The face's
-// normal is j's frame (params.hpp WallFrame: a box tank's face, or a shaped wall's own normal);
-// free-slip walls are static (the loader refuses them on moving walls), so the normal part is j.w's,
-// zero. Once per neighbour, not per pair, so that the pair terms stay free of the face test. `f`,
-// `j`: the fields and index j.state was loaded from.
+// j.v (the fluid's, apply_free_slip), across it j.w's, so the term damps the approach and is no
+// friction: u = j.v - ((j.v - j.w) . n) n. The face's normal is j's frame (params.hpp WallFrame: a
+// box tank's face, or a shaped wall's own normal). Once per neighbour, not per pair, so that the
+// pair terms stay free of the face test. `f`, `j`: the fields and index j's state was loaded from.
 template <int Dim>
 SPATE_HD Vec<Dim> sliding_velocity(const WallFrame<Dim>& face, const ParticleState<Dim>& sj) {
   if (face.shear != FaceShear::FreeSlip) return sj.w;
-  const float vn = dot(sj.v, face.n);
+  const float vn = dot(sj.v - sj.w, face.n);
   Vec<Dim> u;
   SPATE_UNROLL for (int a = 0; a < Dim; ++a) u[a] = sj.v[a] - vn * face.n[a];
   return u;

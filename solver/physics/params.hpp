@@ -183,13 +183,15 @@ SPATE_HD bool is_free_slip(const PhysicsParams& P, const TankFace& face) {
 // behind the surface, and what the face does. A box tank's face gives it from the particle's
 // position (tank_face: n along the face's axis; corners stay no slip); a shaped tank's or solid's
 // particle carries its own (the kWallFrame fields wall_normal and wall_depth, which the generator
-// takes from the shape's signed distance), so free slip and the log law follow a slanted or curved
-// face although the particles stand on the lattice's staircase under it.
+// takes from the shape's signed distance, and which turn with a moving wall: turn_with_motion_step),
+// so free slip and the log law follow a slanted or curved face although the particles stand on the
+// lattice's staircase under it. `w`: the wall's velocity at the particle (wall_motion.hpp).
 template <int Dim>
 struct WallFrame {
   Vec<Dim> n = zero_vec<Dim>();
   float depth = 0.0f;
   FaceShear shear = FaceShear::NoSlip;
+  Vec<Dim> w = zero_vec<Dim>();  // the wall's own velocity there (a moving wall's; zero at rest)
 };
 
 template <int Dim>
@@ -214,6 +216,7 @@ SPATE_HD WallFrame<Dim> wall_frame(const PhysicsParams& P, const Fields& f, std:
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) frame.n[k] = f.wall_normal[k][w];
   frame.depth = f.wall_depth[w];
   frame.shear = shear;
+  frame.w = wall_velocity<Dim>(P, m, x_wall);
   return frame;
 }
 

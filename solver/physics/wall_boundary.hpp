@@ -101,16 +101,17 @@ SPATE_HD WallState<Dim> finish_wall(const PhysicsParams& P, const WallSums<Dim>&
 // Free-slip walls (tank.free_slip, a solid's free_slip; Hysing et al.'s rising bubble has free-slip
 // sides): a wall particle under a free-slip face (its frame, params.hpp WallFrame: a box tank's face
 // or a shaped wall's own normal n; a box tank's corners stay no-slip) keeps Adami's mirrored normal
-// component -(v~ . n) n (no penetration) but takes the fluid's own tangential velocity
-// v~ - (v~ . n) n, so the viscous term (eq. 8) exerts no shear along the wall: u_w = v~ - 2 (v~ . n) n
-// (free-slip walls are static). The artificial viscosity sees that tangential velocity too
-// (sliding_velocity), so it exerts no friction there.
+// component, (2 w - v~) . n with w the wall's velocity (no penetration), but takes the fluid's own
+// tangential velocity, so the viscous term (eq. 8) exerts no shear along the wall:
+//   u_w = v~ + 2 ((w - v~) . n) n   (a wall at rest: v~ - 2 (v~ . n) n).
+// The artificial viscosity sees that tangential velocity too (sliding_velocity), so it exerts no
+// friction there.
 template <int Dim>
 SPATE_HD void apply_free_slip(const WallFrame<Dim>& face, const WallSums<Dim>& s, WallState<Dim>& st) {
   Vec<Dim> v;  // v~, the fluid's kernel-weighted velocity around the wall particle
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) v[k] = s.v_w[k] / s.w;
-  const float vn = dot(v, face.n);
-  SPATE_UNROLL for (int k = 0; k < Dim; ++k) st.v[k] = v[k] - 2.0f * vn * face.n[k];
+  const float un = dot(face.w - v, face.n);
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) st.v[k] = v[k] + 2.0f * un * face.n[k];
 }
 
 // The friction velocity u* of the smooth-wall law of the wall for a tangential speed `u` at distance
@@ -142,7 +143,7 @@ SPATE_HD float log_law_u_star2(float u, float y, float nu) {
 // In the viscous sublayer (u*^2 = nu |u_t| / y) that is v_w,t = -u_t depth / y, the linear
 // extrapolation of a linear profile through the face, i.e. no slip; at y+ ~ 100-1000, where the
 // particles next to a dam-break floor are, the shear is tens of times the laminar term's. The
-// normal component keeps Adami's mirror (no penetration). Walls at rest only (the loader rejects
+// normal component keeps Adami's mirror (no penetration). Walls at rest only (the loader refuses
 // it with a motion); a box tank's corners keep Adami's. With several fluids nu is the walls'
 // reference fluid's (materials.hpp wall_fluid). Only runs with the key execute it.
 template <int Dim>

@@ -85,4 +85,17 @@ SPATE_HD void apply_motion_step(const MotionStep& s, int dim, Array (&x)[3], std
   }
 }
 
+// Turns wall particle i's surface normal (params.hpp WallFrame: a moving solid's or tank's that
+// slides) with the step's rotation, as apply_motion_step moves its position.
+template <class Array>
+SPATE_HD void turn_with_motion_step(const MotionStep& s, int dim, Array (&n)[3], std::size_t i) {
+  double v[3] = {0, 0, 0};
+  for (int k = 0; k < dim; ++k) v[k] = static_cast<double>(n[k][i]);
+  for (int k = 0; k < dim; ++k) {
+    double t = 0.0;
+    for (int l = 0; l < dim; ++l) t += s.rotation[k][l] * v[l];
+    n[k][i] = static_cast<float>(t);
+  }
+}
+
 }  // namespace spate

@@ -473,10 +473,10 @@ TEST(ShapedTanks, AFreeSlipTanksAndSolidsParticlesCarryTheirSurfaceFrame) {
   EXPECT_EQ(optional_field_groups(physics_params(parse_case(disc_tank_case(), "canal.yaml"))) & kWallFrame, 0);
 }
 
-// Free slip and the log law need a wall at rest, and not both on one face.
-TEST(ShapedSolids, TheLoaderRefusesAMovingOrContradictoryFreeSlipSolid) {
+// The log law needs a wall at rest, and free slip and the log law cannot share a face.
+TEST(ShapedSolids, TheLoaderRefusesAMovingLogLawOrAFreeSlipLogLawSolid) {
   auto error = [](const std::string& solid) { return test::error_of(disc_case(solid)); };
-  EXPECT_NE(error("{name: d, disc: {centre: [0.3, 0.2], radius: 0.1}, free_slip: true, motion: {translation: [0.005, 0], period: 1.6}}")
+  EXPECT_NE(error("{name: d, disc: {centre: [0.3, 0.2], radius: 0.1}, wall_shear: log_law, motion: {translation: [0.005, 0], period: 1.6}}")
                 .find("at rest"),
             std::string::npos);
   EXPECT_NE(error("{name: d, disc: {centre: [0.3, 0.2], radius: 0.1}, free_slip: true, wall_shear: log_law}").find("no shear"),
