@@ -300,6 +300,9 @@ std::vector<CheckedCase> gpu_checked_cases() {
       // A shaped free-slip wall: each wall particle's own frame (wall_normal, wall_depth) in the
       // wall pass and for the artificial viscosity's sliding face.
       {"free_slip_slope", load("free_slip_slope_2d.yaml", {"probes=[]"}), 300},
+      // A free-slip disc turning (surface-following wall particles whose normals turn with it).
+      {"turning_disc", load("turning_disc_2d.yaml", {"probes=[]", "solids=[{name: disc, disc: {centre: [0.15, 0.13], radius: 0.08}, "
+                                                     "wall_particles: surface, free_slip: true, motion: {rotation: 30, period: 0.5}}]"}), 300},
   };
 }
 
