@@ -84,8 +84,8 @@ struct SolidSpec {
   std::string name;
   Box box;  // the solid, or the bounding box of its shape
   bool hollow = true;  // only `wall_layers` layers under its surface are particles
-  // What its surface does to the fluid along it (`free_slip: true`, `wall_shear: log_law`; static
-  // solids only): through each particle's own frame (wall_boundary.hpp WallFrame).
+  // What its surface does to the fluid along it (`free_slip: true`, at rest or moving;
+  // `wall_shear: log_law`, at rest only): through each particle's own frame (params.hpp WallFrame).
   bool free_slip = false;
   WallShear wall_shear = WallShear::Laminar;
   // `wall_particles: surface` (2D): its wall particles in layers parallel to its surface at the

@@ -156,7 +156,7 @@ bool classify(const Case& c, const MaterialTable& M, const Sites& s, const int i
   for (std::size_t k = 0; k < c.solids.size(); ++k) {
     const SolidSpec& solid = c.solids[k];
     if (solid.surface_particles) {
-      // Its particles follow its surface (surface_particles below): its sites, and the fluid's within
+      // Its particles follow its surface (surface_wall_particles below): its sites, and the fluid's within
       // the clearance, stay empty.
       Box reach = solid.box;
       for (int a = 0; a < d; ++a) reach.min[a] -= 2 * c.dp, reach.max[a] += 2 * c.dp;
@@ -438,7 +438,7 @@ struct SurfaceParticle {
   std::array<double, 3> x;
   std::uint8_t kind;
 };
-std::vector<SurfaceParticle> surface_particles(const Case& c) {
+std::vector<SurfaceParticle> surface_wall_particles(const Case& c) {
   std::vector<SurfaceParticle> out;
   const MaterialTable M = physics_params(c).materials;
   for (std::size_t k = 0; k < c.solids.size(); ++k) {
@@ -479,7 +479,7 @@ std::shared_ptr<const SiteRecord> site_record(const Case& c) {
   auto r = std::make_shared<SiteRecord>();
   r->key = std::move(key);
   r->counts = count_sites(c, &r->kinds);
-  r->surface = surface_particles(c);
+  r->surface = surface_wall_particles(c);
   r->counts.wall += static_cast<std::int64_t>(r->surface.size());
   const std::lock_guard lock(site_record_mutex);
   site_record_cache = r;
