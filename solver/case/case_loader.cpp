@@ -270,6 +270,14 @@ std::string apply_override(YAML::Node root, const std::string& file, const std::
   return path;
 }
 
+// `wall_shear` of the tank or a solid (physics/wall_boundary.hpp), refused beside `free_slip: true`.
+WallShear read_wall_shear(Section& s, bool free_slip) {
+  const WallShear shear = s.choice<WallShear>("wall_shear", WallShear::Laminar, {{"laminar", WallShear::Laminar}, {"log_law", WallShear::LogLaw}});
+  if (free_slip && shear == WallShear::LogLaw)
+    s.fail(s.raw("wall_shear"), "wall_shear", "a free-slip surface has no shear (free_slip: true and the log law together)");
+  return shear;
+}
+
 Box read_box(Section& s, int dim) {
   Box b;
   b.min = s.vector("min", dim);
@@ -1351,13 +1359,11 @@ Case read(Section& root, const std::string& file) {
   axes("free_slip", c.free_slip);
   for (int k = 0; k < d; ++k)
     if (c.periodic[k] && c.free_slip[k]) tank->fail(tank->raw("free_slip"), "free_slip", "an axis cannot be periodic and have walls");
-  c.wall_shear = tank->choice<WallShear>("wall_shear", WallShear::Laminar, {{"laminar", WallShear::Laminar}, {"log_law", WallShear::LogLaw}});
+  c.wall_shear = read_wall_shear(*tank, c.shaped_tank_free_slip);
   if (c.tank_shape) {  // axes are a box tank's, face by face
     if (tank->has("periodic")) tank->fail(tank->raw("periodic"), "periodic", "is for a box tank's faces, not a shaped tank");
     if (tank->has("free_slip") && !tank->raw("free_slip").IsScalar())
       tank->fail(tank->raw("free_slip"), "free_slip", "a list of axes is for a box tank's faces; a shaped tank's surface takes true or false");
-    if (c.shaped_tank_free_slip && c.wall_shear == WallShear::LogLaw)
-      tank->fail(tank->raw("wall_shear"), "wall_shear", "a free-slip surface has no shear (free_slip: true and the log law together)");
   }
   if (auto t = thermal_section(*tank, c)) {
     c.tank_thermal = read_thermal(*t, c, /*wall=*/true, /*solid=*/false);
@@ -1482,9 +1488,7 @@ Case read(Section& root, const std::string& file) {
       s.fail(s.raw("wall_particles"), "wall_particles", "wall particles that follow the surface are for 2D cases (3D solids stay on the lattice)");
     if (spec.surface_particles && !spec.hollow)
       s.fail(s.raw("wall_particles"), "wall_particles", "surface layers shell the solid; a filled solid (hollow: false) stays on the lattice");
-    spec.wall_shear = s.choice<WallShear>("wall_shear", WallShear::Laminar, {{"laminar", WallShear::Laminar}, {"log_law", WallShear::LogLaw}});
-    if (spec.free_slip && spec.wall_shear == WallShear::LogLaw)
-      s.fail(s.raw("wall_shear"), "wall_shear", "a free-slip surface has no shear (free_slip: true and the log law together)");
+    spec.wall_shear = read_wall_shear(s, spec.free_slip);
     if (auto t = thermal_section(s, c)) {
       spec.thermal = read_thermal(*t, c, /*wall=*/true, /*solid=*/true);
       t->finish();
