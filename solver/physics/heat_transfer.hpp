@@ -206,12 +206,17 @@ SPATE_HD Vec<Dim> buoyancy_acceleration(const ThermalMaterial& m, const float (&
 // The linear least-squares fit of the temperature around a wall particle behind a face, from the
 // particles of one material that carry their own temperature: sums of the weights w = V_j W_ij and
 // of w dx, w dx dx^T, w T, w T dx with dx = (x_j - x_w) / h (scaled, so that the moments are O(1)).
+// w dx dx^T is symmetric: its upper triangle only, row by row (wxx[pair_index(a, b)], a <= b).
 template <int Dim>
 struct LinearFitSums {
+  static constexpr int kPairs = Dim * (Dim + 1) / 2;
+  // The place of w dx_a dx_b (a <= b) in wxx.
+  SPATE_HD static constexpr int pair_index(int a, int b) { return a * Dim - a * (a - 1) / 2 + (b - a); }
   float w = 0.0f, wt = 0.0f;
   float wx[Dim] = {}, wtx[Dim] = {};
-  float wxx[Dim][Dim] = {};
+  float wxx[kPairs] = {};
   float lowest = INFINITY, highest = -INFINITY;  // the neighbours' temperatures span [lowest, highest]
+  SPATE_HD float moment(int a, int b) const { return a <= b ? wxx[pair_index(a, b)] : wxx[pair_index(b, a)]; }
   SPATE_HD void add(float vw, const Vec<Dim>& dx, float t) {
     lowest = t < lowest ? t : lowest;
     highest = t > highest ? t : highest;
@@ -220,7 +225,7 @@ struct LinearFitSums {
     SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
       wx[a] += vw * dx[a];
       wtx[a] += vw * t * dx[a];
-      SPATE_UNROLL for (int b = 0; b < Dim; ++b) wxx[a][b] += vw * dx[a] * dx[b];
+      SPATE_UNROLL for (int b = a; b < Dim; ++b) wxx[pair_index(a, b)] += vw * dx[a] * dx[b];
     }
   }
 };
@@ -248,7 +253,7 @@ SPATE_HD Vec<Dim> fitted_gradient(const LinearFitSums<Dim>& s) {
   SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
     m[0][1 + a] = m[1 + a][0] = s.wx[a];
     m[1 + a][N] = s.wtx[a];
-    SPATE_UNROLL for (int b = 0; b < Dim; ++b) m[1 + a][1 + b] = s.wxx[a][b];
+    SPATE_UNROLL for (int b = 0; b < Dim; ++b) m[1 + a][1 + b] = s.moment(a, b);
   }
   for (int col = 0; col < N; ++col) {
     int pivot = col;

@@ -69,4 +69,25 @@ TEST(NeighbourSelect, RecordGatherDeliversTheSelectedFieldsInOrder) {
   }
 }
 
+// The pair gather (heat transfer's temperature and conductivity: eight pairs at a time with AVX2,
+// then one by one) hands each field of the selected pairs in the selection order.
+TEST(NeighbourSelect, PairGatherSplitsTheSelectedPairsInOrder) {
+  std::mt19937 rng(12);
+  std::vector<cpu::FieldPair> pairs(100);
+  for (std::size_t q = 0; q < pairs.size(); ++q) pairs[q] = {300.0f + static_cast<float>(q), 0.5f + 0.25f * static_cast<float>(q)};
+  std::uniform_int_distribution<std::uint32_t> pick(0, 99);
+  for (int count : {0, 1, 7, 8, 9, 16, 23, 64}) {
+    std::vector<std::uint32_t> index(count);
+    for (auto& q : index) q = pick(rng);
+    std::vector<float> a(count + 1, -1.0f), b(count + 1, -1.0f);
+    cpu::gather_pairs(pairs.data(), index.data(), count, a.data(), b.data());
+    for (int n = 0; n < count; ++n) {
+      ASSERT_EQ(a[n], pairs[index[n]].a) << "count " << count << ", n " << n;
+      ASSERT_EQ(b[n], pairs[index[n]].b) << "count " << count << ", n " << n;
+    }
+    EXPECT_EQ(a[count], -1.0f) << "wrote past the end";
+    EXPECT_EQ(b[count], -1.0f) << "wrote past the end";
+  }
+}
+
 }  // namespace spate

@@ -64,9 +64,10 @@ struct NeighbourBatch {
   std::vector<std::uint8_t> material;
   // Several fluids: each candidate's fluid mass, sound speed and viscosity (NeighbourFluid).
   std::vector<float> mass, c0, viscosity;
-  // Heat transfer: each candidate's temperature and conductivity (fused_heat), or temperature and
-  // volume (the wall state pass's mirrored temperatures).
-  std::vector<float> temperature, conductivity, volume;
+  // Heat transfer: each candidate's temperature and conductivity side by side (fused_heat), or
+  // temperature and volume (the wall state pass's mirrored temperatures).
+  std::vector<FieldPair> heat_pair;
+  std::vector<float> temperature, volume;
   // Neighbours of the current particle: candidate numbers, then the pair terms per neighbour.
   std::vector<std::uint32_t> index;
   std::vector<NeighbourRecord> record;
@@ -79,7 +80,7 @@ struct NeighbourBatch {
     rho.resize(n), p.resize(n), r2.resize(n), index.resize(n);
     material.resize(n);
     if (multiphase) mass.resize(n), c0.resize(n), viscosity.resize(n);
-    if (heat) temperature.resize(n), conductivity.resize(n), volume.resize(n);
+    if (heat) heat_pair.resize(n), temperature.resize(n), volume.resize(n);
   }
 };
 
@@ -106,6 +107,86 @@ inline void add_lanes(float (&scalar)[kLanes], const float (&tscalar)[kChunk], i
     for (int l = 0; l < kLanes; ++l) scalar[l] += tscalar[s + l];
   for (int l = 0; s + l < len; ++l) scalar[l] += tscalar[s + l];
 }
+// The same for F scalars at once (one loop, one tail, rather than one call per field).
+template <int F>
+inline void add_lanes(float (&lanes)[F][kLanes], const float (&terms)[F][kChunk], int len) {
+  int s = 0;
+  for (; s + kLanes <= len; s += kLanes)
+    for (int f = 0; f < F; ++f)
+      for (int l = 0; l < kLanes; ++l) lanes[f][l] += terms[f][s + l];
+  for (int l = 0; s + l < len; ++l)
+    for (int f = 0; f < F; ++f) lanes[f][l] += terms[f][s + l];
+}
+
+// Heat transfer's linear fit of the temperature around a wall particle behind a face
+// (LinearFitSums, heat_transfer.hpp) summed in lanes like the fluid sums: neighbour n's terms into
+// lane n mod kLanes of each field, the lanes added in lane order at the end (the same bits for any
+// split); beside them the range of the neighbours' temperatures and the neighbour nearest the
+// wall's mirror point (the first in the visiting order among equals, as wall_temperature_over).
+template <int Dim>
+struct FitLanes {
+  static constexpr int kFields = 2 + 2 * Dim + LinearFitSums<Dim>::kPairs;  // w, wt, wx, wtx, wxx
+  using Terms = float[kFields][kChunk];
+  float lane[kFields][kLanes];
+  float lowest, highest, nearest;
+  int near;  // the neighbour's number in the selection (-1: none)
+  void reset() {
+    for (auto& f : lane)
+      for (float& l : f) l = 0.0f;
+    lowest = INFINITY, highest = -INFINITY, nearest = INFINITY, near = -1;
+  }
+  // Neighbour s's terms (LinearFitSums::add's products, in its order): weight vw = V_j W_ij,
+  // temperature t, offset dx = (x_j - x_w) / h. Inside the vectorised loops.
+  static void terms(Terms& out, int s, float vw, float t, const float (&dx)[Dim]) {
+    out[0][s] = vw;
+    out[1][s] = vw * t;
+    SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
+      out[2 + a][s] = vw * dx[a];
+      out[2 + Dim + a][s] = vw * t * dx[a];
+      SPATE_UNROLL for (int b = a; b < Dim; ++b) out[2 + 2 * Dim + LinearFitSums<Dim>::pair_index(a, b)][s] = vw * dx[a] * dx[b];
+    }
+  }
+  // Neighbour n's offset dx = (x_j - x_w) / h and its squared distance to the mirror point
+  // (distance_squared's rounding), from a chunk's gathered positions. Inside the vectorised loops.
+  static float offsets(const float (&jx)[Dim][kChunk], int n, const Vec<Dim>& xw, const Vec<Dim>& mirror, float inv_h, float (&dx)[Dim]) {
+    float m2 = 0.0f;
+    SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
+      dx[k] = inv_h * (jx[k][n] - xw[k]);
+      const float d = mirror[k] - jx[k][n];
+      m2 += d * d;
+    }
+    return m2;
+  }
+  // A chunk of len neighbours from number s0 on: their terms, temperatures t and squared distances
+  // to the mirror point m2. The minima and maxima do not depend on the order (vectorised); the
+  // nearest is then found in order.
+  void add(const Terms& out, const float* t, const float* m2, int len, int s0) {
+    add_lanes<kFields>(lane, out, len);
+    float lo = lowest, hi = highest, chunk_nearest = INFINITY;
+    for (int s = 0; s < len; ++s) {
+      lo = t[s] < lo ? t[s] : lo;
+      hi = t[s] > hi ? t[s] : hi;
+      chunk_nearest = m2[s] < chunk_nearest ? m2[s] : chunk_nearest;
+    }
+    lowest = lo, highest = hi;
+    if (chunk_nearest < nearest) {
+      nearest = chunk_nearest;
+      int s = 0;
+      while (m2[s] != chunk_nearest) ++s;
+      near = s0 + s;
+    }
+  }
+  LinearFitSums<Dim> sums() const {
+    LinearFitSums<Dim> s;
+    s.lowest = lowest, s.highest = highest;
+    for (int l = 0; l < kLanes; ++l) {
+      s.w += lane[0][l], s.wt += lane[1][l];
+      SPATE_UNROLL for (int a = 0; a < Dim; ++a) s.wx[a] += lane[2 + a][l], s.wtx[a] += lane[2 + Dim + a][l];
+      SPATE_UNROLL for (int q = 0; q < LinearFitSums<Dim>::kPairs; ++q) s.wxx[q] += lane[2 + 2 * Dim + q][l];
+    }
+    return s;
+  }
+};
 
 // Heat: the fused conduction sum (fused_heat), in the pair terms' loop, from their radial factors.
 template <class Kernel, int Dim, bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann, bool Heat>
@@ -174,10 +255,8 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
             batch.mass[m + q] = f.mass, batch.c0[m + q] = f.c0, batch.viscosity[m + q] = f.viscosity;
           }
         }
-        if constexpr (Heat) {
-          std::copy_n(ps.temperature.data() + jb, len, batch.temperature.data() + m);
-          std::copy_n(ps.conductivity.data() + jb, len, batch.conductivity.data() + m);
-        }
+        if constexpr (Heat)
+          for (int q = 0; q < len; ++q) batch.heat_pair[m + q] = FieldPair{ps.temperature[jb + q], ps.conductivity[jb + q]};
         m += len;
       });
       for (std::uint32_t i = b; i < e; ++i) {
@@ -221,7 +300,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
             gather(batch.viscosity.data(), chunk, len, jmu);
           }
           [[maybe_unused]] float jt[Heat ? kChunk : 1], jk[Heat ? kChunk : 1];
-          if constexpr (Heat) gather(batch.temperature.data(), chunk, len, jt), gather(batch.conductivity.data(), chunk, len, jk);
+          if constexpr (Heat) gather_pairs(batch.heat_pair.data(), chunk, len, jt, jk);
           // The pair terms, one neighbour per vector lane. This loop is most of a step's flops and
           // must stay vectorised (GCC's report, checked by scripts/check-vectorisation): nothing
           // in the pair terms may branch, call a function without a vector variant (powf: the
@@ -302,8 +381,10 @@ void wall_temperature_from(const PhysicsParams& P, ParticleStore& ps, std::uint3
 // body update_wall_state() does.
 // Heat (heat transfer without solids that carry their own temperature): the carriers around a
 // wall particle are the fluid it selects, so the temperatures behind the tank faces are mirrored
-// here (wall_temperature_from) from the same selection; wall_temperature() then only sets the
-// other particles' conductivities.
+// here from the same selection; wall_temperature() then only sets the other particles'
+// conductivities. When the cell's fluid candidates are all of one material (one fluid: the usual
+// case) the fit's terms are computed in the wall terms' own loop, from its kernel values and
+// gathered positions and densities (FitLanes); otherwise wall_temperature_from runs after it.
 template <class Kernel, int Dim, bool Heat>
 void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsParams& params) {
   const PhysicsParams P = params;
@@ -348,47 +429,87 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
       gather(ps.density.data(), fluid.data(), m, crho);
       gather(ps.pressure.data(), fluid.data(), m, cp);
       [[maybe_unused]] CarrierArrays carriers{};
+      [[maybe_unused]] bool one_material = true;
+      [[maybe_unused]] float fit_mass = 0.0f;  // one material: its particles' mass (heat_volume)
       if constexpr (Heat) {
         for (int q = 0; q < m; ++q) {
           const std::uint32_t j = fluid[q];
           batch.temperature[q] = ps.temperature[j], batch.volume[q] = heat_volume(P, ps, j), batch.material[q] = ps.material[j];
+          one_material &= batch.material[q] == batch.material[0];
         }
+        if (m > 0) fit_mass = P.materials.of(batch.material[0]).mass;
         carriers = CarrierArrays{cx, cr2, batch.temperature.data(), batch.volume.data(), batch.material.data(), fluid.data()};
       }
+      [[maybe_unused]] FitLanes<Dim> fit;
       for (std::uint32_t w = b; w < e; ++w) {
         if (P.is_fluid(ps.material[w])) continue;
         const Vec<Dim> xw = load_vec<Dim>(ps.pos, w);
         candidate_distances<Dim>(xw, cx, m, cr2);
         const int count = select_inside(cr2, m, P.support2, index);
+        [[maybe_unused]] ThermalFace face;
+        [[maybe_unused]] ThermalCondition condition{};
+        [[maybe_unused]] bool mirrors = false;
+        if constexpr (Heat) mirrors = wall_temperature_needs_neighbours(P, ps, w, face, condition);
+        // The fit in this pass's loop (Heat: behind a face with a condition, one material around).
+        [[maybe_unused]] const bool fused = Heat && mirrors && one_material && count > 0;
+        [[maybe_unused]] Vec<Dim> mirror{};
+        if (fused) mirror = wall_mirror_point<Dim>(ps, w, face), fit.reset();
         WallSums<Dim> sums;
-        for (int s0 = 0; s0 < count; s0 += kChunk) {
-          const int len = std::min(kChunk, count - s0);
-          const std::uint32_t* chunk = index + s0;
-          float jx[Dim][kChunk], jv[Dim][kChunk], jrho[kChunk], jp[kChunk];
-          SPATE_UNROLL for (int k = 0; k < Dim; ++k) gather(cx[k], chunk, len, jx[k]), gather(cv[k], chunk, len, jv[k]);
-          gather(crho, chunk, len, jrho);
-          gather(cp, chunk, len, jp);
-          // Each neighbour's terms, one per vector lane (they must stay vectorised, like the fluid
-          // pair terms: scripts/check-vectorisation), then added up in the visiting order.
-          float tw[kChunk], tpw[kChunk], trr[Dim][kChunk], tvw[Dim][kChunk];
-          for (int n = 0; n < len; ++n) {  // must vectorise: wall-pair-terms
-            ParticleState<Dim> sj;
-            SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.x[k] = jx[k][n], sj.v[k] = jv[k][n];
-            sj.rho = jrho[n];
-            sj.p = jp[n];
-            sj.material = 0;  // a fluid (the wall sums do not look at it)
-            const WallSums<Dim> t = wall_pair_terms<Kernel, Dim>(P, xw, sj);
-            tw[n] = t.w;
-            tpw[n] = t.pw;
-            SPATE_UNROLL for (int k = 0; k < Dim; ++k) trr[k][n] = t.rho_r_w[k], tvw[k][n] = t.v_w[k];
+        auto sum_chunks = [&]<bool Fit>() {
+          // The candidate arrays as locals of the loop (read through the closure, GCC left the
+          // gathers of the passes with heat scalar: scripts/check-vectorisation).
+          const float* lx[Dim];
+          const float* lv[Dim];
+          SPATE_UNROLL for (int k = 0; k < Dim; ++k) lx[k] = cx[k], lv[k] = cv[k];
+          const float *lrho = crho, *lp = cp, *lt = batch.temperature.data();
+          const std::uint32_t* lindex = index;
+          for (int s0 = 0; s0 < count; s0 += kChunk) {
+            const int len = std::min(kChunk, count - s0);
+            const std::uint32_t* chunk = lindex + s0;
+            float jx[Dim][kChunk], jv[Dim][kChunk], jrho[kChunk], jp[kChunk];
+            SPATE_UNROLL for (int k = 0; k < Dim; ++k) gather(lx[k], chunk, len, jx[k]), gather(lv[k], chunk, len, jv[k]);
+            gather(lrho, chunk, len, jrho);
+            gather(lp, chunk, len, jp);
+            [[maybe_unused]] float jt[Fit ? kChunk : 1], jm2[Fit ? kChunk : 1];
+            [[maybe_unused]] float fit_terms[Fit ? FitLanes<Dim>::kFields : 1][Fit ? kChunk : 1];
+            if constexpr (Fit) gather(lt, chunk, len, jt);
+            // Each neighbour's terms, one per vector lane (they must stay vectorised, like the
+            // fluid pair terms: scripts/check-vectorisation), then added up in the visiting order;
+            // with the fit, its terms (the weight V_j W_ij from this loop's kernel value and the
+            // neighbour's density: wall_temperature_over's fit_weight and heat_volume) and the
+            // squared distance to the mirror point (distance_squared's rounding).
+            float tw[kChunk], tpw[kChunk], trr[Dim][kChunk], tvw[Dim][kChunk];
+            for (int n = 0; n < len; ++n) {  // must vectorise: wall-pair-terms
+              ParticleState<Dim> sj;
+              SPATE_UNROLL for (int k = 0; k < Dim; ++k) sj.x[k] = jx[k][n], sj.v[k] = jv[k][n];
+              sj.rho = jrho[n];
+              sj.p = jp[n];
+              sj.material = 0;  // a fluid (the wall sums do not look at it)
+              const WallSums<Dim> t = wall_pair_terms<Kernel, Dim>(P, xw, sj);
+              tw[n] = t.w;
+              tpw[n] = t.pw;
+              SPATE_UNROLL for (int k = 0; k < Dim; ++k) trr[k][n] = t.rho_r_w[k], tvw[k][n] = t.v_w[k];
+              if constexpr (Fit) {
+                float dx[Dim];
+                jm2[n] = FitLanes<Dim>::offsets(jx, n, xw, mirror, P.inv_h, dx);
+                FitLanes<Dim>::terms(fit_terms, n, heat_volume(true, fit_mass, jrho[n], 0.0f) * t.w, jt[n], dx);
+              }
+            }
+            for (int n = 0; n < len; ++n) {
+              WallSums<Dim> t;
+              t.w = tw[n];
+              t.pw = tpw[n];
+              SPATE_UNROLL for (int k = 0; k < Dim; ++k) t.rho_r_w[k] = trr[k][n], t.v_w[k] = tvw[k][n];
+              add_wall_pair(sums, t);
+            }
+            if constexpr (Fit) fit.add(fit_terms, jt, jm2, len, s0);
           }
-          for (int n = 0; n < len; ++n) {
-            WallSums<Dim> t;
-            t.w = tw[n];
-            t.pw = tpw[n];
-            SPATE_UNROLL for (int k = 0; k < Dim; ++k) t.rho_r_w[k] = trr[k][n], t.v_w[k] = tvw[k][n];
-            add_wall_pair(sums, t);
-          }
+        };
+        if constexpr (Heat) {
+          if (fused) sum_chunks.template operator()<true>();
+          else sum_chunks.template operator()<false>();
+        } else {
+          sum_chunks.template operator()<false>();
         }
         WallState<Dim> st = finish_wall(P, sums, ps.material[w], xw);
         apply_wall_shear<Dim>(P, ps, w, xw, sums, st);
@@ -396,10 +517,12 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
         ps.density[w] = st.rho;
         SPATE_UNROLL for (int k = 0; k < Dim; ++k) ps.vel[k][w] = st.v[k];
         if constexpr (Heat) {
-          ThermalFace face;
-          ThermalCondition condition;
-          if (wall_temperature_needs_neighbours(P, ps, w, face, condition))
+          if (fused) {
+            const std::uint32_t near = index[fit.near];
+            finish_wall_temperature<Dim>(P, ps, w, face, condition, fit.sums(), fluid[near], batch.material[near]);
+          } else if (mirrors) {
             wall_temperature_from<Kernel, Dim>(P, ps, w, face, condition, carriers, index, count);
+          }
         }
       }
     }

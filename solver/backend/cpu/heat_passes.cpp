@@ -13,10 +13,6 @@ namespace spate::cpu {
 
 namespace {
 
-template <int Dim>
-struct FitLanes {
-  float w[kLanes] = {}, wt[kLanes] = {}, wx[Dim][kLanes] = {}, wtx[Dim][kLanes] = {}, wxx[Dim][Dim][kLanes] = {};
-};
 template <class Kernel, int Dim>
 void wall_temperature_from(const PhysicsParams& P, ParticleStore& ps, std::uint32_t w, const ThermalFace& face,
                            ThermalCondition condition, const CarrierArrays& c, const std::uint32_t* inside, int n) {
@@ -31,10 +27,8 @@ void wall_temperature_from(const PhysicsParams& P, ParticleStore& ps, std::uint3
   }
   const Vec<Dim> xw = load_vec<Dim>(ps.pos, w);
   const Vec<Dim> mirror = wall_mirror_point<Dim>(ps, w, face);
-  FitLanes<Dim> lanes;
-  LinearFitSums<Dim> sums;
-  float nearest = INFINITY;
-  int near = -1;
+  FitLanes<Dim> fit;
+  fit.reset();
   for (int s0 = 0; s0 < n; s0 += kChunk) {
     const int len = std::min(kChunk, n - s0);
     const std::uint32_t* chunk = inside + s0;
@@ -45,56 +39,17 @@ void wall_temperature_from(const PhysicsParams& P, ParticleStore& ps, std::uint3
     gather(c.volume, chunk, len, jv);
     // LinearFitSums::add's terms and the distance to the mirror point (distance_squared's
     // rounding), one neighbour per vector lane (scripts/check-vectorisation).
-    float tw[kChunk], twt[kChunk], twx[Dim][kChunk], twtx[Dim][kChunk], twxx[Dim][Dim][kChunk], tm[kChunk];
+    typename FitLanes<Dim>::Terms terms;
+    float jm2[kChunk];
     for (int s = 0; s < len; ++s) {  // must vectorise: wall-fit-terms
-      const float vw = fit_weight<Kernel>(P, jv[s], jr2[s]);
-      const float t = jt[s];
       float dx[Dim];
-      float rm = 0.0f;
-      SPATE_UNROLL for (int k = 0; k < Dim; ++k) {
-        dx[k] = P.inv_h * (jx[k][s] - xw[k]);
-        const float d = mirror[k] - jx[k][s];
-        rm += d * d;
-      }
-      tw[s] = vw;
-      twt[s] = vw * t;
-      SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
-        twx[a][s] = vw * dx[a];
-        twtx[a][s] = vw * t * dx[a];
-        SPATE_UNROLL for (int b = 0; b < Dim; ++b) twxx[a][b][s] = vw * dx[a] * dx[b];
-      }
-      tm[s] = rm;
+      jm2[s] = FitLanes<Dim>::offsets(jx, s, xw, mirror, P.inv_h, dx);
+      FitLanes<Dim>::terms(terms, s, fit_weight<Kernel>(P, jv[s], jr2[s]), jt[s], dx);
     }
-    add_lanes(lanes.w, tw, len), add_lanes(lanes.wt, twt, len);
-    SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
-      add_lanes(lanes.wx[a], twx[a], len), add_lanes(lanes.wtx[a], twtx[a], len);
-      SPATE_UNROLL for (int b = 0; b < Dim; ++b) add_lanes(lanes.wxx[a][b], twxx[a][b], len);
-    }
-    // The range of the temperatures and the nearest to the mirror point: minima and maxima, which
-    // do not depend on the order (vectorised), then the first neighbour at the nearest distance
-    // (the first in the visiting order among equals, as wall_temperature_over).
-    float lo = sums.lowest, hi = sums.highest, chunk_nearest = INFINITY;
-    for (int s = 0; s < len; ++s) {
-      lo = jt[s] < lo ? jt[s] : lo;
-      hi = jt[s] > hi ? jt[s] : hi;
-      chunk_nearest = tm[s] < chunk_nearest ? tm[s] : chunk_nearest;
-    }
-    sums.lowest = lo, sums.highest = hi;
-    if (chunk_nearest < nearest) {
-      nearest = chunk_nearest;
-      int s = 0;
-      while (tm[s] != chunk_nearest) ++s;
-      near = s0 + s;
-    }
+    fit.add(terms, jt, jm2, len, s0);
   }
-  for (int l = 0; l < kLanes; ++l) {
-    sums.w += lanes.w[l], sums.wt += lanes.wt[l];
-    SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
-      sums.wx[a] += lanes.wx[a][l], sums.wtx[a] += lanes.wtx[a][l];
-      SPATE_UNROLL for (int b = 0; b < Dim; ++b) sums.wxx[a][b] += lanes.wxx[a][b][l];
-    }
-  }
-  finish_wall_temperature<Dim>(P, ps, w, face, condition, sums, c.carrier[inside[near]], c.material[inside[near]]);
+  const std::uint32_t near = inside[fit.near];
+  finish_wall_temperature<Dim>(P, ps, w, face, condition, fit.sums(), c.carrier[near], c.material[near]);
 }
 
 }  // namespace
