@@ -85,24 +85,27 @@ struct HostLanes {
 };
 
 // The sums of particle i (at xi, in cell g) over its neighbours, in the lane order above, on a team
-// of kPairLanes lanes: add(j, sums) adds neighbour j's terms to a lane's partial sums. The
+// of kPairLanes lanes: add(j, n, sums) adds neighbour j (its number n) to a lane's partial sums.
+// The neighbours are the particles inside the support that `takes` accepts (every one, for the
+// fluid and SPS passes; the wall temperatures take only the carriers of a temperature). The
 // candidates are tested kPairLanes at a time (one per lane) and the in-support ones dealt to the
 // lanes in order; a lane holds its dealt neighbour until every lane holds one (a batch: neighbours
 // 16 b to 16 b + 15), and then all lanes run their terms together, so the terms run on full lanes
 // however few candidates are inside (about 1 in 6 in 3D; 1 in 3 at h = 2 dp) but for the last
 // batch. Each lane still adds its neighbours in increasing number, so the sums are the CPU's.
 // The total is the team leader's (the other members' is partial).
-template <int Dim, class Sums, class Team, class Fields, class Add>
-SPATE_HD Sums sum_neighbours_in_lanes(const PhysicsParams& P, const CellGridView& v, const Fields& f, const Vec<Dim>& xi, const int g[3],
-                                      const Team& team, Add&& add) {
+template <int Dim, class Sums, class Team, class Fields, class Takes, class Add>
+SPATE_HD Sums sum_taken_in_lanes(const PhysicsParams& P, const CellGridView& v, const Fields& f, const Vec<Dim>& xi, const int g[3],
+                                 const Team& team, Takes&& takes, Add&& add) {
   constexpr std::uint32_t kNone = 0xffffffffu;
   Sums held[Team::kHeld];
   std::uint32_t pending[Team::kHeld];  // per lane: the neighbour dealt to it and not yet added
-  team.for_each_lane([&](int, int slot) { pending[slot] = kNone; });
+  unsigned number[Team::kHeld];        // and its number
+  team.for_each_lane([&](int, int slot) { pending[slot] = kNone, number[slot] = 0; });
   const auto add_pending = [&]() {
     team.for_each_lane([&](int, int slot) {
       if (pending[slot] == kNone) return;
-      add(pending[slot], held[slot]);
+      add(pending[slot], number[slot], held[slot]);
       pending[slot] = kNone;
     });
   };
@@ -111,7 +114,7 @@ SPATE_HD Sums sum_neighbours_in_lanes(const PhysicsParams& P, const CellGridView
     for (std::uint32_t c0 = jb; c0 < je; c0 += kPairLanes) {
       const unsigned inside = team.ballot([&](int lane) {
         const std::uint32_t j = c0 + static_cast<std::uint32_t>(lane);
-        return j < je && distance_squared<Dim>(xi, f.pos, j) < P.support2;
+        return j < je && takes(j) && distance_squared<Dim>(xi, f.pos, j) < P.support2;
       });
       const unsigned count = lane_popcount(inside);
       const unsigned open = kPairLanes - dealt % kPairLanes;  // numbers left in the open batch
@@ -120,7 +123,10 @@ SPATE_HD Sums sum_neighbours_in_lanes(const PhysicsParams& P, const CellGridView
       const auto deal = [&](bool completing) {
         team.for_each_lane([&](int lane, int slot) {
           const int q = lane_candidate(inside, dealt, lane);
-          if (q >= 0 && (lane_rank(dealt, lane) < open) == completing) pending[slot] = c0 + static_cast<std::uint32_t>(q);
+          if (q >= 0 && (lane_rank(dealt, lane) < open) == completing) {
+            pending[slot] = c0 + static_cast<std::uint32_t>(q);
+            number[slot] = dealt + lane_rank(dealt, lane);
+          }
         });
       };
       deal(true);
@@ -133,6 +139,26 @@ SPATE_HD Sums sum_neighbours_in_lanes(const PhysicsParams& P, const CellGridView
   });
   add_pending();
   return team.sum_in_lane_order(held);
+}
+// The same over every particle inside the support, add(j, sums).
+template <int Dim, class Sums, class Team, class Fields, class Add>
+SPATE_HD Sums sum_neighbours_in_lanes(const PhysicsParams& P, const CellGridView& v, const Fields& f, const Vec<Dim>& xi, const int g[3],
+                                      const Team& team, Add&& add) {
+  return sum_taken_in_lanes<Dim, Sums>(
+      P, v, f, xi, g, team, [](std::uint32_t) { return true; }, [&](std::uint32_t j, unsigned, Sums& sums) { add(j, sums); });
+}
+
+// The fluid pass's sums and, with heat transfer's fused conduction (fused_heat), the conduction
+// sum beside them (the CPU's fluid pass sums it in the same lanes).
+template <int Dim>
+struct FluidHeatRates {
+  FluidRates<Dim> rates;
+  float conduction = 0.0f;
+};
+template <int Dim>
+SPATE_HD void add_lane_sums(FluidHeatRates<Dim>& total, const FluidHeatRates<Dim>& x) {
+  add_pair_rates(total.rates, x.rates);
+  total.conduction += x.conduction;
 }
 
 // update_fluid_rates (particle_updates.hpp) with its sums in the lane order above (the CPU's fluid
@@ -147,10 +173,71 @@ SPATE_HD void update_fluid_rates_in_lanes(const PhysicsParams& P, const CellGrid
   const ParticleState<Dim> si = load_state<Dim>(f, i);
   const FluidMaterial& M = P.materials.of(si.material);
   const float mu_i = Multiphase ? particle_viscosity(P, f, i) : M.viscosity;
-  FluidRates<Dim> rates = sum_neighbours_in_lanes<Dim, FluidRates<Dim>>(P, v, f, si.x, g, team, [&](std::uint32_t j, FluidRates<Dim>& sums) {
-    add_fluid_neighbour<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, M, si, mu_i, f, j, sums);
+  // Heat transfer: the conduction sum over the same neighbours (heat_pair_term: the terms the CPU's
+  // fused loop adds, from the same radial factors), then the rate and buoyancy as the CPU's.
+  const bool heat = fused_heat(P);
+  const ThermalMaterial& Mi = P.heat.material(si.material);
+  const float ti = heat ? f.temperature[i] : 0.0f;
+  const auto sums = sum_neighbours_in_lanes<Dim, FluidHeatRates<Dim>>(P, v, f, si.x, g, team, [&](std::uint32_t j, FluidHeatRates<Dim>& s) {
+    add_fluid_neighbour<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, M, si, mu_i, f, j, s.rates);
+    if (heat) s.conduction += heat_pair_term<Kernel, Dim>(P, f, Mi, si.x, ti, j);
   });
-  if (team.leader()) store_fluid_rates<Dim>(P, M, si, f, i, rates);
+  if (!team.leader()) return;
+  FluidRates<Dim> rates = sums.rates;
+  store_fluid_rates<Dim>(P, M, si, f, i, rates);
+  if (heat) finish_heat_rates<Dim>(P, f, i, sums.conduction);
+}
+
+// Heat transfer's wall pass (update_wall_temperature) in the lane order of the CPU's (FitLanes,
+// cpu/fluid_pass.hpp): behind a tank face with a condition, the carriers of a temperature inside
+// w's support (carries_temperature), carrier n into lane n mod kPairLanes of the linear fit's sums
+// (LinearFitSums::add's products, the lanes merged in order); the carrier nearest the mirror point
+// the first in the visiting order among equals (each lane keeps its first nearest and its number,
+// the merge the nearer or, at equal distance, the earlier). Carriers of more than one material:
+// the sequential fits of wall_temperature_over, as the CPU runs them then.
+template <int Dim>
+struct LaneFit {
+  LinearFitSums<Dim> fit;
+  float nearest = INFINITY;      // squared distance of the carrier nearest the mirror point
+  unsigned number = 0xffffffffu;  // its number among the carriers
+  std::uint32_t carrier = 0;
+  int material = -1;  // the carriers' material (-1: none yet)
+  int mixed = 0;      // 1: carriers of more than one material
+};
+template <int Dim>
+SPATE_HD void add_lane_sums(LaneFit<Dim>& total, const LaneFit<Dim>& x) {
+  total.fit.merge(x.fit);
+  if (x.nearest < total.nearest || (x.nearest == total.nearest && x.number < total.number))
+    total.nearest = x.nearest, total.number = x.number, total.carrier = x.carrier;
+  if (total.material < 0) total.material = x.material;
+  total.mixed |= x.mixed | (x.material >= 0 && x.material != total.material ? 1 : 0);
+}
+template <class Kernel, int Dim, class Team, class Fields>
+SPATE_HD void update_wall_temperature_in_lanes(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t w, const int g[3],
+                                               const Team& team) {
+  if (!mirrors_temperature(P, f, w)) {  // only its conductivity: no neighbours
+    if (team.leader()) update_wall_temperature<Kernel, Dim>(P, v, f, w, g);
+    return;
+  }
+  ThermalFace face;
+  ThermalCondition c;
+  wall_temperature_needs_neighbours(P, f, w, face, c);
+  const Vec<Dim> xw = load_vec<Dim>(f.pos, w);
+  const Vec<Dim> mirror = wall_mirror_point<Dim>(f, w, face);
+  const LaneFit<Dim> s = sum_taken_in_lanes<Dim, LaneFit<Dim>>(
+      P, v, f, xw, g, team, [&](std::uint32_t j) { return carries_temperature(P, f, j); },
+      [&](std::uint32_t j, unsigned n, LaneFit<Dim>& l) {
+        const Vec<Dim> dx = load_vec<Dim>(f.pos, j) - xw;
+        l.fit.add(fit_weight<Kernel>(P, heat_volume(P, f, j), dot(dx, dx)), P.inv_h * dx, f.temperature[j]);
+        const float m2 = distance_squared<Dim>(mirror, f.pos, j);
+        if (m2 < l.nearest) l.nearest = m2, l.number = n, l.carrier = j;
+        const int m = f.material[j];
+        if (l.material < 0) l.material = m;
+        else if (m != l.material) l.mixed = 1;
+      });
+  if (!team.leader()) return;
+  if (s.mixed) return update_wall_temperature<Kernel, Dim>(P, v, f, w, g);
+  finish_wall_temperature<Dim>(P, f, w, face, c, s.fit, s.carrier, s.material);
 }
 
 // SPS turbulence, pass 1 (update_sps_stress) in the lane order: the velocity gradient over the

@@ -501,6 +501,13 @@ SPATE_HD void finish_heat_rates(const PhysicsParams& P, Fields& f, std::uint32_t
   }
 }
 
+// Heat transfer's conduction sum of a fluid particle runs inside the fluid pass's neighbour loop,
+// over the neighbours it selects anyway and in its lane order (the CPU's batched pass,
+// fluid_rates_batched with Heat; the GPU's half-warp pass, update_fluid_rates_in_lanes); the heat
+// pass is then left with the walls and solids that conduct. Not with particle shifting, whose
+// temperature gradient the heat pass computes beside the sum.
+SPATE_HD bool fused_heat(const PhysicsParams& P) { return P.heat.on && !P.shifting.enabled; }
+
 template <class Kernel, int Dim, class Fields>
 SPATE_HD void update_heat_rates(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
   ThermalFace face;

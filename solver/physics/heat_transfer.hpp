@@ -228,6 +228,15 @@ struct LinearFitSums {
       SPATE_UNROLL for (int b = a; b < Dim; ++b) wxx[pair_index(a, b)] += vw * dx[a] * dx[b];
     }
   }
+  // Another partial fit's sums added to these (lanes added in lane order: pair_lanes.hpp).
+  SPATE_HD void merge(const LinearFitSums& x) {
+    lowest = x.lowest < lowest ? x.lowest : lowest;
+    highest = x.highest > highest ? x.highest : highest;
+    w += x.w;
+    wt += x.wt;
+    SPATE_UNROLL for (int a = 0; a < Dim; ++a) wx[a] += x.wx[a], wtx[a] += x.wtx[a];
+    SPATE_UNROLL for (int q = 0; q < kPairs; ++q) wxx[q] += x.wxx[q];
+  }
 };
 
 // The mirror temperature: t_near (the temperature of the neighbour nearest the mirror point) carried

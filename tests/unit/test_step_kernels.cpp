@@ -142,6 +142,18 @@ class GpuOrderKernels final : public ResidentKernels {
       add_sps_acceleration<Kernel, Dim>(P, v, p, i, g);
     });
   }
+  // Heat transfer as the CUDA kernels' per-thread loop runs it: every wall temperature's fit and
+  // every particle's conduction sum in visiting order (the CPU's: in lanes, fused into its passes).
+  void wall_temperature(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    per_owned_particle(P, [&]<class Kernel, int Dim>(const CellGridView& v, ParticleStore& p, std::uint32_t i, const int g[3]) {
+      update_wall_temperature<Kernel, Dim>(P, v, p, i, g);
+    });
+  }
+  void heat_rates(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    per_owned_particle(P, [&]<class Kernel, int Dim>(const CellGridView& v, ParticleStore& p, std::uint32_t i, const int g[3]) {
+      update_heat_rates<Kernel, Dim>(P, v, p, i, g);
+    });
+  }
 };
 
 // The GPU's half-warp schedule on the CPU: the resident path with the fluid pass run as the CUDA
@@ -175,6 +187,13 @@ class HostLaneKernels final : public ResidentKernels {
   void wall_state(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
     per_owned_particle(P, [&]<class Kernel, int Dim>(const CellGridView& v, ParticleStore& p, std::uint32_t i, const int g[3]) {
       update_wall_state<Kernel, Dim>(P, v, p, i, g);
+    });
+  }
+  // Heat transfer: the wall temperatures' fits on half-warps (the fluid particles' conduction is in
+  // the fluid pass above; the CPU's heat pass, inherited, is left with the walls that conduct).
+  void wall_temperature(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    per_owned_particle(P, [&]<class Kernel, int Dim>(const CellGridView& v, ParticleStore& p, std::uint32_t i, const int g[3]) {
+      update_wall_temperature_in_lanes<Kernel, Dim>(P, v, p, i, g, HostLanes{});
     });
   }
 };
@@ -303,6 +322,18 @@ std::vector<CheckedCase> gpu_checked_cases() {
       // A free-slip disc turning (surface-following wall particles whose normals turn with it).
       {"turning_disc", load("turning_disc_2d.yaml", {"probes=[]", "solids=[{name: disc, disc: {centre: [0.15, 0.13], radius: 0.08}, "
                                                      "wall_particles: surface, free_slip: true, motion: {rotation: 30, period: 0.5}}]"}), 300},
+      // Heat transfer: buoyant convection between a hot and a cold face (the fluid pass's fused
+      // conduction, the wall temperatures behind the faces mirrored from the fluid) ...
+      {"heated_cavity", load("heated_cavity_2d.yaml", {"probes=[]", "fluid.thermal.expansion=2.6295e-3"}), 100},
+      // ... a surge over a heated floor past an adiabatic end wall (water sliding along the faces,
+      // so that the fit's gradient carries the nearest particle's temperature to the mirror point) ...
+      {"heated_floor", load("dam_break_2d.yaml", {"heat.initial_temperature=300", "fluid.thermal={conductivity: 50, specific_heat: 4186}",
+                                                  "tank.thermal.faces={y-: {temperature: 330}, x-: {heat_flux: 20000}}"}), 200},
+      // ... and conjugate conduction into a solid that carries its own temperature (the walls'
+      // fits over fluid and solid carriers, the solid's own conduction in the heat pass), under
+      // gravity: the still case's field varies along x alone and its sums came out the same in
+      // either order, which would test nothing.
+      {"conduction", load("conduction_2d.yaml", {"probes=[]", "gravity=[0, -9.81]", "fluid.sound_speed=10"}), 100},
   };
 }
 

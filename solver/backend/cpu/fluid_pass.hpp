@@ -21,12 +21,6 @@
 
 namespace spate::cpu {
 
-// Heat transfer's conduction sum of a fluid particle runs inside the fluid pass's neighbour loop
-// (fluid_rates_batched with Heat), over the neighbours it has selected anyway and from the fluid
-// pair terms' radial factors; the heat pass is then left with the walls and solids that conduct.
-// Not with particle shifting, whose temperature gradient the heat pass computes beside the sum.
-inline bool fused_heat(const PhysicsParams& P) { return P.heat.on && !P.shifting.enabled; }
-
 // Whether the wall state pass mirrors the temperatures behind the tank faces (wall_state_batched
 // with Heat): heat transfer without a solid that carries its own temperature.
 inline bool wall_state_mirrors_temperature(const PhysicsParams& P) { return P.heat.on && !solids_carry_temperature(P); }

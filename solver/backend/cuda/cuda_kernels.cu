@@ -124,9 +124,11 @@ struct WallTemperaturePass {
     update_wall_temperature<Kernel, Dim>(P, v, d, i, g);
   }
 };
+// `fused`: the fluid particles' conduction was summed by the half-warp fluid pass (fused_heat).
 struct HeatRatesPass {
   template <class Kernel, int Dim>
-  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3], bool fused) {
+    if (fused && P.is_fluid(d.material[i])) return;
     update_heat_rates<Kernel, Dim>(P, v, d, i, g);
   }
 };
@@ -180,6 +182,12 @@ struct FluidRatesLanes {
   template <class Kernel, int Dim>
   __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3], const HalfWarp& t) {
     update_fluid_rates_in_lanes<Kernel, Dim, Gamma7, Multiphase, MovingWalls, Riemann>(P, v, d, i, g, t);
+  }
+};
+struct WallTemperatureLanes {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3], const HalfWarp& t) {
+    update_wall_temperature_in_lanes<Kernel, Dim>(P, v, d, i, g, t);
   }
 };
 struct SpsStressLanes {
@@ -301,11 +309,17 @@ class CudaKernels final : public StepKernels {
   void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
     neighbour_pass<ShiftingPass>(P, ParticleRange{0, owned()}, dt);
   }
+  // Heat transfer in the CPU's lane order (pair_lanes.hpp): the wall temperatures' fits on
+  // half-warps; the fluid particles' conduction summed by the half-warp fluid pass, so that the heat
+  // pass is left with the walls and solids that conduct (as the CPU's, cpu_backend.cpp).
   void wall_temperature(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
-    neighbour_pass<WallTemperaturePass>(P, ParticleRange{0, owned()});
+    if (per_thread_pair_loop_) neighbour_pass<WallTemperaturePass>(P, ParticleRange{0, owned()});
+    else lanes_pass<WallTemperatureLanes>(P, ParticleRange{0, owned()});
   }
   void heat_rates(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
-    neighbour_pass<HeatRatesPass>(P, ParticleRange{0, owned()});
+    const bool fused = !per_thread_pair_loop_ && fused_heat(P);
+    if (fused && !P.heat.walls_conduct) return;  // the walls' rates stay 0 (update_heat_rates' value)
+    neighbour_pass<HeatRatesPass>(P, ParticleRange{0, owned()}, fused);
   }
   float min_time_step(const ParticleStore&, const PhysicsParams& P, const TimeStepControl& c) override {
     arrays_.select();
