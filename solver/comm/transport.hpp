@@ -5,10 +5,13 @@
 //
 // Slabs are numbered globally left to right along x; slab s has neighbours s-1 and s+1 (wrapping
 // around when x is periodic, possibly to itself).
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -49,6 +52,20 @@ class SlabTransport {
   virtual void sum(std::vector<std::int64_t>& v) = 0;
   // Every slab's buffer, in slab order, on every slab.
   virtual std::vector<Bytes> allgather(const Bytes& mine) = 0;
+  // Every slab's value of a plain type (its bytes), in slab order, on every slab.
+  template <class T>
+  std::vector<T> allgather_value(const T& mine) {
+    static_assert(std::is_trivially_copyable_v<T>, "allgather_value sends a value's bytes");
+    Bytes b(sizeof mine);
+    std::memcpy(b.data(), &mine, sizeof mine);
+    std::vector<T> all;
+    for (const Bytes& part : allgather(b)) {
+      T v{};
+      std::memcpy(&v, part.data(), std::min(sizeof v, part.size()));
+      all.push_back(v);
+    }
+    return all;
+  }
   // Every slab's buffer, in slab order, on slab 0 only (the others get an empty list). For the big
   // gathers (checkpoints): only the writer holds everything, and `mine` is moved, not copied.
   virtual std::vector<Bytes> gather(Bytes mine) = 0;

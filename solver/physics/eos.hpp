@@ -23,31 +23,39 @@ SPATE_HD float pow7(float x) {
 // x^gamma with the exact product for the usual gamma = 7.
 SPATE_HD float tait_power(float x, float gamma) { return gamma == 7.0f ? pow7(x) : powf(x, gamma); }
 
+// A float's bits as an integer, and back (the same on the host and the device).
+SPATE_HD std::int32_t float_bits(float x) {
+#if defined(__CUDA_ARCH__)
+  return __float_as_int(x);
+#else
+  std::int32_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  return bits;
+#endif
+}
+SPATE_HD float bits_float(std::int32_t bits) {
+#if defined(__CUDA_ARCH__)
+  return __int_as_float(bits);
+#else
+  float x;
+  std::memcpy(&x, &bits, sizeof x);
+  return x;
+#endif
+}
+
 // x^(1/7) for the usual gamma = 7, from + - * / alone (each IEEE-rounded on the CPU and the GPU),
 // so that both round it to the same bits: powf's last bit differs between glibc and CUDA's
 // library, and the wall state (tait_density with fluid.portable_eos) runs every step. NaN below
 // 0, as powf.
 SPATE_HD float seventh_root(float x) {
-  if (x == 0.0f || !(x < std::numeric_limits<float>::infinity())) return x > 0.0f || x == 0.0f ? x : std::numeric_limits<float>::quiet_NaN();
-  if (!(x > 0.0f)) return std::numeric_limits<float>::quiet_NaN();
+  if (!(x >= 0.0f)) return std::numeric_limits<float>::quiet_NaN();      // below 0, -inf, NaN
+  if (x == 0.0f || x == std::numeric_limits<float>::infinity()) return x;  // 0 and +inf are their own root
   // The start: the exponent divided by 7 on the float's bits (a few percent off); then Newton's
   // iteration y <- (6 y + x / y^6) / 7 in double precision, five times (the relative error goes
   // 5e-2, 8e-3, 2e-4, 1e-7, 2e-14, rounding), rounded once to float: the correctly rounded root but
   // where it lies within about 1e-7 ulp of a rounding boundary.
-  std::int32_t bits;
-#if defined(__CUDA_ARCH__)
-  bits = __float_as_int(x);
-#else
-  std::memcpy(&bits, &x, sizeof bits);
-#endif
-  bits = (bits - 0x3f800000) / 7 + 0x3f800000;
-  float start;
-#if defined(__CUDA_ARCH__)
-  start = __int_as_float(bits);
-#else
-  std::memcpy(&start, &bits, sizeof start);
-#endif
-  double y = start;
+  const std::int32_t bits = (float_bits(x) - 0x3f800000) / 7 + 0x3f800000;
+  double y = bits_float(bits);
   const double xd = x;
   for (int n = 0; n < 5; ++n) {
     const double y2 = y * y;

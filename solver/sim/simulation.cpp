@@ -556,29 +556,9 @@ class Worker {
     }
     record_progress();
     const auto counts = w_.slab_particle_counts();
-    std::vector<double> busy;
-    {
-      const double mine = w_.busy_seconds();
-      Bytes b(sizeof mine);
-      std::memcpy(b.data(), &mine, sizeof mine);
-      for (auto& part : t_.allgather(b)) {
-        double v = 0.0;
-        std::memcpy(&v, part.data(), std::min(sizeof v, part.size()));
-        busy.push_back(v);
-      }
-    }
+    const std::vector<double> busy = t_.allgather_value(w_.busy_seconds());
     // Per-pass seconds of every slab (zeros unless SPATE_PASS_TIMERS=1; backend/pass_times.hpp).
-    std::vector<PassSeconds> pass_seconds;
-    {
-      const PassSeconds mine = w_.pass_seconds();
-      Bytes b(sizeof mine);
-      std::memcpy(b.data(), mine.data(), sizeof mine);
-      for (auto& part : t_.allgather(b)) {
-        PassSeconds v{};
-        std::memcpy(v.data(), part.data(), std::min(sizeof v, part.size()));
-        pass_seconds.push_back(v);
-      }
-    }
+    const std::vector<PassSeconds> pass_seconds = t_.allgather_value(w_.pass_seconds());
     const std::int64_t solver_bytes = t_.sum(static_cast<std::int64_t>(w_.allocated_bytes()));
     const std::int64_t ghosts = t_.sum(static_cast<std::int64_t>(w_.particles().ghosts()));
     if (reporter) {

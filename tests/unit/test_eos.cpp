@@ -38,6 +38,8 @@ TEST(Eos, SeventhRootIsCorrectlyRoundedFromPlainArithmetic) {
   EXPECT_EQ(seventh_root(0.0f), 0.0f);
   EXPECT_TRUE(std::isnan(seventh_root(-1.0f)));
   EXPECT_TRUE(std::isnan(seventh_root(NAN)));
+  EXPECT_TRUE(std::isnan(seventh_root(-INFINITY)));
+  EXPECT_TRUE(std::signbit(seventh_root(-0.0f)));
   EXPECT_EQ(seventh_root(INFINITY), INFINITY);
 }
 
