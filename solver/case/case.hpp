@@ -88,8 +88,8 @@ struct SolidSpec {
   // `wall_shear: log_law`, at rest only): through each particle's own frame (params.hpp WallFrame).
   bool free_slip = false;
   WallShear wall_shear = WallShear::Laminar;
-  // `wall_particles: surface` (2D): its wall particles in layers parallel to its surface at the
-  // lattice's spacing (shape.hpp surface_layers_2d), not the lattice sites under it; the fluid keeps
+  // `wall_particles: surface`: its wall particles in layers parallel to its surface at the
+  // lattice's spacing (shape.hpp surface_layers), not the lattice sites under it; the fluid keeps
   // kSurfaceClearance dp off its surface (generator.cpp).
   bool surface_particles = false;
   int motion = -1;     // index into Case::motions, or -1: static
@@ -281,6 +281,9 @@ struct Case {
   Vec3d tank_origin{0, 0, 0};
   Vec3d tank_size{1, 1, 1};
   int wall_layers = 3;
+  // A shaped tank's `wall_particles: surface`: its walls in layers parallel to its surface outside
+  // it (shape.hpp surface_layers), as a solid's.
+  bool tank_surface_particles = false;
   bool open_top = true;
   std::array<bool, 3> periodic{false, false, false};
   std::array<bool, 3> free_slip{false, false, false};  // tank walls normal to these axes are free-slip

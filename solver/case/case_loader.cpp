@@ -1326,6 +1326,10 @@ Case read(Section& root, const std::string& file) {
     if (!(c.tank_size[k] > 0)) tank->fail(tank->raw("size"), "size", "every extent must be > 0");
   c.wall_layers = tank->integer("wall_layers", 3);
   if (c.wall_layers < 1 || c.wall_layers > 8) tank->fail(tank->raw("wall_layers"), "wall_layers", "must be between 1 and 8");
+  c.tank_surface_particles = tank->choice<bool>("wall_particles", false, {{"lattice", false}, {"surface", true}});
+  if (c.tank_surface_particles && !c.tank_shape)
+    tank->fail(tank->raw("wall_particles"), "wall_particles",
+               "a box tank's wall particles already lie in layers along its faces; 'surface' is for a shaped tank (mesh, disc, ...)");
   c.open_top = tank->boolean("open_top", !c.tank_shape);
   if (c.tank_shape && c.open_top)
     tank->fail(tank->raw("open_top"), "open_top", "a shaped tank is a closed surface (make it taller than the water for an open vessel)");
@@ -1484,8 +1488,6 @@ Case read(Section& root, const std::string& file) {
     spec.hollow = s.boolean("hollow", true);
     spec.free_slip = s.boolean("free_slip", false);
     spec.surface_particles = s.choice<bool>("wall_particles", false, {{"lattice", false}, {"surface", true}});
-    if (spec.surface_particles && d != 2)
-      s.fail(s.raw("wall_particles"), "wall_particles", "wall particles that follow the surface are for 2D cases (3D solids stay on the lattice)");
     if (spec.surface_particles && !spec.hollow)
       s.fail(s.raw("wall_particles"), "wall_particles", "surface layers shell the solid; a filled solid (hollow: false) stays on the lattice");
     spec.wall_shear = read_wall_shear(s, spec.free_slip);

@@ -141,6 +141,9 @@ bool classify(const Case& c, const MaterialTable& M, const Sites& s, const int i
     // solid); farther out nothing.
     const double dist = memo.tank.at(*c.tank_shape, x, d, (c.wall_layers + 1) * c.dp);
     if (dist > c.wall_layers * c.dp) return false;
+    // Walls that follow the surface (surface_wall_particles below): the sites outside it, and the
+    // fluid's within the clearance, stay empty.
+    if (c.tank_surface_particles && dist > -kSurfaceClearance * c.dp) return false;
     if (dist > -kOnSurface * c.dp) {
       kind = M.tank();
       return true;
@@ -285,6 +288,7 @@ std::string geometry_signature(const Case& c) {
   s += fmt::format("tank.wall_layers: {}\ntank.open_top: {}\n", c.wall_layers, c.open_top);
   s += fmt::format("tank.periodic: [{}, {}, {}]\n", c.periodic[0], c.periodic[1], c.periodic[2]);
   if (c.tank_shape) s += "tank.shape: " + c.tank_shape->signature + "\n";
+  if (c.tank_surface_particles) s += "tank.wall_particles: surface\n";
   for (std::size_t k = 0; k < c.fluid_blocks.size(); ++k) {
     s += fmt::format("fluid_blocks[{}]: {} to {}\n", k, vec(c.fluid_blocks[k].min), vec(c.fluid_blocks[k].max));
     if (c.fluid_blocks[k].shape) s += fmt::format("fluid_blocks[{}].shape: {}\n", k, c.fluid_blocks[k].shape->signature);
@@ -432,8 +436,8 @@ ParticleCounts count_sites(const Case& c, std::vector<std::uint8_t>* record) {
   return n;
 }
 
-// The wall particles of the solids whose particles follow their surface (SolidSpec::surface_particles),
-// in the solids' order, after every lattice site.
+// The wall particles that follow a surface: a shaped tank's (Case::tank_surface_particles), then
+// the solids' (SolidSpec::surface_particles) in their order, after every lattice site.
 struct SurfaceParticle {
   std::array<double, 3> x;
   std::uint8_t kind;
@@ -441,9 +445,11 @@ struct SurfaceParticle {
 std::vector<SurfaceParticle> surface_wall_particles(const Case& c) {
   std::vector<SurfaceParticle> out;
   const MaterialTable M = physics_params(c).materials;
+  if (c.tank_surface_particles)
+    for (const auto& x : surface_layers(*c.tank_shape, c.dp, c.wall_layers, /*outside=*/true, c.dim)) out.push_back(SurfaceParticle{x, M.tank()});
   for (std::size_t k = 0; k < c.solids.size(); ++k) {
     if (!c.solids[k].surface_particles) continue;
-    for (const auto& x : surface_layers_2d(*solid_surface(c.solids[k], c.dim), c.dp, c.wall_layers, /*outside=*/false))
+    for (const auto& x : surface_layers(*solid_surface(c.solids[k], c.dim), c.dp, c.wall_layers, /*outside=*/false, c.dim))
       out.push_back(SurfaceParticle{x, M.solid(static_cast<int>(k))});
   }
   return out;

@@ -1,5 +1,6 @@
-// Meshes as shapes (shape.hpp), read and queried with VTK: its readers for the file formats, its
-// static cell locator for the nearest point of the surface.
+// Meshes as shapes (shape.hpp), read with VTK's readers for the file formats; the nearest point of
+// the surface from a bounding-volume hierarchy over the triangles (triangle_tree.hpp says why not
+// VTK's cell locator).
 // spate's own code here only merges coincident points and checks that the triangles close a
 // volume with outward normals, which no VTK filter reports as one verdict.
 #include <algorithm>
@@ -7,7 +8,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <mutex>
 #include <unordered_map>
 
 #include <fmt/format.h>
@@ -16,7 +16,6 @@
 #include <vtkDataSetSurfaceFilter.h>
 #include <vtkDelaunay3D.h>
 #include <vtkIdList.h>
-#include <vtkGenericCell.h>
 #include <vtkNew.h>
 #include <vtkOBJReader.h>
 #include <vtkObject.h>
@@ -26,19 +25,19 @@
 #include <vtkPolyDataReader.h>
 #include <vtkSTLReader.h>
 #include <vtkSmartPointer.h>
-#include <vtkStaticCellLocator.h>
 #include <vtkTriangleFilter.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPolyDataReader.h>
 
 #include "shape.hpp"
+#include "triangle_tree.hpp"
 
 namespace spate {
 
 namespace {
 
 using P3 = std::array<double, 3>;
-using Tri = std::array<vtkIdType, 3>;
+using Tri = std::array<long long, 3>;  // point numbers (TriangleTree's)
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr std::uintmax_t kMaxMeshFileBytes = 2ull << 30;  // 2 GiB
@@ -152,23 +151,14 @@ void check_closed(const TriangleMesh& m, const std::string& what) {
                                  volume));
 }
 
-// The signed distance to a closed triangle mesh: the nearest point from VTK's static cell locator,
+// The signed distance to a closed triangle mesh: the nearest point from the triangles' hierarchy,
 // the sign from the angle-weighted pseudo-normal of the feature it lies on (face, edge or vertex;
 // Baerentzen & Aanaes 2005), which is exact for a closed, consistently oriented surface: the
 // nearest point's face normal alone misjudges points near sharp edges.
 class MeshShape final : public Shape {
  public:
   MeshShape(const TriangleMesh& m, int dim, const std::string& name, const std::string& definition)
-      : dim_(dim), points_(m.points), triangles_(m.triangles) {
-    vtkNew<vtkPoints> pts;
-    pts->SetDataTypeToDouble();
-    for (const P3& p : m.points) pts->InsertNextPoint(p.data());
-    vtkNew<vtkCellArray> cells;
-    for (const Tri& t : m.triangles) cells->InsertNextCell(3, t.data());
-    poly_->SetPoints(pts);
-    poly_->SetPolys(cells);
-    locator_->SetDataSet(poly_);
-    locator_->BuildLocator();
+      : dim_(dim), points_(m.points), triangles_(m.triangles), tree_(points_, triangles_) {
     // Pseudo-normals: faces' unit normals; an edge's, the sum of its two faces'; a vertex's, its
     // faces' weighted by their angles at it.
     face_normal_.resize(m.triangles.size());
@@ -211,17 +201,12 @@ class MeshShape final : public Shape {
   }
   double distance(const double x[3], double normal[3]) const override {
     const double at[3] = {x[0], x[1], dim_ == 2 ? mid_z_ : x[2]};
-    P3 c{0, 0, 0};
-    vtkIdType cell = -1;
-    int sub_id = 0;
-    double d2 = 0;
-    {
-      // The locator's search keeps scratch state: one query at a time.
-      std::lock_guard lock(mutex_);
-      locator_->FindClosestPoint(at, c.data(), scratch_, cell, sub_id, d2);
-    }
+    const TriangleTree::Nearest nearest = tree_.nearest({at[0], at[1], at[2]});
+    const P3& c = nearest.point;
+    const std::size_t cell = nearest.triangle;
+    const double d2 = nearest.distance2;
     const P3 r{at[0] - c[0], at[1] - c[1], at[2] - c[2]};
-    const P3 pseudo = pseudo_normal(static_cast<std::size_t>(cell), c);
+    const P3 pseudo = pseudo_normal(cell, c);
     const double d = std::sqrt(d2);
     const double sign = dot(r, pseudo) < 0 ? -1.0 : 1.0;
     P3 n = d > 1e-12 * (depth_ + norm(sub(hi, lo))) ? P3{sign * r[0] / d, sign * r[1] / d, sign * r[2] / d} : face_normal_[cell];
@@ -269,10 +254,7 @@ class MeshShape final : public Shape {
   std::vector<Tri> triangles_;
   std::vector<P3> face_normal_, vertex_normal_;
   std::unordered_map<std::uint64_t, P3> edge_normal_;
-  vtkNew<vtkPolyData> poly_;
-  vtkNew<vtkStaticCellLocator> locator_;
-  vtkNew<vtkGenericCell> scratch_;
-  mutable std::mutex mutex_;
+  TriangleTree tree_;  // after points_ and triangles_, which it reads
 };
 
 std::uint64_t file_hash(const std::string& path) {

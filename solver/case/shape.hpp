@@ -39,11 +39,16 @@ class Shape {
 };
 using ShapePtr = std::shared_ptr<const Shape>;
 
-// Wall particles that follow a 2D shape's surface (a solid's `wall_particles: surface`): `layers`
-// layers, layer k on the level set at (k + 1/2) dp behind the surface (inside the shape, or outside
-// it when `outside`: a container's walls), each contour resampled at even arc-length spacing as near
-// dp as a whole number of points allows (surface_layers.cpp). Points at z = 0.
+// Wall particles that follow a shape's surface (a solid's or a shaped tank's `wall_particles:
+// surface`): `layers` layers, layer k on the level set at (k + 1/2) dp behind the surface (inside
+// the shape, or outside it when `outside`: a container's walls). 2D: each contour resampled at even
+// arc-length spacing as near dp as a whole number of points allows (surface_layers.cpp), points at
+// z = 0. 3D: dp^-2 points per square metre of each level set, spread evenly (surface_layers_3d.cpp).
 std::vector<std::array<double, 3>> surface_layers_2d(const Shape& shape, double dp, int layers, bool outside);
+std::vector<std::array<double, 3>> surface_layers_3d(const Shape& shape, double dp, int layers, bool outside);
+inline std::vector<std::array<double, 3>> surface_layers(const Shape& shape, double dp, int layers, bool outside, int dim) {
+  return dim == 2 ? surface_layers_2d(shape, dp, layers, outside) : surface_layers_3d(shape, dp, layers, outside);
+}
 
 // The surface of a shape as VTK XML polydata (a .vtp file's text; ASCII, readable by ParaView).
 std::string surface_vtp(const Shape& shape);

@@ -11,6 +11,7 @@
 #include "../source_dir.hpp"
 #include "case/case.hpp"
 #include "case/generator.hpp"
+#include "case/triangle_tree.hpp"
 #include "particles/particle_store.hpp"
 #include "case_errors.hpp"
 
@@ -28,6 +29,48 @@ double dist(const Shape& s, P3 x, P3* n = nullptr) {
 }
 
 std::string mesh(const std::string& name) { return test::source_dir() + "/" + name; }
+
+// The mesh distance's nearest-triangle search (triangle_tree.hpp): the nearest point of a triangle
+// in each of its regions (face, edge, vertex), and the hierarchy's answer against every triangle
+// tried in turn, for a soup of random triangles and queries near and far from them.
+TEST(Shapes, TheTriangleTreeFindsTheNearestTriangle) {
+  const P3 a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};
+  auto near = [&](const P3& x, const P3& expected) {
+    const P3 got = closest_on_triangle(x, a, b, c);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], expected[k], 1e-15) << "from " << x[0] << ", " << x[1] << ", " << x[2];
+  };
+  near({0.2, 0.3, 5.0}, {0.2, 0.3, 0.0});   // over the face
+  near({-1, -2, 1}, a);                     // beyond a vertex
+  near({0.5, -3.0, 0.5}, {0.5, 0.0, 0.0});  // beyond an edge
+  near({1.0, 1.0, 0.0}, {0.5, 0.5, 0.0});   // beyond the slanted edge
+  std::uint64_t state = 12345;
+  auto uniform = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) * 0x1.0p-53;
+  };
+  std::vector<P3> points;
+  std::vector<std::array<long long, 3>> triangles;
+  for (long long t = 0; t < 300; ++t) {
+    const P3 centre{uniform(), uniform(), uniform()};
+    for (int k = 0; k < 3; ++k) points.push_back({centre[0] + 0.1 * uniform(), centre[1] + 0.3 * uniform(), centre[2] + 0.05 * uniform()});
+    triangles.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+  }
+  const TriangleTree tree(points, triangles);
+  for (int m = 0; m < 3000; ++m) {
+    const double spread = m % 3 == 0 ? 4.0 : 1.2;
+    const P3 x{spread * (uniform() - 0.5) + 0.5, spread * (uniform() - 0.5) + 0.5, spread * (uniform() - 0.5) + 0.5};
+    double best = 1e300;
+    std::size_t which = 0;
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+      const P3 p = closest_on_triangle(x, points[triangles[t][0]], points[triangles[t][1]], points[triangles[t][2]]);
+      const double d2 = (x[0] - p[0]) * (x[0] - p[0]) + (x[1] - p[1]) * (x[1] - p[1]) + (x[2] - p[2]) * (x[2] - p[2]);
+      if (d2 < best) best = d2, which = t;
+    }
+    const TriangleTree::Nearest n = tree.nearest(x);
+    ASSERT_EQ(n.distance2, best) << "query " << m;
+    ASSERT_EQ(n.triangle, which) << "query " << m;
+  }
+}
 
 TEST(Shapes, DiscAndSphereDistances) {
   const ShapePtr disc = make_ball({0.5, 0.2, 0}, 0.1, 2);
@@ -235,6 +278,58 @@ TEST(ShapedSolids, SurfaceWallParticlesRingADiscInEvenLayers) {
             std::string::npos);
 }
 
+// The same in 3D: a sphere's wall particles on spheres (k + 1/2) dp under its surface, dp^-2 of
+// them per square metre of each (the lattice's number under a face), spread evenly: no two closer
+// than 0.8 dp, each one's nearest neighbour in its layer about dp away (the hexagonal packing of
+// that density has them 1.07 dp apart; a square lattice dp).
+TEST(ShapedSolids, SurfaceWallParticlesShellASphereInEvenLayers) {
+  const Case c = parse_case(R"(name: sphere
+dimensions: 3
+dp: 0.01
+time: {end: 0.1}
+tank: {size: [0.3, 0.3, 0.3], wall_layers: 3}
+wet_bed: 0.28
+solids:
+  - {name: ball, sphere: {centre: [0.15, 0.15, 0.14], radius: 0.08}, wall_particles: surface}
+)", "sphere.yaml");
+  const ParticleStore p = generate_particles(c);
+  EXPECT_EQ(static_cast<std::int64_t>(p.size()), count_particles(c).total());
+  std::map<int, std::vector<P3>> layers;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const P3 x{p.pos[0][i] - 0.15, p.pos[1][i] - 0.15, p.pos[2][i] - 0.14};
+    const double r = std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+    if (p.material[i] == kSolidMaterialForTest) {
+      const double depth = (0.08 - r) / c.dp;
+      const int k = static_cast<int>(std::lround(depth - 0.5));
+      ASSERT_GE(k, 0);
+      ASSERT_LT(k, c.wall_layers);
+      EXPECT_NEAR(depth, k + 0.5, 0.01) << "off its layer";
+      layers[k].push_back(x);
+    } else if (p.material[i] == 0) {
+      EXPECT_GT(r, 0.08 + 0.25 * c.dp - 1e-6) << "fluid within the clearance";
+    }
+  }
+  ASSERT_EQ(layers.size(), static_cast<std::size_t>(c.wall_layers));
+  for (const auto& [k, x] : layers) {
+    const double r = 0.08 - (k + 0.5) * c.dp;
+    EXPECT_NEAR(static_cast<double>(x.size()), 4 * M_PI * r * r / (c.dp * c.dp), 0.02 * 4 * M_PI * r * r / (c.dp * c.dp)) << "layer " << k;
+    double nearest_min = 1e30, nearest_sum = 0, nearest_max = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      double nearest = 1e30;
+      for (std::size_t j = 0; j < x.size(); ++j)
+        if (j != i) nearest = std::min(nearest, std::hypot(x[i][0] - x[j][0], x[i][1] - x[j][1], x[i][2] - x[j][2]));
+      nearest_min = std::min(nearest_min, nearest), nearest_max = std::max(nearest_max, nearest), nearest_sum += nearest;
+    }
+    const double mean = nearest_sum / static_cast<double>(x.size());
+    std::printf("layer %d: %zu particles (%.1f), nearest %.3f .. %.3f dp, mean %.3f dp\n", k, x.size(), 4 * M_PI * r * r / (c.dp * c.dp),
+                nearest_min / c.dp, nearest_max / c.dp, mean / c.dp);
+    EXPECT_GT(nearest_min, 0.7 * c.dp) << "layer " << k;
+    EXPECT_GT(mean, 0.88 * c.dp) << "layer " << k;
+    EXPECT_LT(mean, 1.1 * c.dp) << "layer " << k;
+    EXPECT_LT(nearest_max, 1.25 * c.dp) << "layer " << k;
+  }
+}
+
 // The paper's column from an STL against today's box column (issue 31), at the case's dp = 0.01,
 // where the column's faces lie between planes of lattice sites. The two give the same fluid
 // particles and the same column particles wherever a fluid particle can reach (its support is
@@ -421,6 +516,39 @@ fluid_blocks:
   }
   EXPECT_GT(corners, 0);
   EXPECT_NE(geometry_hash(box), geometry_hash(stl));
+}
+
+// A shaped tank's `wall_particles: surface`: its walls in rings (k + 1/2) dp outside the disc, each
+// at even spacing as near dp as a whole number allows; no lattice site outside, no fluid within a
+// quarter of dp of the wall. A box tank has nothing to gain from it and refuses it.
+TEST(ShapedTanks, ADiscTanksSurfaceWallsRingItOutside) {
+  const Case c = parse_case(disc_tank_case("  wall_particles: surface\n"), "canal.yaml");
+  ASSERT_TRUE(c.tank_surface_particles);
+  const ParticleStore p = generate_particles(c);
+  EXPECT_EQ(static_cast<std::int64_t>(p.size()), count_particles(c).total());
+  std::map<int, int> rings;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double r = std::hypot(p.pos[0][i] - 0.2, p.pos[1][i] - 0.2);
+    if (p.material[i] == 0) {
+      EXPECT_LT(r, 0.2 - 0.25 * c.dp + 1e-9) << "fluid within the clearance";
+      continue;
+    }
+    const double depth = (r - 0.2) / c.dp;
+    const int k = static_cast<int>(std::lround(depth - 0.5));
+    EXPECT_NEAR(depth, k + 0.5, 0.02) << "off its ring";
+    rings[k] += 1;
+  }
+  ASSERT_EQ(rings.size(), 3u);
+  for (const auto& [k, n] : rings) EXPECT_EQ(n, std::lround(2 * M_PI * (0.2 + (k + 0.5) * c.dp) / c.dp)) << "ring " << k;
+  EXPECT_NE(geometry_hash(c), geometry_hash(parse_case(disc_tank_case(), "canal.yaml")));
+  EXPECT_NE(test::error_of(R"(name: box
+dimensions: 2
+dp: 0.01
+time: {end: 0.1}
+tank: {size: [0.4, 0.4], wall_particles: surface}
+wet_bed: 0.2
+)").find("box tank"),
+            std::string::npos);
 }
 
 TEST(ShapedTanks, TheLoaderRefusesABoxTanksKeys) {
