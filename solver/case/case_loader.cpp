@@ -1385,8 +1385,9 @@ Case read(Section& root, const std::string& file) {
     for (int k = 0; k < d; ++k)
       if (c.free_slip[k])
         tank->fail(tank->raw("free_slip"), "free_slip", "a box tank's free-slip faces are for a tank at rest (not with tank.motion)");
-    if (c.wall_shear == WallShear::LogLaw)
-      tank->fail(tank->raw("wall_shear"), "wall_shear", "the log law is for a tank at rest (not with tank.motion)");
+    if (c.wall_shear == WallShear::LogLaw && !c.tank_shape)
+      tank->fail(tank->raw("wall_shear"), "wall_shear",
+                 "the log law on a moving tank needs each wall particle's frame: a shaped tank's (mesh, polyhedron, ...), not a box tank's faces");
   }
   if (c.tank_motion >= 0)
     for (const FaceThermalSpec& f : c.tank_faces)
@@ -1505,8 +1506,6 @@ Case read(Section& root, const std::string& file) {
       spec.motion = static_cast<int>(c.motions.size());
       c.motions.push_back(read_motion(*m, c, spec.name, spec.box.min, spec.box.max));
     }
-    if (spec.motion >= 0 && spec.wall_shear == WallShear::LogLaw)
-      s.fail(s.raw("wall_shear"), "wall_shear", "the log law is for a solid at rest (not with a motion)");
     if (spec.motion < 0 || c.motions[spec.motion].floating < 0)
       for (const char* key : {"density", "mass", "centre_of_mass", "inertia", "free", "hinge", "springs", "contact"})
         if (s.has(key)) s.fail(s.raw(key), key, "only a floating solid (motion: floating) takes '" + std::string(key) + "'");

@@ -143,8 +143,12 @@ SPATE_HD float log_law_u_star2(float u, float y, float nu) {
 // In the viscous sublayer (u*^2 = nu |u_t| / y) that is v_w,t = -u_t depth / y, the linear
 // extrapolation of a linear profile through the face, i.e. no slip; at y+ ~ 100-1000, where the
 // particles next to a dam-break floor are, the shear is tens of times the laminar term's. The
-// normal component keeps Adami's mirror (no penetration). Walls at rest only (the loader refuses
-// it with a motion); a box tank's corners keep Adami's. With several fluids nu is the walls'
+// normal component keeps Adami's mirror (no penetration). A moving wall (a solid's or a shaped
+// tank's motion, a floating solid; face.w its velocity there) applies the law to the fluid's
+// velocity relative to it: u_t is the tangential part of v~ - w and v_w,t = w_t + u_t (1 - ...), so
+// water moving with the wall feels no shear (for a wall at rest w = 0 and the formula is the one
+// above, bit for bit). A box tank has no per-particle frame to move with it: the loader refuses the
+// law on a moving box tank; its corners keep Adami's. With several fluids nu is the walls'
 // reference fluid's (materials.hpp wall_fluid). Only runs with the key execute it.
 template <int Dim>
 SPATE_HD void apply_log_law(const PhysicsParams& P, const WallFrame<Dim>& face, const WallSums<Dim>& s, WallState<Dim>& st) {
@@ -154,8 +158,8 @@ SPATE_HD void apply_log_law(const PhysicsParams& P, const WallFrame<Dim>& face, 
   const float d = -dot(s.rho_r_w, face.n) / (M.rho0 * s.w);
   const float y = d - face.depth;
   if (y <= 0.0f) return;
-  Vec<Dim> v;  // v~ and its tangential part
-  SPATE_UNROLL for (int k = 0; k < Dim; ++k) v[k] = s.v_w[k] / s.w;
+  Vec<Dim> v;  // v~ - w, the fluid's velocity relative to the wall, and its tangential part
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) v[k] = s.v_w[k] / s.w - face.w[k];
   const float vn = dot(v, face.n);
   Vec<Dim> t;
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) t[k] = v[k] - vn * face.n[k];
@@ -165,7 +169,8 @@ SPATE_HD void apply_log_law(const PhysicsParams& P, const WallFrame<Dim>& face, 
   if (nu <= 0.0f) return;  // an inviscid fluid has no law of the wall: Adami's no slip stays
   const float factor = 1.0f - log_law_u_star2(u, y, nu) * d / (nu * u);
   const float wn = dot(st.v, face.n);  // Adami's mirrored normal component, kept
-  SPATE_UNROLL for (int k = 0; k < Dim; ++k) st.v[k] = factor * t[k] + wn * face.n[k];
+  const float w_n = dot(face.w, face.n);
+  SPATE_UNROLL for (int k = 0; k < Dim; ++k) st.v[k] = (face.w[k] - w_n * face.n[k]) + factor * t[k] + wn * face.n[k];
 }
 
 // The wall particle's velocity for the laminar term beyond Adami's no slip: free slip or the log law,

@@ -238,7 +238,7 @@ TEST(CaseLoader, BadMotionsAreRefusedWithTheKey) {
   refuse({"tank.motion.file=no_such.csv"}, "a time series (file) takes no 'period'");
   refuse({"tank.motion.speed=1"}, "unknown key");
   refuse({"tank.periodic=[x]"}, "no periodic axes with a motion");
-  refuse({"tank.wall_shear=log_law"}, "the log law is for a tank at rest");
+  refuse({"tank.wall_shear=log_law"}, "not a box tank's faces");
   // The Riemann flux's wall term takes walls at rest; a sensor on a moving wall would stay behind.
   refuse({"momentum.flux=riemann"}, "'momentum.flux'");
   refuse({"probes=[{name: s, type: wall_pressure, position: [0.0, 0.05]}]"}, "on a moving wall is not supported");
