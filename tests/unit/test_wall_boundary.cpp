@@ -14,6 +14,15 @@
 namespace spate {
 namespace {
 
+// 2D water (rho0 1000, mu 1e-3) for the wall treatments' formulas.
+PhysicsParams water_2d() {
+  PhysicsParams P;
+  P.dim = 2;
+  P.materials.fluid[0].rho0 = 1000.0f;
+  P.materials.fluid[0].viscosity = 1e-3f;
+  return P;
+}
+
 TEST(WallBoundary, FreeSlipWallsMirrorOnlyTheNormalVelocity) {
   PhysicsParams P;
   P.dim = 2;
@@ -47,11 +56,8 @@ TEST(WallBoundary, FreeSlipWallsMirrorOnlyTheNormalVelocity) {
 // axis-aligned face, turned with it (the treatments are covariant), and the artificial viscosity
 // sees the free-slip face slide along itself.
 TEST(WallBoundary, ATiltedFacesFrameTurnsFreeSlipAndTheLogLawWithIt) {
-  PhysicsParams P;
-  P.dim = 2;
-  P.materials.fluid[0].rho0 = 1000.0f;
-  P.materials.fluid[0].viscosity = 1e-3f;
-  const float depth = 0.0025f, d = 0.0075f;
+  const PhysicsParams P = water_2d();
+  const float depth = 0.0025f, d = 0.0075f;  // a first-layer wall particle; the fluid 5 mm off the face
   auto turn = [](const Vec<2>& v, float a) {
     return Vec<2>{{std::cos(a) * v[0] - std::sin(a) * v[1], std::sin(a) * v[0] + std::cos(a) * v[1]}};
   };
@@ -88,11 +94,8 @@ TEST(WallBoundary, ATiltedFacesFrameTurnsFreeSlipAndTheLogLawWithIt) {
 // whatever the wall's own speed along itself (Galilean invariance), water moving with the wall
 // feels none, and the normal component stays Adami's mirror.
 TEST(WallBoundary, TheLogLawOnAMovingWallActsOnTheFlowRelativeToIt) {
-  PhysicsParams P;
-  P.dim = 2;
-  P.materials.fluid[0].rho0 = 1000.0f;
-  P.materials.fluid[0].viscosity = 1e-3f;
-  const float depth = 0.0025f, d = 0.0075f;
+  const PhysicsParams P = water_2d();
+  const float depth = 0.0025f, d = 0.0075f;  // a first-layer wall particle; the fluid 5 mm off the face
   auto wall_velocity = [&](const Vec<2>& fluid, const Vec<2>& w, const Vec<2>& n) {
     WallSums<2> s;
     s.w = 2.0f;
