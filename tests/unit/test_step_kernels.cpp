@@ -322,6 +322,13 @@ std::vector<CheckedCase> gpu_checked_cases() {
       // A free-slip disc turning (surface-following wall particles whose normals turn with it).
       {"turning_disc", load("turning_disc_2d.yaml", {"probes=[]", "solids=[{name: disc, disc: {centre: [0.15, 0.13], radius: 0.08}, "
                                                      "wall_particles: surface, free_slip: true, motion: {rotation: 30, period: 0.5}}]"}), 300},
+      // The same disc under the log law, which acts on the flow relative to the turning wall.
+      {"turning_disc_log_law", load("turning_disc_2d.yaml", {"probes=[]", "solids=[{name: disc, disc: {centre: [0.15, 0.13], radius: 0.08}, "
+                                                             "wall_particles: surface, wall_shear: log_law, motion: {rotation: 30, period: 0.5}}]"}), 200},
+      // A free-slip sphere turning in 3D, its wall particles sampled evenly on its level sets.
+      {"turning_sphere", load("turning_sphere_3d.yaml", {"probes=[]", "dp=0.012", "fluid_blocks=[{min: [0, 0, 0], max: [0.2, 0.2, 0.18]}]",
+                                                         "solids=[{name: ball, sphere: {centre: [0.1, 0.1, 0.09], radius: 0.06}, wall_particles: surface, "
+                                                         "free_slip: true, motion: {rotation: 30, axis: [0, 1, 0], period: 0.5}}]"}), 60},
       // Heat transfer: buoyant convection between a hot and a cold face (the fluid pass's fused
       // conduction, the wall temperatures behind the faces mirrored from the fluid) ...
       {"heated_cavity", load("heated_cavity_2d.yaml", {"probes=[]", "fluid.thermal.expansion=2.6295e-3"}), 100},
