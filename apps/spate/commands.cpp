@@ -536,8 +536,11 @@ int info_command(const InfoArgs& a) {
                     names[m].c_str(), f.rho0, f.mass, f.viscosity, f.c0, f.gamma, f.background_pressure);
       } else {
         const int motion = P.materials.motion[m];
-        std::printf("  %-3d %-12s %s%s\n", m, names[m].c_str(), m == P.materials.tank() ? "tank walls" : "solid",
-                    motion > 0 ? fmt::format(", moving (motion {})", motion - 1).c_str() : "");
+        const bool tank = m == P.materials.tank();
+        const bool layers = tank ? c.tank_surface_particles : c.solids[static_cast<std::size_t>(m - P.materials.tank() - 1)].surface_particles;
+        std::printf("  %-3d %-12s %s%s%s\n", m, names[m].c_str(), tank ? "tank walls" : "solid",
+                    motion > 0 ? fmt::format(", moving (motion {})", motion - 1).c_str() : "",
+                    layers ? ", wall particles in layers along its surface (wall_particles: surface)" : "");
       }
     }
     for_each_shape(c, [&](const std::string& owner, const Shape& s) {
