@@ -325,6 +325,9 @@ std::vector<CheckedCase> gpu_checked_cases() {
       // The same disc under the log law, which acts on the flow relative to the turning wall.
       {"turning_disc_log_law", load("turning_disc_2d.yaml", {"probes=[]", "solids=[{name: disc, disc: {centre: [0.15, 0.13], radius: 0.08}, "
                                                              "wall_particles: surface, wall_shear: log_law, motion: {rotation: 30, period: 0.5}}]"}), 200},
+      // A floating box (its load summed over its particles, its particles moved rigidly by the
+      // multibody step, the wall pass seeing its velocity and acceleration).
+      {"floating_box", load("floating_box_2d.yaml", {"probes=[]", "dp=0.02"}), 200},
       // A free-slip sphere turning in 3D, its wall particles sampled evenly on its level sets.
       {"turning_sphere", load("turning_sphere_3d.yaml", {"probes=[]", "dp=0.012", "fluid_blocks=[{min: [0, 0, 0], max: [0.2, 0.2, 0.18]}]",
                                                          "solids=[{name: ball, sphere: {centre: [0.1, 0.1, 0.09], radius: 0.06}, wall_particles: surface, "
