@@ -2,8 +2,9 @@
 // Solids and fluid regions beyond axis-aligned boxes (issue 31): a shape answers the signed
 // distance from a point to its surface (negative inside) and the outward normal there. The
 // generator fills a fluid region with the lattice sites inside it, and shells a solid with the
-// sites within `wall_layers` dp under its surface; they stay on the lattice, a staircase under a
-// slanted or curved face (generator.cpp says why: moving them onto the surface did worse).
+// sites within `wall_layers` dp under its surface; by default they stay on the lattice, a
+// staircase under a slanted or curved face (generator.cpp says why), or with `wall_particles:
+// surface` lie in layers along the surface (surface_layers below).
 // Primitives are exact; meshes (STL, OBJ, PLY, VTK/VTP) are read and
 // checked with VTK (mesh_shape.cpp), in builds that have it.
 #include <array>
