@@ -30,6 +30,7 @@
 #include <vtkXMLPolyDataReader.h>
 
 #include "shape.hpp"
+#include "point3.hpp"
 #include "triangle_tree.hpp"
 
 namespace spate {
@@ -42,10 +43,7 @@ using Tri = std::array<long long, 3>;  // point numbers (TriangleTree's)
 constexpr double kPi = 3.14159265358979323846;
 constexpr std::uintmax_t kMaxMeshFileBytes = 2ull << 30;  // 2 GiB
 
-P3 sub(const P3& a, const P3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-P3 cross(const P3& a, const P3& b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
-double dot(const P3& a, const P3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double norm(const P3& a) { return std::sqrt(dot(a, a)); }
+using point3::cross, point3::dot, point3::norm, point3::sub;
 
 std::string point_text(const P3& p) { return fmt::format("({:.6g}, {:.6g}, {:.6g})", p[0], p[1], p[2]); }
 

@@ -18,6 +18,7 @@
 #include <queue>
 #include <unordered_map>
 
+#include "point3.hpp"
 #include "shape.hpp"
 
 namespace spate {
@@ -71,10 +72,6 @@ class PointCells {
   std::unordered_map<std::int64_t, std::pair<std::size_t, std::size_t>> range_;
 };
 
-double dist2(const P3& a, const P3& b) {
-  const double x = a[0] - b[0], y = a[1] - b[1], z = a[2] - b[2];
-  return x * x + y * y + z * z;
-}
 
 // Moves x towards the level set {distance = level} along the distance's gradient, `steps` Newton
 // steps (each exact where the level set is flat); `normal`: the gradient at the last x queried.
@@ -107,7 +104,7 @@ std::vector<std::uint32_t> eliminate(const std::vector<P3>& x, std::size_t keep,
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < static_cast<std::int64_t>(n); ++i)
     cells.near(x[i], [&](std::uint32_t j) {
-      const double d2 = dist2(x[i], x[j]);
+      const double d2 = point3::distance2(x[i], x[j]);
       if (j != i && d2 < reach * reach) w[i] += weight(std::sqrt(d2));
     });
   // A max-heap of (weight, index); an entry whose weight is no longer the point's is stale.
@@ -122,7 +119,7 @@ std::vector<std::uint32_t> eliminate(const std::vector<P3>& x, std::size_t keep,
     gone[i] = 1;
     --left;
     cells.near(x[i], [&](std::uint32_t j) {
-      const double d2 = dist2(x[i], x[j]);
+      const double d2 = point3::distance2(x[i], x[j]);
       if (gone[j] || d2 >= reach * reach) return;
       w[j] -= weight(std::sqrt(d2));
       heap.push({w[j], j});
@@ -150,7 +147,7 @@ void relax(const Shape& shape, double level, double spacing, std::vector<P3>& x,
     for (std::int64_t i = 0; i < n; ++i) {
       P3 f{0, 0, 0};
       cells.near(x[i], [&](std::uint32_t j) {
-        const double d2 = dist2(x[i], x[j]);
+        const double d2 = point3::distance2(x[i], x[j]);
         if (j == i || d2 >= reach * reach || d2 == 0.0) return;
         const double d = std::sqrt(d2), q = 1.0 - d / reach;
         for (int a = 0; a < 3; ++a) f[a] += q * q * (x[i][a] - x[j][a]) / d;

@@ -1,5 +1,7 @@
 #include "triangle_tree.hpp"
 
+#include "point3.hpp"
+
 #include <algorithm>
 #include <limits>
 
@@ -7,8 +9,7 @@ namespace spate {
 
 namespace {
 using P3 = TriangleTree::P3;
-P3 sub(const P3& a, const P3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const P3& a, const P3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+using point3::dot, point3::sub;
 P3 along(const P3& a, const P3& u, double t) { return {a[0] + t * u[0], a[1] + t * u[1], a[2] + t * u[2]}; }
 
 // The squared distance from x to a box (0 inside).
