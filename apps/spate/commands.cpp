@@ -167,12 +167,26 @@ struct RunRecord {
   std::filesystem::path out_dir;
   std::string case_name;
   bool summary_written = false;
+  std::unique_ptr<OutputFolderLock> lock;  // held from the moment the folder is known to the end
 };
 
 int run_case(const RunArgs& a, RunRecord& record) {
   Case c = load(a.case_file, a.overrides);
   record.case_name = c.name;
   if (a.out.empty()) record.out_dir = std::filesystem::path("out") / c.name;
+  // The folder is this run's from here on. A second run into it is refused (exit 2) and writes
+  // nothing there: its summary.json would replace the first run's.
+  if (process_group().rank == 0) {
+    try {
+      record.lock = std::make_unique<OutputFolderLock>(record.out_dir);
+    } catch (const OutputFolderBusy&) {
+      record.summary_written = true;
+      throw BadInput(fmt::format("--out {}: another spate run is writing into this folder; wait for it to end or choose another --out",
+                                 record.out_dir.string()));
+    } catch (const OutputError&) {
+      // Not usable: the simulation's own check of the folder says why (exit 2).
+    }
+  }
   check_backend(a.backend);
   const std::vector<std::string> warnings = warn_thin_features(c);
   // In situ: the command line replaces the case file's `insitu:` section.
@@ -365,6 +379,7 @@ int run_command(const RunArgs& a) {
   if (!a.out.empty()) record.out_dir = a.out;
   auto leave_summary = [&](const char* status, int code, const std::string& message) {
     if (record.summary_written || record.out_dir.empty() || process_group().rank != 0) return;
+    if (!record.lock && OutputFolderLock::held_elsewhere(record.out_dir)) return;  // another run's folder
     try {
       write_refusal_summary(record.out_dir / "summary.json", record.case_name, a.case_file, status, code, message);
     } catch (const std::exception& e) {

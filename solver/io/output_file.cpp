@@ -1,6 +1,7 @@
 #include "output_file.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -32,6 +33,40 @@ void create_output_folder(const std::filesystem::path& folder) {
   std::filesystem::create_directories(folder, ec);
   if (ec) throw OutputError(folder.string() + ": cannot create the folder: " + ec.message());
   if (!std::filesystem::is_directory(folder, ec)) throw OutputError(folder.string() + ": cannot create the folder: not a folder");
+}
+
+namespace {
+
+// The folder opened for flock(): -1 with errno set when it cannot be.
+int open_folder(const std::filesystem::path& folder) { return ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); }
+
+}  // namespace
+
+OutputFolderLock::OutputFolderLock(const std::filesystem::path& folder) {
+  create_output_folder(folder);
+  fd_ = open_folder(folder);
+  if (fd_ < 0) throw_output_error(folder, "cannot open the folder", errno);
+  int rc;
+  while ((rc = ::flock(fd_, LOCK_EX | LOCK_NB)) != 0 && errno == EINTR) {
+  }
+  if (rc == 0) return;
+  const int e = errno;
+  ::close(fd_);
+  fd_ = -1;
+  if (e == EWOULDBLOCK) throw OutputFolderBusy(folder.string() + ": another spate run is writing into this folder");
+  throw_output_error(folder, "cannot lock the folder", e);
+}
+
+OutputFolderLock::~OutputFolderLock() {
+  if (fd_ >= 0) ::close(fd_);  // closing the last descriptor releases the lock
+}
+
+bool OutputFolderLock::held_elsewhere(const std::filesystem::path& folder) {
+  const int fd = open_folder(folder);
+  if (fd < 0) return false;
+  const bool busy = ::flock(fd, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+  ::close(fd);
+  return busy;
 }
 
 namespace {

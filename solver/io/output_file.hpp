@@ -30,6 +30,30 @@ bool is_temporary_name(const std::string& name);
 // Creates the folder (and its parents); OutputError when it cannot.
 void create_output_folder(const std::filesystem::path& folder);
 
+// Another process holds the output folder (OutputFolderLock).
+struct OutputFolderBusy : OutputError {
+  using OutputError::OutputError;
+};
+
+// One run's claim on its output folder: an exclusive flock() on the folder itself (no file is
+// added to it), held while the object lives and dropped by the kernel when the process ends, even
+// by kill -9. Two `spate run`s into one --out would otherwise interleave their probes, snapshots and
+// summary.json without a word; the second is refused instead (docs/cli.md).
+class OutputFolderLock {
+ public:
+  // Creates the folder if needed and claims it: OutputFolderBusy when another process holds it,
+  // OutputError when it cannot be created or opened.
+  explicit OutputFolderLock(const std::filesystem::path& folder);
+  ~OutputFolderLock();
+  OutputFolderLock(const OutputFolderLock&) = delete;
+  OutputFolderLock& operator=(const OutputFolderLock&) = delete;
+  // Whether another process holds the folder now (false for a folder that does not exist).
+  static bool held_elsewhere(const std::filesystem::path& folder);
+
+ private:
+  int fd_ = -1;
+};
+
 // A whole file written in pieces, published by commit() (tmp + rename). Dropped without commit()
 // (an exception on the way), the temporary file is removed.
 class AtomicFile {

@@ -655,6 +655,37 @@ def restart_with_changed_mesh(env):
 # ---- instability --------------------------------------------------------------------------------
 
 @test
+def second_run_into_a_busy_folder(env):
+    # A run holds its output folder: a second `spate run` into it while the first is writing is
+    # refused (exit 2) and writes nothing there (the summary.json is the first run's); once the
+    # first has ended the folder is free again.
+    out = env.path("busy")
+    case = os.path.join(env.shipped, "dam_break_2d.yaml")
+    first = subprocess.Popen([env.spate, "run", case, "--steps", "5000", "--out", out, "--quiet", "--threads", "1"],
+                             cwd=env.work, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while not os.path.exists(os.path.join(out, "case.yaml")) and first.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        check(first.poll() is None, "the first run ended before the second could start: lengthen it")
+        p = env.run("run", env.tiny, "--out", out, "--quiet")
+        check(p.returncode == 2, f"second run: exit {p.returncode}, expected 2")
+        check("another spate run is writing into this folder" in p.stderr and out in p.stderr,
+              f"the refusal does not say why: {p.stderr.strip()}")
+        check(not os.path.exists(os.path.join(out, "summary.json")), "the refused run wrote a summary.json into the busy folder")
+        check(first.poll() is None, "the first run must go on (lengthen it if it ended by itself)")
+    finally:
+        stdout, stderr = first.communicate(timeout=300)
+    check(first.returncode == 0, f"the first run: exit {first.returncode}: {stderr.strip()}")
+    with open(os.path.join(out, "summary.json")) as f:
+        s = json.load(f)
+    check(s["exit_status"] == "done" and s["final_step"] == 5000 and s["case"] == "dam_break_2d",
+          f"the first run's summary: {s['exit_status']} {s.get('final_step')} {s.get('case')}")
+    p = env.run("run", env.tiny, "--steps", "5", "--out", out, "--quiet")
+    check(p.returncode == 0, f"a run into the folder once it is free: exit {p.returncode}")
+
+
+@test
 def unstable_run(env):
     # The 2D dam break with a fixed step 10x above its CFL limit blows up within a few steps.
     out = env.path("unstable")
