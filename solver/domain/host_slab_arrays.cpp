@@ -53,7 +53,7 @@ void HostSlabArrays::compute_keys(const CellGrid& geometry, std::size_t first, s
   const std::int8_t* hops = migrating ? hops_.data() : nullptr;
   const int d = store_->dim();
   const auto n = static_cast<std::int64_t>(last - first);
-#pragma omp parallel for schedule(static) if (n > cpu::kCheapGrain)
+#pragma omp parallel for schedule(static) if (n > cpu::cheap_grain())
   for (std::int64_t k = 0; k < n; ++k) {
     const std::size_t i = first + static_cast<std::size_t>(k);
     keys_[i] = particle_key(v, L, hops, store_->pos[0][i], d >= 2 ? store_->pos[1][i] : 0.0f, d >= 3 ? store_->pos[2][i] : 0.0f);
@@ -75,7 +75,7 @@ void HostSlabArrays::sort_by_key(std::size_t first, std::size_t last) {
   for (std::uint32_t b = 0; b < bins; ++b) counts_[b + 1] += counts_[b];
   for (std::size_t i = 0; i < n; ++i) perm_[counts_[key[i]]++] = static_cast<std::uint32_t>(i);
   // counts_[b] is now the end of bin b.
-#pragma omp parallel for schedule(dynamic, 256) if (static_cast<std::int64_t>(n) > cpu::kCheapGrain)
+#pragma omp parallel for schedule(dynamic, 256) if (static_cast<std::int64_t>(n) > cpu::cheap_grain())
   for (std::int64_t b = 0; b < static_cast<std::int64_t>(bins); ++b) {
     const std::uint32_t e = counts_[b], s = b == 0 ? 0u : counts_[b - 1];
     for (std::uint32_t k = s + 1; k < e; ++k) {

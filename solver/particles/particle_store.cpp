@@ -57,7 +57,7 @@ void permute_runs(char* base, std::size_t first, std::span<const std::uint32_t> 
   if (!base) return;
   char* data = base + first * Size;
   for (const auto& [b, e] : runs) {
-#pragma omp parallel for schedule(static) if (e - b > cpu::kCheapGrain)
+#pragma omp parallel for schedule(static) if (e - b > cpu::cheap_grain())
     for (std::uint32_t k = b; k < e; ++k) {
       std::uint32_t word = 0;
       std::memcpy(&word, data + std::size_t{perm[k]} * Size, Size);
@@ -65,7 +65,7 @@ void permute_runs(char* base, std::size_t first, std::span<const std::uint32_t> 
     }
   }
   for (const auto& [b, e] : runs) {
-#pragma omp parallel for schedule(static) if (e - b > cpu::kCheapGrain)
+#pragma omp parallel for schedule(static) if (e - b > cpu::cheap_grain())
     for (std::uint32_t k = b; k < e; ++k) std::memcpy(data + std::size_t{k} * Size, &scratch[k], Size);
   }
 }

@@ -23,6 +23,7 @@
 #include <pthread.h>
 #include <sched.h>
 
+#include "../backend/cpu/core_watch.hpp"
 #include "../backend/cuda/device_plan.hpp"
 #include "../backend/cuda/device_runtime.hpp"
 #include "../comm/in_process_transport.hpp"
@@ -467,6 +468,10 @@ class Worker {
       s_.result.removed = removed;
     };
     record_progress();
+    // One per process: whether its threads have the cores to themselves sets the grains of the
+    // CPU backend's parallel loops (backend/cpu/parallel.hpp); the bits never depend on it.
+    std::optional<cpu::CoreWatch> core_watch;
+    if (reporter) core_watch.emplace(s_.omp_threads * s_.local_slabs);
     while (true) {
       if (steer.stop) {
         s_.result.stopped_by_steering = true;
@@ -492,6 +497,7 @@ class Worker {
       time += dt;
       ++step;
       ++taken;
+      if (core_watch) core_watch->tick();
       record_progress();
       const StepReport report =
           share_report(t_, w_.health(static_cast<float>(s_.c.density_min_ratio), static_cast<float>(s_.c.density_max_ratio)),

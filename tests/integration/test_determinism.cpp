@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "backend/cpu/parallel.hpp"
 #include "case/motion.hpp"
 #include "run_helpers.hpp"
 
@@ -159,6 +160,25 @@ TEST(Threads, OneAndTwoThreadsBitIdentical) {
   ASSERT_GT(one.particles.total(), 20000);
   std::string why;
   EXPECT_TRUE(test::identical_checkpoints(one.last_checkpoint, two.last_checkpoint, &why)) << why;
+}
+
+TEST(Threads, TheGrainsOfAFreeMachineGiveTheSameBits) {
+  // A small 2D case: under the busy machine's grains every loop is serial; under the free
+  // machine's (backend/cpu/parallel.hpp, what CoreWatch picks when the cores are this run's) the
+  // pair loops and the cheap loops run on two threads. Same bits either way.
+  const Case c = load_case(test::case_path("dam_break_buchner_2d.yaml"), {"output.interval=0", "probes=[]"});
+  RunOptions o;
+  o.steps = 40;
+  o.threads = 2;
+  cpu::fix_cores_free(false);
+  const RunResult busy = test::run_case(c, test::scratch("grain-busy"), o);
+  cpu::fix_cores_free(true);
+  const RunResult free = test::run_case(c, test::scratch("grain-free"), o);
+  cpu::fix_cores_free(std::nullopt);
+  ASSERT_GT(free.particles.total(), cpu::kFreeCheapGrain);
+  ASSERT_LT(free.particles.total(), cpu::kBusyPairGrain);
+  std::string why;
+  EXPECT_TRUE(test::identical_checkpoints(busy.last_checkpoint, free.last_checkpoint, &why)) << why;
 }
 
 }  // namespace

@@ -29,7 +29,7 @@ void for_each_owned_cell(const CellGrid& grid, Body&& body) {
   const CellGridView v = grid.view();
   const auto cells = static_cast<std::int64_t>(grid.owned_cell_count());
   const auto particles = static_cast<std::int64_t>(v.start[cells]);
-#pragma omp parallel for schedule(dynamic, 64) if (particles > kPairGrain)
+#pragma omp parallel for schedule(dynamic, 64) if (particles > pair_grain())
   for (std::int64_t c = 0; c < cells; ++c) {
     const std::uint32_t b = v.start[c], e = v.start[c + 1];
     if (b == e) continue;
@@ -44,7 +44,7 @@ void for_each_owned_cell(const CellGrid& grid, Body&& body) {
 void predict(ParticleStore& p, const PhysicsParams& P, float dt) {
   p.swap_rates();  // the rates of step n become the "previous" ones the corrector needs
   const auto n = static_cast<std::int64_t>(p.owned());
-#pragma omp parallel for schedule(static) if (n > kCheapGrain)
+#pragma omp parallel for schedule(static) if (n > cheap_grain())
   for (std::int64_t i = 0; i < n; ++i) predict_particle(P, p, static_cast<std::uint32_t>(i), dt);
 }
 
@@ -54,7 +54,7 @@ void correct(ParticleStore& p, const PhysicsParams& P, float dt) {
   const bool continuity = P.density_mode == DensityMode::Continuity;
   const bool shifting = P.shifting.enabled;
   const bool heat = P.heat.on;
-#pragma omp parallel for schedule(static) if (n > kCheapGrain)
+#pragma omp parallel for schedule(static) if (n > cheap_grain())
   for (std::int64_t i = 0; i < n; ++i) {
     if (heat) correct_temperature(P, p, static_cast<std::uint32_t>(i), dt);
     if (!P.is_fluid(p.material[i])) continue;
@@ -66,7 +66,7 @@ void correct(ParticleStore& p, const PhysicsParams& P, float dt) {
 
 void equation_of_state(ParticleStore& p, const PhysicsParams& P) {
   const auto n = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for schedule(static) if (n > kCheapGrain)
+#pragma omp parallel for schedule(static) if (n > cheap_grain())
   for (std::int64_t i = 0; i < n; ++i)
     if (P.is_fluid(p.material[i])) p.pressure[i] = fluid_pressure(P, P.materials.of(p.material[i]), p.density[i]);
 }
@@ -150,7 +150,7 @@ float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeSt
   float dt = std::numeric_limits<float>::infinity();
   const auto n = static_cast<std::int64_t>(p.owned());
   const int d = P.dim;
-#pragma omp parallel for schedule(static) reduction(min : dt) if (n > kCheapGrain)
+#pragma omp parallel for schedule(static) reduction(min : dt) if (n > cheap_grain())
   for (std::int64_t i = 0; i < n; ++i) {
     if (!P.is_fluid(p.material[i])) continue;
     float v2 = 0.0f, a2 = 0.0f;

@@ -197,7 +197,7 @@ void fluid_rates_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsP
   const auto first = static_cast<std::int64_t>(std::upper_bound(starts, starts_end, lo) - starts) - 1;
   const auto cells = static_cast<std::int64_t>(std::lower_bound(starts, starts_end, hi) - starts);
   const auto particles = static_cast<std::int64_t>(hi - lo);
-#pragma omp parallel if (particles > kPairGrain)
+#pragma omp parallel if (particles > pair_grain())
   {
     NeighbourBatch<Dim> batch;
 #pragma omp for schedule(dynamic, 64)
@@ -385,7 +385,7 @@ void wall_state_batched(ParticleStore& ps, const CellGrid& grid, const PhysicsPa
   const CellGridView v = grid.view();
   const auto cells = static_cast<std::int64_t>(grid.owned_cell_count());
   const auto particles = static_cast<std::int64_t>(v.start[cells]);
-#pragma omp parallel if (particles > kPairGrain)
+#pragma omp parallel if (particles > pair_grain())
   {
     NeighbourBatch<Dim> batch;
     std::vector<std::uint32_t> fluid;

@@ -76,7 +76,7 @@ void wall_temperature_batched(ParticleStore& ps, const CellGrid& grid, const Phy
   const CellGridView v = grid.view();
   const auto cells = static_cast<std::int64_t>(grid.owned_cell_count());
   const auto particles = static_cast<std::int64_t>(v.start[cells]);
-#pragma omp parallel if (particles > kPairGrain)
+#pragma omp parallel if (particles > pair_grain())
   {
     std::vector<std::uint32_t> carriers, inside;
     std::vector<float> cx[Dim], cr2, ct, cv;
@@ -129,7 +129,7 @@ void wall_temperature(ParticleStore& p, const CellGrid& grid, const PhysicsParam
   if (wall_state_mirrors_temperature(P)) {
     // The wall state pass has mirrored the temperatures: the other particles' conductivities.
     const auto n = static_cast<std::int64_t>(grid.view().start[grid.owned_cell_count()]);
-#pragma omp parallel for schedule(static) if (n > kCheapGrain)
+#pragma omp parallel for schedule(static) if (n > cheap_grain())
     for (std::int64_t i = 0; i < n; ++i) {
       ThermalFace face;
       ThermalCondition condition;

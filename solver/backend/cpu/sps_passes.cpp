@@ -59,7 +59,7 @@ void for_each_particle_with_candidates(const ParticleStore& ps, const CellGrid& 
   const CellGridView v = grid.view();
   const auto cells = static_cast<std::int64_t>(grid.owned_cell_count());
   const auto particles = static_cast<std::int64_t>(v.start[cells]);
-#pragma omp parallel if (particles > kPairGrain)
+#pragma omp parallel if (particles > pair_grain())
   {
     SpsCandidates<Dim> c;
 #pragma omp for schedule(dynamic, 64)
