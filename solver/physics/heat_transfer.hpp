@@ -217,16 +217,28 @@ struct LinearFitSums {
   float wxx[kPairs] = {};
   float lowest = INFINITY, highest = -INFINITY;  // the neighbours' temperatures span [lowest, highest]
   SPATE_HD float moment(int a, int b) const { return a <= b ? wxx[pair_index(a, b)] : wxx[pair_index(b, a)]; }
+  // The terms one neighbour adds (weight vw = V_j W_ij, temperature t, offset dx), numbered in the
+  // order w, wt, wx, wtx, wxx: emit(k, term k). The one formula of add() and of the CPU's vectorised
+  // lanes (FitLanes, cpu/fluid_pass.hpp), which keep each term in an array of its own.
+  static constexpr int kTerms = 2 + 2 * Dim + kPairs;
+  template <class Offset, class Emit>
+  SPATE_HD static void terms(float vw, float t, const Offset& dx, Emit&& emit) {
+    emit(0, vw);
+    emit(1, vw * t);
+    SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
+      emit(2 + a, vw * dx[a]);
+      emit(2 + Dim + a, vw * t * dx[a]);
+      SPATE_UNROLL for (int b = a; b < Dim; ++b) emit(2 + 2 * Dim + pair_index(a, b), vw * dx[a] * dx[b]);
+    }
+  }
+  // Term k's sum (k a constant once the loops above are unrolled).
+  SPATE_HD float& term(int k) {
+    return k == 0 ? w : k == 1 ? wt : k < 2 + Dim ? wx[k - 2] : k < 2 + 2 * Dim ? wtx[k - 2 - Dim] : wxx[k - 2 - 2 * Dim];
+  }
   SPATE_HD void add(float vw, const Vec<Dim>& dx, float t) {
     lowest = t < lowest ? t : lowest;
     highest = t > highest ? t : highest;
-    w += vw;
-    wt += vw * t;
-    SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
-      wx[a] += vw * dx[a];
-      wtx[a] += vw * t * dx[a];
-      SPATE_UNROLL for (int b = a; b < Dim; ++b) wxx[pair_index(a, b)] += vw * dx[a] * dx[b];
-    }
+    terms(vw, t, dx, [&](int k, float v) { term(k) += v; });
   }
   // Another partial fit's sums added to these (lanes added in lane order: pair_lanes.hpp).
   SPATE_HD void merge(const LinearFitSums& x) {

@@ -119,7 +119,7 @@ inline void add_lanes(float (&lanes)[F][kLanes], const float (&terms)[F][kChunk]
 // wall's mirror point (the first in the visiting order among equals, as wall_temperature_over).
 template <int Dim>
 struct FitLanes {
-  static constexpr int kFields = 2 + 2 * Dim + LinearFitSums<Dim>::kPairs;  // w, wt, wx, wtx, wxx
+  static constexpr int kFields = LinearFitSums<Dim>::kTerms;  // w, wt, wx, wtx, wxx
   using Terms = float[kFields][kChunk];
   float lane[kFields][kLanes];
   float lowest, highest, nearest;
@@ -129,16 +129,10 @@ struct FitLanes {
       for (float& l : f) l = 0.0f;
     lowest = INFINITY, highest = -INFINITY, nearest = INFINITY, near = -1;
   }
-  // Neighbour s's terms (LinearFitSums::add's products, in its order): weight vw = V_j W_ij,
-  // temperature t, offset dx = (x_j - x_w) / h. Inside the vectorised loops.
+  // Neighbour s's terms (LinearFitSums::terms): weight vw = V_j W_ij, temperature t, offset
+  // dx = (x_j - x_w) / h. Inside the vectorised loops.
   static void terms(Terms& out, int s, float vw, float t, const float (&dx)[Dim]) {
-    out[0][s] = vw;
-    out[1][s] = vw * t;
-    SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
-      out[2 + a][s] = vw * dx[a];
-      out[2 + Dim + a][s] = vw * t * dx[a];
-      SPATE_UNROLL for (int b = a; b < Dim; ++b) out[2 + 2 * Dim + LinearFitSums<Dim>::pair_index(a, b)][s] = vw * dx[a] * dx[b];
-    }
+    LinearFitSums<Dim>::terms(vw, t, dx, [&](int k, float v) { out[k][s] = v; });
   }
   // Neighbour n's offset dx = (x_j - x_w) / h and its squared distance to the mirror point
   // (distance_squared's rounding), from a chunk's gathered positions. Inside the vectorised loops.
@@ -173,11 +167,8 @@ struct FitLanes {
   LinearFitSums<Dim> sums() const {
     LinearFitSums<Dim> s;
     s.lowest = lowest, s.highest = highest;
-    for (int l = 0; l < kLanes; ++l) {
-      s.w += lane[0][l], s.wt += lane[1][l];
-      SPATE_UNROLL for (int a = 0; a < Dim; ++a) s.wx[a] += lane[2 + a][l], s.wtx[a] += lane[2 + Dim + a][l];
-      SPATE_UNROLL for (int q = 0; q < LinearFitSums<Dim>::kPairs; ++q) s.wxx[q] += lane[2 + 2 * Dim + q][l];
-    }
+    for (int l = 0; l < kLanes; ++l)
+      SPATE_UNROLL for (int k = 0; k < kFields; ++k) s.term(k) += lane[k][l];
     return s;
   }
 };
