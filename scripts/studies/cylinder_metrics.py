@@ -2,19 +2,36 @@
 number from a run's probes, as Schafer & Turek (1996) define them for their channel:
 c_D = 2 F_D / (rho U^2 D), c_L = 2 F_L / (rho U^2 D), St = D f / U, with U the mean inflow
 velocity (2/3 of the parabola's peak) and F the fluid's whole force on the cylinder (pressure and
-viscous: the force probe's fx + fx_viscous). Used by scripts/studies/cylinder-flow."""
+viscous: the force probe's fx + fx_viscous), plus, where the run has the probe `drive`, the
+mean pressure gradient's push on the cylinder that a body-force-driven channel lacks: in the
+periodic channel the drive's body force f stands for their pressure drop, and with P = p - rho f x
+(their pressure, up to a constant) the divergence theorem gives F_theirs = F_spate + rho f V, V the
+cylinder's area (docs/studies/cylinder-flow.md). Used by scripts/studies/cylinder-flow."""
+import os
+
 import numpy as np
 
 RHO, D, U = 1000.0, 0.1, 0.2  # the case's density, diameter and bulk velocity Q/H
 
 
+def buoyancy(out, t):
+    """rho f V [N/m] at the times t: the drive's body force (probe `drive`) times the density and
+    the cylinder's area; 0 where the run has no such probe."""
+    path = f"{out}/probes/drive.csv"
+    if not os.path.exists(path):
+        return np.zeros_like(t)
+    d = np.genfromtxt(path, delimiter=",", names=True)
+    return RHO * np.interp(t, d["times"], d["fxms2"]) * np.pi * D * D / 4
+
+
 def read(out):
     d = np.genfromtxt(f"{out}/probes/drag.csv", delimiter=",", names=True)
     t = d["times"]
-    fx = d["fxNm"] + d["fx_viscousNm"]
+    b = buoyancy(out, t)
+    fx = d["fxNm"] + d["fx_viscousNm"] + b
     fy = d["fyNm"] + d["fy_viscousNm"]
     q = 0.5 * RHO * U * U * D
-    return t, fx / q, fy / q, d["fxNm"] / q
+    return t, fx / q, fy / q, (d["fxNm"] + b) / q
 
 
 def mean_drag(out, start, end=np.inf):

@@ -153,7 +153,7 @@ struct BodySpec {
   } contact;
 };
 
-enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid, Temperature, HeatFlux, Interface, Body };
+enum class ProbeType { Pressure, Velocity, Height, Force, Front, WallPressure, Centroid, Temperature, HeatFlux, Interface, Body, Drive };
 
 struct ProbeSpec {
   std::string name;

@@ -1547,7 +1547,9 @@ Case read(Section& root, const std::string& file) {
                                       {"force", ProbeType::Force}, {"front", ProbeType::Front}, {"wall_pressure", ProbeType::WallPressure},
                                       {"centroid", ProbeType::Centroid}, {"temperature", ProbeType::Temperature},
                                       {"heat_flux", ProbeType::HeatFlux}, {"interface", ProbeType::Interface},
-                                      {"body", ProbeType::Body}});
+                                      {"body", ProbeType::Body}, {"drive", ProbeType::Drive}});
+    if (probe.type == ProbeType::Drive && !c.drive.on)
+      p.fail(p.raw("type"), "type", "a drive probe records the body force of a `drive:` section, and the case has none");
     if ((probe.type == ProbeType::Temperature || probe.type == ProbeType::HeatFlux) && !c.heat)
       p.fail(p.raw("type"), "type", "a " + p.text("type") + " probe needs heat transfer (a `heat:` section)");
     // A phase (fluid) to measure: required by a centroid, optional for a point, a gauge or a front.
@@ -1628,7 +1630,8 @@ Case read(Section& root, const std::string& file) {
           p.fail(p.raw("position"), "position", "a wall_pressure sensor on a moving wall is not supported (it stays where it is)");
         break;
       case ProbeType::Centroid:
-      case ProbeType::Interface: break;
+      case ProbeType::Interface:
+      case ProbeType::Drive: break;
       case ProbeType::Front: {
         const std::string axis = p.text("axis", std::string("x"));
         probe.axis = axis == "x" ? 0 : axis == "y" ? 1 : axis == "z" ? 2 : -1;

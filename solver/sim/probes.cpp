@@ -653,6 +653,7 @@ std::vector<std::string> probe_columns(const ProbeSpec& p, int dim) {
       for (int k = 0; k < dim; ++k) columns.push_back(std::string(axes[k]) + "[m]");
       components("v", "m/s");
       break;
+    case ProbeType::Drive: components("f", "m/s2"); break;
     case ProbeType::Interface:
       columns.push_back("amplitude[m]");  // half the vertical extent
       columns.push_back("top[m]");
@@ -686,6 +687,7 @@ std::string probe_description(const ProbeSpec& p, int dim) {
              (dim == 2 ? fmt::format(" height at x = {:g} m", p.position[0]) : " height at (x, y) = " + point(2)) +
              (p.connected ? " (connected column)" : "");
     case ProbeType::Centroid: return "centroid and mean velocity of " + p.phase_name;
+    case ProbeType::Drive: return "the body force the drive applies (per unit mass)";
     case ProbeType::Interface: return "interface of " + p.phase_name + ": half its vertical extent, its top and bottom";
     case ProbeType::Force:
       return std::string(p.viscous ? "pressure and viscous force" : "pressure force") + " on solid '" + p.solid + "'" + (p.face >= 0 ? fmt::format(" face {}{}", p.face % 2 ? "+" : "-", axes[p.face / 2]) : "");
@@ -852,6 +854,9 @@ std::vector<std::vector<double>> ProbeSet::sample(double time, std::int64_t step
       }
       case ProbeType::Front: row.push_back(t.max(local_front(w, p.axis, front_level(p, case_), p.phase))); break;
       case ProbeType::Centroid: row = sample_centroid(w, p.phase); break;
+      case ProbeType::Drive:
+        for (int k = 0; k < case_.dim; ++k) row.push_back(w.params().body_force[k]);
+        break;
       case ProbeType::Interface: {
         const auto [low, high] = local_interface_extent(w, case_, p.phase);
         const double bottom = -t.max(-low), top = t.max(high);

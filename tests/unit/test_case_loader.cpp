@@ -400,6 +400,7 @@ TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
        {"fluid_blocks[0].min", "'centre' and 'radius' only"}},
       {"wet bed of an unknown fluid", {"wet_bed={depth: 0.02, fluid: air}"}, {"wet_bed.fluid", "no fluid named 'air'"}},
       {"probe on a missing solid", {"probes=[{name: f, type: force, solid: nope}]"}, {"probes[0].solid", "no solid named 'nope'"}},
+      {"drive probe without a drive", {"probes=[{name: f, type: drive}]"}, {"probes[0].type", "drive probe", "has none"}},
       {"drive without a periodic axis", {"drive={mean_velocity: [0.1, 0]}"}, {"'drive'", "needs a periodic axis"}},
       {"drive across a wall", {"tank.periodic=[x]", "drive={mean_velocity: [0.1, 0.1]}"}, {"'drive.mean_velocity'", "y component must be 0"}},
       {"drive with a negative response time", {"tank.periodic=[x]", "drive={mean_velocity: [0.1, 0], response_time: -1}"},
