@@ -21,14 +21,20 @@ SPATE_HD bool finite_value(float v) {
 
 // Brings a position that left a periodic axis back by one period (the owner does it once per step).
 // A position a hair below the lower end rounds to the upper end itself once the period is added
-// (-1e-8 + 1 is 1.0f), which is outside [lower, upper): it goes to the lower end instead.
+// (-1e-8 + 1 is 1.0f), which is outside [lower, upper): it goes to the lower end instead. The
+// lattice's cell decides as well as the coordinate: a position an ulp below the upper end can have
+// (x - origin) / cell_size round up to the cell count, a cell that does not exist (a 1 mm
+// Poiseuille channel at dp = L/80 stopped on "left the domain along x (position 0.0006 m, domain
+// [0, 0.0006] m)"); it wraps too, and lands on the lower end if the subtraction rounds below it.
+// Positions that never reached either end are left as they are (bit for bit).
 SPATE_HD void wrap_periodic(const Lattice& L, float& x, int axis) {
-  if (!L.periodic[axis]) return;
-  if (x >= L.upper(axis)) {
+  if (!L.periodic[axis] || !finite_value(x)) return;  // a NaN or infinity: the position check reports it
+  if (x >= L.upper(axis) || L.cell_of(x, axis) >= L.cells[axis]) {
     x -= L.period[axis];
+    if (x < L.origin[axis] || L.cell_of(x, axis) < 0) x = L.origin[axis];
   } else if (x < L.origin[axis]) {
     x += L.period[axis];
-    if (x >= L.upper(axis)) x = L.origin[axis];
+    if (x >= L.upper(axis) || L.cell_of(x, axis) >= L.cells[axis]) x = L.origin[axis];
   }
 }
 

@@ -92,6 +92,32 @@ TEST(Wrap, EveryPeriodicPositionLandsInsideTheLattice) {
   }
 }
 
+// The cell decides too: a position an ulp below the upper end whose cell rounds to the cell count
+// (the 1 mm Poiseuille channel at dp = L/80: 0.6 mm long, 18 cells; x = 0.00059999997 times
+// 1 / cell_size = 30000 rounds to 18.0).
+TEST(Wrap, APositionWhoseCellRoundsPastTheLastComesBack) {
+  Lattice L = periodic_lattice(2);
+  L.origin[0] = 0.0f;
+  L.cells[0] = 18;
+  L.cell_size[0] = 6.0e-4f / 18;
+  L.inv_cell[0] = 1.0f / L.cell_size[0];
+  L.period[0] = L.upper(0);
+  int found = 0;
+  for (float x0 = L.upper(0); found < 4 && x0 > 0.99f * L.upper(0); x0 = nextafterf(x0, 0.0f)) {
+    if (x0 >= L.upper(0) || L.cell_of(x0, 0) < L.cells[0]) continue;  // only the rounding case
+    ++found;
+    float x = x0;
+    wrap_periodic(L, x, 0);
+    EXPECT_GE(x, L.origin[0]) << x0;
+    EXPECT_LT(x, L.upper(0)) << x0;
+    EXPECT_EQ(position_fault(L, x, 0), PositionFault::None) << x0;
+  }
+  EXPECT_GT(found, 0) << "no position below the upper end rounds into the cell past the last";
+  float inside = 0.5f * L.upper(0), before = inside;  // and a position inside is left alone
+  wrap_periodic(L, inside, 0);
+  EXPECT_EQ(inside, before);
+}
+
 TEST(Halo, RefreshBringsCurrentValuesToEveryGhost) {
   for (int dim : {2, 3}) {
     const Lattice L = periodic_lattice(dim);
