@@ -722,11 +722,16 @@ ParticleStore generate_particles(const Case& c) {
       for (int a = 0; a < c.dim; ++a) p.vel[a][i] = static_cast<float>(u[a]);
       const FluidMaterial& m = P.materials.of(kind);
       // Start from hydrostatic balance (inverse of eq. 9) rather than from a uniform density that
-      // would first have to collapse into it.
+      // would first have to collapse into it, on top of the background pressure: a particle at the
+      // free surface (or anywhere in a flow without gravity) starts at rho0 and p_b, as the several
+      // fluids' stacks do (layered_hydrostatic_density). Starting it at p = 0 instead gave it the
+      // density below rho0 that cancels p_b, and the continuity equation kept that offset: a closed
+      // channel then ran about its start's zero pressure whatever p_b, and the pressure minima
+      // beside the cylinder of cylinder_flow_2d.yaml went below zero (docs/studies/cylinder-flow.md).
       float x[3] = {0, 0, 0};
       for (int a = 0; a < c.dim; ++a) x[a] = p.pos[a][i];
       const double depth = std::max(0.0, rest_surface(c, x) - x[c.dim - 1]);
-      p.density[i] = tait_density(static_cast<float>(m.rho0 * g * depth), m);
+      p.density[i] = tait_density(static_cast<float>(m.background_pressure + m.rho0 * g * depth), m);
     }
     ++i;
   };

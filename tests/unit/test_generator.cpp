@@ -169,6 +169,30 @@ TEST(Generator, HydrostaticInitialDensity) {
   }
 }
 
+// A background pressure is added to the hydrostatic one, as the EOS adds it (eq. 9): the particles
+// at the free surface start at rho0 and p_b, and without gravity every particle does (a closed,
+// driven channel). Before 2026-12-05 they started at p = 0, i.e. at the density below rho0 that
+// cancels p_b, and the continuity equation kept the offset: p_b did not raise the pressure at all.
+TEST(Generator, BackgroundPressureIsWhereTheFluidStarts) {
+  for (const double g : {9.81, 0.0}) {
+    const Case c = parse_case(std::string(kSmallTank) + "gravity: [0, " + std::to_string(-g) + "]\nfluid: {background_pressure: 200}\n",
+                              "small.yaml");
+    const ParticleStore p = generate_particles(c);
+    const PhysicsParams P = physics_params(c);
+    const FluidMaterial& m = P.materials.fluid[0];
+    ASSERT_EQ(m.background_pressure, 200.0f);
+    int top_row = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (p.material[i] != kFluidMaterial) continue;
+      const double depth = 0.03 - p.pos[1][i];
+      EXPECT_NEAR(tait_pressure(p.density[i], m), 200.0 + 1000.0 * g * depth, 0.01 * 200.0) << "particle " << i << ", g " << g;
+      if (g == 0.0) EXPECT_NEAR(p.density[i], m.rho0, 1e-3f) << "particle " << i;
+      top_row += depth < 0.01;
+    }
+    EXPECT_GT(top_row, 0);
+  }
+}
+
 TEST(Generator, ZeroFluidParticlesIsBadInput) {
   // A block thinner than half a spacing holds no site centre.
   const Case c = parse_case(kSmallTank, "thin.yaml", {"fluid_blocks=[{min: [0.001, 0], max: [0.004, 0.03]}]"});

@@ -1,0 +1,123 @@
+"""The fluid next to the cylinder of cases/cylinder_flow_2d.yaml, from a run's saved steps: what the
+fluid's own fields say the drag is, set beside the force its particles exert on the wall's, angle by
+angle (docs/studies/cylinder-flow.md, "Where the drag goes"). For each saved step in [t0, t1]:
+- the drag from the fields: least-squares fits, over the fluid particles within `delta` of the
+  surface, of u_t = sum_k (r - R) (a_k cos k th + b_k sin k th) + (r - R)^2 (...) + (...) (a slip
+  term) and p = sum_k (...) + (r - R) (...), Fourier order 6; then the viscous drag
+  -pi R mu b_1 (the sin-th part of du_t/dr at r = R) and the pressure drag -pi R c_1 (p's cos-th
+  part at r = R), as c_D (without the drive's push);
+- per 30-degree sector (th from the rear, counter-clockwise): the tangential (counter-clockwise)
+  viscous force of the fluid on the cylinder's particles, the pair term the solver uses (eq. 8 with
+  Adami's wall velocity as the saved step holds it), against mu du_t/dr times the sector's arc from
+  a quadratic fit within 0.02 m; the mean and least pressure within 3 dp of the surface; the mean
+  gap from the surface to the five nearest fluid particles, in dp.
+Usage: /usr/bin/python3 scripts/studies/cylinder_near_wall.py RUN D_OVER_DP [T0 T1]
+"""
+import sys
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+sys.path.insert(0, str(Path(__file__).parent))
+from run_output import saved_steps, snapshot_arrays  # noqa: E402
+
+R, CENTRE, MU, RHO0 = 0.05, np.array([0.2, 0.2]), 1.0, 1000.0
+Q = 0.5 * RHO0 * 0.2 ** 2 * 0.1  # 1/2 rho U^2 D
+SMOOTHING_RATIO, FOURIER, SECTORS = 1.3, 6, 12
+FLUID, CYLINDER = 0, 2  # the saved `kind` of fluid and of the case's one solid
+
+
+def wendland_gradient_norm(h, dp):
+    """kernel_norm over the lattice's second moment (physics/kernels.hpp lattice_gradient_moment)."""
+    norm = 7 / (4 * np.pi * h * h)
+    n = int(2 * h / dp) + 1
+    i, j = np.meshgrid(np.arange(-n, n + 1), np.arange(-n, n + 1))
+    r = np.hypot(i, j) * dp
+    q = r / h
+    inside = (q < 2) & (r > 0)
+    F = -5 * norm * (1 - q[inside] / 2) ** 3 / h ** 2
+    return norm / np.sum(-dp * dp * (i[inside] * dp) ** 2 * F)
+
+
+def fourier(th):
+    cols = [np.ones_like(th)]
+    for k in range(1, FOURIER + 1):
+        cols += [np.cos(k * th), np.sin(k * th)]
+    return np.stack(cols, 1)  # column 1: cos th, column 2: sin th
+
+
+def fluid_side_drag(r, th, ut, p, delta):
+    s = r - R < delta
+    y, Fo = r[s] - R, fourier(th[s])
+    nf = Fo.shape[1]
+    cu = np.linalg.lstsq(np.hstack([Fo * y[:, None], Fo * (y * y)[:, None], Fo]), ut[s], rcond=None)[0]
+    cp = np.linalg.lstsq(np.hstack([Fo, Fo * y[:, None]]), p[s], rcond=None)[0]
+    assert nf > 2
+    return -np.pi * R * MU * cu[2] / Q, -np.pi * R * cp[1] / Q
+
+
+def sector_of(th):
+    return (((th + np.pi) / (2 * np.pi) * SECTORS).astype(int)) % SECTORS
+
+
+def analyse(run, n, t0, t1):
+    dp = 0.1 / n
+    h = SMOOTHING_RATIO * dp
+    gn, eta2, m = wendland_gradient_norm(h, dp), 0.01 * h * h, RHO0 * dp * dp
+    drag, wall, shear, pmean, pmin, gap, steps = [], 0, 0, 0, 0, 0, 0
+    for t, step in saved_steps(Path(run)):
+        if t < t0 - 1e-3 or t > t1 + 1e-3:
+            continue
+        x, a = snapshot_arrays(step, ["kind", "velocity", "density", "pressure"])
+        x, v, rho, kind = x[:, :2], a["velocity"][:, :2], a["density"], a["kind"]
+        f, w = np.where(kind == FLUID)[0], np.where(kind == CYLINDER)[0]
+        d = x[f] - CENTRE
+        r, th = np.hypot(d[:, 0], d[:, 1]), np.arctan2(d[:, 1], d[:, 0])
+        ut = (-d[:, 1] * v[f, 0] + d[:, 0] * v[f, 1]) / r
+        drag.append([fluid_side_drag(r, th, ut, a["pressure"][f], delta) for delta in (0.015, 0.02, 0.03)])
+        # The wall particles' viscous pair force, as the solver sums it (fluid_pair_terms' laminar term).
+        tree, wt = cKDTree(x[f]), np.zeros(SECTORS)
+        for b in w:
+            js = f[tree.query_ball_point(x[b], 2 * h)]
+            if len(js) == 0:
+                continue
+            e = x[js] - x[b]
+            r2 = (e * e).sum(1)
+            F = -5 * gn * np.maximum(1 - np.sqrt(r2) / h / 2, 0) ** 3 / h ** 2
+            lam = MU / m * ((m / rho[js]) ** 2 + (m / rho[b]) ** 2) * r2 * F / (r2 + eta2)
+            force = -(m * lam[:, None] * (v[js] - v[b])).sum(0)
+            tb = np.arctan2(x[b, 1] - CENTRE[1], x[b, 0] - CENTRE[0])
+            wt[sector_of(np.array([tb]))[0]] += force @ np.array([-np.sin(tb), np.cos(tb)])
+        wall = wall + wt
+        sec = sector_of(th)
+        for k in range(SECTORS):
+            s = (sec == k) & (r - R < 0.02)
+            shear_k = np.polyfit(r[s] - R, ut[s], 2)[-2] if s.sum() > 3 else np.nan
+            near = (sec == k) & (r - R < 3 * dp)
+            arc = 2 * np.pi * R / SECTORS
+            if isinstance(shear, int):
+                shear, pmean, pmin, gap = (np.zeros(SECTORS) for _ in range(4))
+            shear[k] += MU * shear_k * arc
+            pmean[k] += a["pressure"][f][near].mean()
+            pmin[k] += a["pressure"][f][near].min()
+            gap[k] += np.sort((r[sec == k] - R) / dp)[:5].mean()
+        steps += 1
+    if steps == 0:
+        sys.exit(f"{run}: no saved step between {t0} and {t1} s")
+    drag = np.array(drag).mean(0)
+    print(f"{run} (D/dp = {n:g}), {steps} saved steps in [{t0:g}, {t1:g}] s")
+    for delta, (cv, cp) in zip((0.015, 0.02, 0.03), drag):
+        print(f"  from the fields within {delta} m: viscous c_D {cv:.3f}, pressure c_D {cp:.3f} (without the drive's push)")
+    centres = np.degrees(-np.pi + 2 * np.pi * (np.arange(SECTORS) + 0.5) / SECTORS)
+    rows = [("sector centre [deg]", centres, "{:7.0f}"), ("wall pair force [N/m]", wall / steps, "{:7.3f}"),
+            ("mu du_t/dr x arc [N/m]", shear / steps, "{:7.3f}"), ("mean p, 3 dp [Pa]", pmean / steps, "{:7.0f}"),
+            ("least p, 3 dp [Pa]", pmin / steps, "{:7.0f}"), ("gap of nearest 5 [dp]", gap / steps, "{:7.2f}")]
+    for name, vals, fmt in rows:
+        print(f"  {name:24s}" + " ".join(fmt.format(v) for v in vals))
+
+
+if __name__ == "__main__":
+    run, n = sys.argv[1], float(sys.argv[2])
+    t0, t1 = (float(sys.argv[3]), float(sys.argv[4])) if len(sys.argv) > 4 else (2.0, 3.0)
+    analyse(run, n, t0, t1)
