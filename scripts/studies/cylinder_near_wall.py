@@ -11,20 +11,22 @@ angle (docs/studies/cylinder-flow.md, "Where the drag goes"). For each saved ste
   Adami's wall velocity as the saved step holds it), against mu du_t/dr times the sector's arc from
   a quadratic fit within 0.02 m; the mean and least pressure within 3 dp of the surface; the mean
   gap from the surface to the five nearest fluid particles, in dp.
-Usage: /usr/bin/python3 scripts/studies/cylinder_near_wall.py RUN D_OVER_DP [T0 T1]
+The spacing, smoothing ratio, density and viscosity come from the run's own case.yaml (Wendland
+kernel only, the case's).
+Usage: /usr/bin/python3 scripts/studies/cylinder_near_wall.py RUN [T0 T1]   (T0, T1: 2, 3 s)
 """
 import sys
 from pathlib import Path
 
 import numpy as np
+import yaml
 from scipy.spatial import cKDTree
 
 sys.path.insert(0, str(Path(__file__).parent))
 from run_output import saved_steps, snapshot_arrays  # noqa: E402
 
-R, CENTRE, MU, RHO0 = 0.05, np.array([0.2, 0.2]), 1.0, 1000.0
-Q = 0.5 * RHO0 * 0.2 ** 2 * 0.1  # 1/2 rho U^2 D
-SMOOTHING_RATIO, FOURIER, SECTORS = 1.3, 6, 12
+R, CENTRE, U = 0.05, np.array([0.2, 0.2]), 0.2  # the case's cylinder and bulk velocity
+FOURIER, SECTORS = 6, 12
 FLUID, CYLINDER = 0, 2  # the saved `kind` of fluid and of the case's one solid
 
 
@@ -47,25 +49,30 @@ def fourier(th):
     return np.stack(cols, 1)  # column 1: cos th, column 2: sin th
 
 
-def fluid_side_drag(r, th, ut, p, delta):
+def fluid_side_drag(r, th, ut, p, delta, mu):
+    """Viscous and pressure drag [N/m] from the fits (column 2 of u_t's first block: sin th times
+    (r - R), i.e. du_t/dr's sin-th part; column 1 of p's: its cos-th part at r = R)."""
     s = r - R < delta
     y, Fo = r[s] - R, fourier(th[s])
-    nf = Fo.shape[1]
     cu = np.linalg.lstsq(np.hstack([Fo * y[:, None], Fo * (y * y)[:, None], Fo]), ut[s], rcond=None)[0]
     cp = np.linalg.lstsq(np.hstack([Fo, Fo * y[:, None]]), p[s], rcond=None)[0]
-    assert nf > 2
-    return -np.pi * R * MU * cu[2] / Q, -np.pi * R * cp[1] / Q
+    return -np.pi * R * mu * cu[2], -np.pi * R * cp[1]
 
 
 def sector_of(th):
     return (((th + np.pi) / (2 * np.pi) * SECTORS).astype(int)) % SECTORS
 
 
-def analyse(run, n, t0, t1):
-    dp = 0.1 / n
-    h = SMOOTHING_RATIO * dp
-    gn, eta2, m = wendland_gradient_norm(h, dp), 0.01 * h * h, RHO0 * dp * dp
-    drag, wall, shear, pmean, pmin, gap, steps = [], 0, 0, 0, 0, 0, 0
+def analyse(run, t0, t1):
+    case = yaml.safe_load((Path(run) / "case.yaml").read_text())
+    if case.get("kernel", "wendland") != "wendland":
+        sys.exit(f"{run}: the kernel is {case['kernel']}; this script knows the Wendland kernel only")
+    dp, rho0, mu = case["dp"], case["fluid"]["density"], case["fluid"]["viscosity"]
+    q = 0.5 * rho0 * U * U * 2 * R  # 1/2 rho U^2 D
+    h = case.get("smoothing_ratio", 1.3) * dp
+    gn, eta2, m = wendland_gradient_norm(h, dp), 0.01 * h * h, rho0 * dp * dp
+    drag, steps = [], 0
+    wall, shear, pmean, pmin, gap = (np.zeros(SECTORS) for _ in range(5))
     for t, step in saved_steps(Path(run)):
         if t < t0 - 1e-3 or t > t1 + 1e-3:
             continue
@@ -75,9 +82,9 @@ def analyse(run, n, t0, t1):
         d = x[f] - CENTRE
         r, th = np.hypot(d[:, 0], d[:, 1]), np.arctan2(d[:, 1], d[:, 0])
         ut = (-d[:, 1] * v[f, 0] + d[:, 0] * v[f, 1]) / r
-        drag.append([fluid_side_drag(r, th, ut, a["pressure"][f], delta) for delta in (0.015, 0.02, 0.03)])
+        drag.append([fluid_side_drag(r, th, ut, a["pressure"][f], delta, mu) for delta in (0.015, 0.02, 0.03)])
         # The wall particles' viscous pair force, as the solver sums it (fluid_pair_terms' laminar term).
-        tree, wt = cKDTree(x[f]), np.zeros(SECTORS)
+        tree = cKDTree(x[f])
         for b in w:
             js = f[tree.query_ball_point(x[b], 2 * h)]
             if len(js) == 0:
@@ -85,28 +92,24 @@ def analyse(run, n, t0, t1):
             e = x[js] - x[b]
             r2 = (e * e).sum(1)
             F = -5 * gn * np.maximum(1 - np.sqrt(r2) / h / 2, 0) ** 3 / h ** 2
-            lam = MU / m * ((m / rho[js]) ** 2 + (m / rho[b]) ** 2) * r2 * F / (r2 + eta2)
+            lam = mu / m * ((m / rho[js]) ** 2 + (m / rho[b]) ** 2) * r2 * F / (r2 + eta2)
             force = -(m * lam[:, None] * (v[js] - v[b])).sum(0)
             tb = np.arctan2(x[b, 1] - CENTRE[1], x[b, 0] - CENTRE[0])
-            wt[sector_of(np.array([tb]))[0]] += force @ np.array([-np.sin(tb), np.cos(tb)])
-        wall = wall + wt
+            wall[sector_of(np.array([tb]))[0]] += force @ np.array([-np.sin(tb), np.cos(tb)])
         sec = sector_of(th)
         for k in range(SECTORS):
             s = (sec == k) & (r - R < 0.02)
             shear_k = np.polyfit(r[s] - R, ut[s], 2)[-2] if s.sum() > 3 else np.nan
             near = (sec == k) & (r - R < 3 * dp)
-            arc = 2 * np.pi * R / SECTORS
-            if isinstance(shear, int):
-                shear, pmean, pmin, gap = (np.zeros(SECTORS) for _ in range(4))
-            shear[k] += MU * shear_k * arc
+            shear[k] += mu * shear_k * 2 * np.pi * R / SECTORS
             pmean[k] += a["pressure"][f][near].mean()
             pmin[k] += a["pressure"][f][near].min()
             gap[k] += np.sort((r[sec == k] - R) / dp)[:5].mean()
         steps += 1
     if steps == 0:
         sys.exit(f"{run}: no saved step between {t0} and {t1} s")
-    drag = np.array(drag).mean(0)
-    print(f"{run} (D/dp = {n:g}), {steps} saved steps in [{t0:g}, {t1:g}] s")
+    drag = np.array(drag).mean(0) / q
+    print(f"{run} (D/dp = {2 * R / dp:g}), {steps} saved steps in [{t0:g}, {t1:g}] s")
     for delta, (cv, cp) in zip((0.015, 0.02, 0.03), drag):
         print(f"  from the fields within {delta} m: viscous c_D {cv:.3f}, pressure c_D {cp:.3f} (without the drive's push)")
     centres = np.degrees(-np.pi + 2 * np.pi * (np.arange(SECTORS) + 0.5) / SECTORS)
@@ -118,6 +121,6 @@ def analyse(run, n, t0, t1):
 
 
 if __name__ == "__main__":
-    run, n = sys.argv[1], float(sys.argv[2])
-    t0, t1 = (float(sys.argv[3]), float(sys.argv[4])) if len(sys.argv) > 4 else (2.0, 3.0)
-    analyse(run, n, t0, t1)
+    run = sys.argv[1]
+    t0, t1 = (float(sys.argv[2]), float(sys.argv[3])) if len(sys.argv) > 3 else (2.0, 3.0)
+    analyse(run, t0, t1)

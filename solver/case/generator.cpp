@@ -723,11 +723,9 @@ ParticleStore generate_particles(const Case& c) {
       const FluidMaterial& m = P.materials.of(kind);
       // Start from hydrostatic balance (inverse of eq. 9) rather than from a uniform density that
       // would first have to collapse into it, on top of the background pressure: a particle at the
-      // free surface (or anywhere in a flow without gravity) starts at rho0 and p_b, as the several
-      // fluids' stacks do (layered_hydrostatic_density). Starting it at p = 0 instead gave it the
-      // density below rho0 that cancels p_b, and the continuity equation kept that offset: a closed
-      // channel then ran about its start's zero pressure whatever p_b, and the pressure minima
-      // beside the cylinder of cylinder_flow_2d.yaml went below zero (docs/studies/cylinder-flow.md).
+      // free surface (or anywhere without gravity) starts at rho0 and p_b, as the several fluids'
+      // stacks do (layered_hydrostatic_density). The continuity equation keeps the density a particle
+      // starts with, so a start at p = 0 would cancel p_b for the whole run.
       float x[3] = {0, 0, 0};
       for (int a = 0; a < c.dim; ++a) x[a] = p.pos[a][i];
       const double depth = std::max(0.0, rest_surface(c, x) - x[c.dim - 1]);
