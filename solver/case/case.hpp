@@ -226,6 +226,7 @@ struct Case {
   double artificial_viscosity = 0.0;
   double wall_artificial_viscosity = 1.0;  // the factor on alpha in fluid-wall pairs
   bool tension = true;  // false: fluid pressures clipped at 0 (eos.hpp fluid_pressure)
+  bool wall_tension = false;  // true: wall pressures not clipped at 0 (wall_boundary.hpp finish_wall)
   // true: the walls' density from their pressure by seventh_root (eos.hpp), the same bits on every
   // device; false: the C library's powf (fluid.portable_eos).
   bool portable_eos = false;

@@ -1187,7 +1187,7 @@ Case read(Section& root, const std::string& file) {
       for (const char* key : {"name", "density", "viscosity", "sound_speed", "tait_exponent", "background_pressure", "thermal"})
         if (f.has(key))
           f.fail(f.raw(key), key, "with a 'fluids' list each fluid's properties go in its entry; 'fluid' keeps only "
-                                  "artificial_viscosity, wall_artificial_viscosity, body_force, tension and portable_eos");
+                                  "artificial_viscosity, wall_artificial_viscosity, body_force, tension, wall_tension and portable_eos");
     }
     c.artificial_viscosity = f.number("artificial_viscosity", 0.0);
     if (c.artificial_viscosity < 0) f.fail(f.raw("artificial_viscosity"), "artificial_viscosity", "must be >= 0");
@@ -1196,6 +1196,9 @@ Case read(Section& root, const std::string& file) {
       f.fail(f.raw("wall_artificial_viscosity"), "wall_artificial_viscosity", "must be between 0 and 1");
     c.body_force = f.vector("body_force", d, Vec3d{0, 0, 0});
     c.tension = f.boolean("tension", true);
+    c.wall_tension = f.boolean("wall_tension", false);
+    if (c.wall_tension && !c.tension)
+      f.fail(f.raw("wall_tension"), "wall_tension", "walls that hold tension need a fluid that takes it (tension: false clips the fluid's pressure at 0)");
     c.portable_eos = f.boolean("portable_eos", false);
     f.finish();
   }
@@ -1864,6 +1867,7 @@ PhysicsParams physics_params(const Case& c) {
     P.surface_tension.on = P.surface_tension.on || sigma > 0.0f;
   }
   P.tension = c.tension;
+  P.wall_tension = c.wall_tension;
   P.portable_eos = c.portable_eos;
   for (int k = 0; k < 3; ++k) {
     P.tank_lo[k] = static_cast<float>(c.tank_origin[k]);

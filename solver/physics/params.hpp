@@ -76,6 +76,9 @@ struct PhysicsParams {
   // false: fluid pressures are clipped at 0 and continuity densities at rho0 (fluid.tension;
   // eos.hpp fluid_pressure, integrator.hpp correct_density).
   bool tension = true;
+  // true: the walls take the negative pressure the fluid around them implies (fluid.wall_tension;
+  // wall_boundary.hpp finish_wall); false: clipped at 0, so that a wall does not hold a free surface.
+  bool wall_tension = false;
   // The walls' density from their pressure (wall_boundary.hpp finish_wall) through seventh_root,
   // which rounds alike on every device, instead of powf (fluid.portable_eos; eos.hpp).
   bool portable_eos = false;

@@ -75,7 +75,10 @@ SPATE_HD float adami_pressure(const PhysicsParams& P, const WallSums<Dim>& s, co
   return (s.pw + g_dot) / s.w;
 }
 
-// Negative wall pressures would glue fluid to walls at a free surface; they are clipped to zero.
+// Negative wall pressures would glue fluid to walls at a free surface; they are clipped to zero
+// unless the case says the walls hold tension (fluid.wall_tension, for flows without a free surface:
+// there the clip lets fluid in tension, which pulls on itself with p_i + p_j < 0 but on the wall with
+// p_i alone, tear off the wall; docs/studies/cylinder-flow.md).
 // The density comes from the equation of state of the fluid the wall bounds (materials.hpp).
 // `material` and `x` are the wall particle's: a moving wall adds its motion (wall_motion.hpp).
 template <int Dim>
@@ -87,7 +90,7 @@ SPATE_HD WallState<Dim> finish_wall(const PhysicsParams& P, const WallSums<Dim>&
   // (g - a_w): the wall's acceleration at its own position (zero for a static wall).
   const Vec<Dim> a_w = motion ? rigid_acceleration<Dim>(*motion, x) : zero_vec<Dim>();
   const float p = adami_pressure(P, s, a_w);
-  out.p = p > 0.0f ? p : 0.0f;
+  out.p = p > 0.0f || P.wall_tension ? p : 0.0f;
   out.rho = tait_density(out.p, M, P.portable_eos);
   if (motion) {
     const Vec<Dim> v_w = rigid_velocity<Dim>(*motion, x);

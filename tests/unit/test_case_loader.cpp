@@ -41,6 +41,7 @@ fluid:
   sound_speed: 30
   artificial_viscosity: 0.05
   wall_artificial_viscosity: 0.25
+  wall_tension: true
   body_force: [0.1, 0, 0]
 density:
   mode: summation
@@ -187,6 +188,8 @@ TEST(CaseLoader, EveryKeyIsRead) {
   EXPECT_DOUBLE_EQ(c.artificial_viscosity, 0.05);
   EXPECT_DOUBLE_EQ(c.wall_artificial_viscosity, 0.25);
   EXPECT_FLOAT_EQ(physics_params(c).wall_artificial_viscosity, 0.25f);
+  EXPECT_TRUE(c.wall_tension);
+  EXPECT_TRUE(physics_params(c).wall_tension);
   EXPECT_DOUBLE_EQ(c.body_force[0], 0.1);
   EXPECT_EQ(c.density_mode, DensityMode::Summation);
   EXPECT_EQ(c.diffusion, DensityDiffusion::MolteniColagrossi);
@@ -425,6 +428,8 @@ TEST(CaseLoader, BadInputIsReportedWithFileKeyAndReason) {
        {"probes[0].window", ">= 0"}},
       {"unknown momentum flux", {"momentum.flux=upwind"}, {"'momentum.flux'", "central", "riemann"}},
       {"wall factor above one", {"fluid.wall_artificial_viscosity=2"}, {"'fluid.wall_artificial_viscosity'", "between 0 and 1"}},
+      {"walls in tension beside a fluid that takes none", {"fluid.tension=false", "fluid.wall_tension=true"},
+       {"'fluid.wall_tension'", "tension: false"}},
       {"unknown wall shear", {"tank.wall_shear=rough"}, {"'tank.wall_shear'", "laminar", "log_law"}},
       {"free slip along a periodic axis", {"tank.periodic=[x]", "tank.free_slip=[x]"}, {"'tank.free_slip'", "periodic"}},
       {"free slip along a missing axis", {"tank.free_slip=[z]"}, {"'tank.free_slip'", "'z' is not an axis"}},

@@ -23,6 +23,30 @@ PhysicsParams water_2d() {
   return P;
 }
 
+// Adami's wall pressure is clipped at 0 (a wall must not hold a free surface) unless the case's walls
+// hold tension (fluid.wall_tension: flows without a free surface, where the clip lets fluid in
+// tension tear off the wall); the density follows the pressure either way.
+TEST(WallBoundary, WallsHoldTensionOnlyWhenTheCaseSaysSo) {
+  PhysicsParams P = water_2d();
+  P.materials.fluid[0].tait_b = 1000.0f * 25.0f / 7.0f;  // c0 = 5 m/s
+  P.materials.fluid[0].gamma = 7.0f;
+  P.materials.fluid[0].inv_gamma = 1.0f / 7.0f;
+  P.materials.fluids = 1;
+  P.materials.count = 2;  // fluid, tank
+  WallSums<2> s;
+  s.w = 2.0f;
+  s.pw = -100.0f;  // the fluid around it at -50 Pa
+  const Vec<2> x{{0.5f, -0.01f}};
+  const WallState<2> clipped = finish_wall(P, s, P.materials.tank(), x);
+  EXPECT_FLOAT_EQ(clipped.p, 0.0f);
+  EXPECT_FLOAT_EQ(clipped.rho, 1000.0f);
+  P.wall_tension = true;
+  const WallState<2> held = finish_wall(P, s, P.materials.tank(), x);
+  EXPECT_FLOAT_EQ(held.p, -50.0f);
+  EXPECT_NEAR(held.rho, 1000.0f * std::pow(1.0f - 50.0f / P.materials.fluid[0].tait_b, 1.0f / 7.0f), 1e-3f);
+  EXPECT_LT(held.rho, 1000.0f);
+}
+
 TEST(WallBoundary, FreeSlipWallsMirrorOnlyTheNormalVelocity) {
   PhysicsParams P;
   P.dim = 2;
