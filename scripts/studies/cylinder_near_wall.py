@@ -10,7 +10,12 @@ angle (docs/studies/cylinder-flow.md, "Where the drag goes"). For each saved ste
   viscous force of the fluid on the cylinder's particles, the pair term the solver uses (eq. 8 with
   Adami's wall velocity as the saved step holds it), against mu du_t/dr times the sector's arc from
   a quadratic fit within 0.02 m; the mean and least pressure within 3 dp of the surface; the mean
-  gap from the surface to the five nearest fluid particles, in dp.
+  gap from the surface to the five nearest fluid particles, in dp; the SPH shear stress across the
+  lines 1, 2 and 4 dp from the surface (the tangential viscous pair forces that the fluid above the
+  line receives from the fluid below it, per sector, by the pair midpoint's angle); and how evenly
+  the fluid within 6 dp of the surface is spread: its particle count and the mean and tenth
+  percentile of the distance to each particle's nearest neighbour, in dp (clumps of the tensile
+  instability show as small distances and few particles).
 The spacing, smoothing ratio, density and viscosity come from the run's own case.yaml (Wendland
 kernel only, the case's).
 Usage: /usr/bin/python3 scripts/studies/cylinder_near_wall.py RUN [T0 T1]   (T0, T1: 2, 3 s)
@@ -27,6 +32,7 @@ from run_output import saved_steps, snapshot_arrays  # noqa: E402
 
 R, CENTRE, U = 0.05, np.array([0.2, 0.2]), 0.2  # the case's cylinder and bulk velocity
 FOURIER, SECTORS = 6, 12
+LINES = (1, 2, 4)  # dp from the surface: the lines across which the SPH shear stress is summed
 FLUID, CYLINDER = 0, 2  # the saved `kind` of fluid and of the case's one solid
 
 
@@ -59,6 +65,31 @@ def fluid_side_drag(r, th, ut, p, delta, mu):
     return -np.pi * R * mu * cu[2], -np.pi * R * cp[1]
 
 
+def line_stresses(x, v, rho, kind, dp, h, gn, eta2, mu, m, out):
+    """Adds to out[n, sector] the counter-clockwise tangential viscous force [N/m] that the fluid
+    more than LINES[n] dp from the surface receives from the particles nearer to it, the cylinder's
+    included (eq. 8's pairs, as the solver sums them, with the walls' no-slip velocity as saved),
+    each pair counted in the sector of its midpoint."""
+    d = x - CENTRE
+    r = np.hypot(d[:, 0], d[:, 1])
+    r = np.where(kind == CYLINDER, R - dp, r)  # the cylinder's particles lie below every line
+    near = np.where(((kind == FLUID) | (kind == CYLINDER)) & (r < R + (max(LINES) + 3) * dp))[0]
+    pairs = np.array(sorted(cKDTree(x[near]).query_pairs(2 * h)))
+    i, j = near[pairs[:, 0]], near[pairs[:, 1]]
+    e = x[i] - x[j]
+    r2 = (e * e).sum(1)
+    F = -5 * gn * np.maximum(1 - np.sqrt(r2) / h / 2, 0) ** 3 / h ** 2
+    on_i = (mu * ((m / rho[i]) ** 2 + (m / rho[j]) ** 2) * r2 * F / (r2 + eta2))[:, None] * (v[i] - v[j])
+    mid = 0.5 * (x[i] + x[j]) - CENTRE
+    t = np.stack([-mid[:, 1], mid[:, 0]], 1) / np.hypot(mid[:, 0], mid[:, 1])[:, None]
+    along = (on_i * t).sum(1)  # on i; -along on j
+    sec = sector_of(np.arctan2(mid[:, 1], mid[:, 0]))
+    yi, yj = (r[i] - R) / dp, (r[j] - R) / dp
+    for n, y in enumerate(LINES):
+        cross = np.where((yi >= y) & (yj < y), along, 0.0) - np.where((yj >= y) & (yi < y), along, 0.0)
+        out[n] += np.bincount(sec, weights=cross, minlength=SECTORS)
+
+
 def sector_of(th):
     return (((th + np.pi) / (2 * np.pi) * SECTORS).astype(int)) % SECTORS
 
@@ -72,7 +103,8 @@ def analyse(run, t0, t1):
     h = case.get("smoothing_ratio", 1.3) * dp
     gn, eta2, m = wendland_gradient_norm(h, dp), 0.01 * h * h, rho0 * dp * dp
     drag, steps = [], 0
-    wall, shear, pmean, pmin, gap = (np.zeros(SECTORS) for _ in range(5))
+    wall, shear, pmean, pmin, gap, count, nn_mean, nn_p10 = (np.zeros(SECTORS) for _ in range(8))
+    lines = np.zeros((len(LINES), SECTORS))
     for t, step in saved_steps(Path(run)):
         if t < t0 - 1e-3 or t > t1 + 1e-3:
             continue
@@ -105,6 +137,13 @@ def analyse(run, t0, t1):
             pmean[k] += a["pressure"][f][near].mean()
             pmin[k] += a["pressure"][f][near].min()
             gap[k] += np.sort((r[sec == k] - R) / dp)[:5].mean()
+        line_stresses(x, v, rho, kind, dp, h, gn, eta2, mu, m, lines)
+        nn = cKDTree(x[f]).query(x[f], 2)[0][:, 1] / dp
+        for k in range(SECTORS):
+            s = (sec == k) & (r - R < 6 * dp)
+            count[k] += s.sum()
+            nn_mean[k] += nn[s].mean()
+            nn_p10[k] += np.percentile(nn[s], 10)
         steps += 1
     if steps == 0:
         sys.exit(f"{run}: no saved step between {t0} and {t1} s")
@@ -116,6 +155,9 @@ def analyse(run, t0, t1):
     rows = [("sector centre [deg]", centres, "{:7.0f}"), ("wall pair force [N/m]", wall / steps, "{:7.3f}"),
             ("mu du_t/dr x arc [N/m]", shear / steps, "{:7.3f}"), ("mean p, 3 dp [Pa]", pmean / steps, "{:7.0f}"),
             ("least p, 3 dp [Pa]", pmin / steps, "{:7.0f}"), ("gap of nearest 5 [dp]", gap / steps, "{:7.2f}")]
+    rows += [(f"shear across {y:g} dp [N/m]", lines[n] / steps, "{:7.3f}") for n, y in enumerate(LINES)]
+    rows += [("particles within 6 dp", count / steps, "{:7.0f}"), ("nearest neighbour [dp]", nn_mean / steps, "{:7.2f}"),
+             ("  its tenth percentile", nn_p10 / steps, "{:7.2f}")]
     for name, vals, fmt in rows:
         print(f"  {name:24s}" + " ".join(fmt.format(v) for v in vals))
 
