@@ -65,6 +65,16 @@ def fluid_side_drag(r, th, ut, p, delta, mu):
     return -np.pi * R * mu * cu[2], -np.pi * R * cp[1]
 
 
+def laminar_force(xi, xj, vi, vj, rho_i, rho_j, h, gn, eta2, mu, m):
+    """The laminar viscous force [N/m] on particle(s) i from j, eq. 8 as the solver sums it
+    (fluid_pair_terms' laminar term, Wendland kernel): mu (V_i^2 + V_j^2) r^2 F / (r^2 + eta^2)
+    (v_i - v_j), with grad W = F (x_i - x_j)."""
+    e = xi - xj
+    r2 = (e * e).sum(-1)
+    F = -5 * gn * np.maximum(1 - np.sqrt(r2) / h / 2, 0) ** 3 / h ** 2
+    return (mu * ((m / rho_i) ** 2 + (m / rho_j) ** 2) * r2 * F / (r2 + eta2))[..., None] * (vi - vj)
+
+
 def line_stresses(x, v, rho, kind, dp, h, gn, eta2, mu, m, out):
     """Adds to out[n, sector] the counter-clockwise tangential viscous force [N/m] that the fluid
     more than LINES[n] dp from the surface receives from the particles nearer to it, the cylinder's
@@ -76,10 +86,7 @@ def line_stresses(x, v, rho, kind, dp, h, gn, eta2, mu, m, out):
     near = np.where(((kind == FLUID) | (kind == CYLINDER)) & (r < R + (max(LINES) + 3) * dp))[0]
     pairs = np.array(sorted(cKDTree(x[near]).query_pairs(2 * h)))
     i, j = near[pairs[:, 0]], near[pairs[:, 1]]
-    e = x[i] - x[j]
-    r2 = (e * e).sum(1)
-    F = -5 * gn * np.maximum(1 - np.sqrt(r2) / h / 2, 0) ** 3 / h ** 2
-    on_i = (mu * ((m / rho[i]) ** 2 + (m / rho[j]) ** 2) * r2 * F / (r2 + eta2))[:, None] * (v[i] - v[j])
+    on_i = laminar_force(x[i], x[j], v[i], v[j], rho[i], rho[j], h, gn, eta2, mu, m)
     mid = 0.5 * (x[i] + x[j]) - CENTRE
     t = np.stack([-mid[:, 1], mid[:, 0]], 1) / np.hypot(mid[:, 0], mid[:, 1])[:, None]
     along = (on_i * t).sum(1)  # on i; -along on j
@@ -121,11 +128,7 @@ def analyse(run, t0, t1):
             js = f[tree.query_ball_point(x[b], 2 * h)]
             if len(js) == 0:
                 continue
-            e = x[js] - x[b]
-            r2 = (e * e).sum(1)
-            F = -5 * gn * np.maximum(1 - np.sqrt(r2) / h / 2, 0) ** 3 / h ** 2
-            lam = mu / m * ((m / rho[js]) ** 2 + (m / rho[b]) ** 2) * r2 * F / (r2 + eta2)
-            force = -(m * lam[:, None] * (v[js] - v[b])).sum(0)
+            force = laminar_force(x[b], x[js], v[b], v[js], rho[b], rho[js], h, gn, eta2, mu, m).sum(0)
             tb = np.arctan2(x[b, 1] - CENTRE[1], x[b, 0] - CENTRE[0])
             wall[sector_of(np.array([tb]))[0]] += force @ np.array([-np.sin(tb), np.cos(tb)])
         sec = sector_of(th)
