@@ -219,12 +219,16 @@ SPATE_HD void update_summation_density(const PhysicsParams& P, const CellGridVie
   f.density[i] = rho < M.rho0 ? M.rho0 : rho;
 }
 
-// Particle-shifting displacement of fluid particle i for a step dt (shifting.hpp), into `shift`;
-// applied to the position by the corrector (apply_shift). Run after the fluid rates, before the
-// corrector changes any density, so that owned particles and ghosts read the same neighbour state.
+// Particle-shifting displacement of fluid particle i for a step dt (shifting.hpp), into `shift`
+// (0 for walls, whose slots the volume-consistent density reads); applied to the position by the
+// corrector (apply_shift). Run after the fluid rates, before the corrector changes any density, so
+// that owned particles and ghosts read the same neighbour state.
 template <class Kernel, int Dim, class Fields>
 SPATE_HD void update_shift(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3], float dt) {
-  if (!P.is_fluid(f.material[i])) return;
+  if (!P.is_fluid(f.material[i])) {
+    SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.shift[k][i] = 0.0f;
+    return;
+  }
   const FluidMaterial& M = P.materials.of(f.material[i]);
   const Vec<Dim> xi = load_vec<Dim>(f.pos, i);
   const float w_dp = Kernel::value(P.dp * P.inv_h, P.kernel_norm);
@@ -235,6 +239,24 @@ SPATE_HD void update_shift(const PhysicsParams& P, const CellGridView& v, Fields
   });
   const Vec<Dim> dr = shifting_displacement<Dim>(P, M, sums, dt);
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.shift[k][i] = dr[k];
+}
+
+// `shifting.volume_consistent`: the density change of fluid particle i under every particle's
+// shift (shifting.hpp), added to its density. Run after update_shift and a halo refresh of `shift`,
+// before the corrector moves anyone; reads only positions, shifts and i's own density, so the
+// order in which particles are updated does not matter.
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void update_shift_density(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3]) {
+  if (!P.is_fluid(f.material[i])) return;
+  const FluidMaterial& M = P.materials.of(f.material[i]);
+  const Vec<Dim> xi = load_vec<Dim>(f.pos, i);
+  const Vec<Dim> dri = load_vec<Dim>(f.shift, i);
+  float sum = 0.0f;
+  v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
+    for (std::uint32_t j = jb; j < je; ++j)
+      sum += shift_volume_term<Kernel, Dim>(P, M, xi, dri, load_vec<Dim>(f.pos, j), load_vec<Dim>(f.shift, j));
+  });
+  f.density[i] += shift_density_change(f.density[i], sum);
 }
 
 // Antuono delta-SPH diffusion, pass 1: the renormalised density gradient of fluid particle i (zero

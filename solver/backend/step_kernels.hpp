@@ -72,6 +72,12 @@ class StepKernels {
     (void)p, (void)g, (void)P, (void)dt;
     throw std::logic_error(std::string(name()) + " backend: no particle shifting");
   }
+  // With P.shifting.volume_consistent, after shifting() and a halo refresh of `shift`: each owned
+  // fluid particle's density change under the shifts (particle_updates.hpp update_shift_density).
+  virtual void shift_density(ParticleStore& p, const CellGrid& g, const PhysicsParams& P) {
+    (void)p, (void)g, (void)P;
+    throw std::logic_error(std::string(name()) + " backend: no volume-consistent shifting");
+  }
   // Heat transfer (only when P.heat.on; physics/heat_transfer.hpp): the temperatures of the owned
   // wall particles behind tank faces with a condition, after the wall state and before the halo
   // refresh; the conduction rates (and the buoyancy, added to the fluid's acceleration) of the owned

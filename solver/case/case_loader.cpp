@@ -1285,6 +1285,8 @@ Case read(Section& root, const std::string& file) {
       s.fail(s.raw("coefficient"), "coefficient", "must be between 0 and 10");
     c.shifting_mach = s.number("mach", 0.1);
     if (!(c.shifting_mach > 0 && c.shifting_mach <= 1)) s.fail(s.raw("mach"), "mach", "must be in (0, 1]");
+    c.shifting_volume_consistent = s.boolean("volume_consistent", false);
+    c.shifting_free_surface = s.boolean("free_surface", true);
     s.finish();
   }
   if (auto t = root.child("time")) {
@@ -1906,6 +1908,9 @@ PhysicsParams physics_params(const Case& c) {
   P.shifting.enabled = c.shifting;
   P.shifting.coefficient = static_cast<float>(c.shifting_coefficient);
   P.shifting.mach = static_cast<float>(c.shifting_mach);
+  // A summation density follows the positions by itself: the term is for continuity only.
+  P.shifting.volume_consistent = c.shifting && c.shifting_volume_consistent && c.density_mode == DensityMode::Continuity;
+  P.shifting.free_surface = c.shifting_free_surface;
   for (int k = 0; k < 3; ++k) {
     P.gravity[k] = static_cast<float>(c.gravity[k]);
     P.body_force[k] = static_cast<float>(c.body_force[k]);

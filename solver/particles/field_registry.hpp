@@ -78,8 +78,9 @@ constexpr FieldType field_type_of() {
 }
 
 // F(member, C++ type, shape, role, flags, exported name, dataset name(s) ...)
-// `shift`: the particle-shifting displacement (physics/shifting.hpp), scratch between the fluid
-// rates and the corrector of one step (FieldSpec::scratch). `density_gradient`: the renormalised
+// `shift`: the particle-shifting displacement (physics/shifting.hpp), between the fluid rates and
+// the corrector of one step; sent to the ghosts, whose shifts the volume-consistent density reads
+// (`shifting.volume_consistent`). `density_gradient`: the renormalised
 // density gradient of `density.diffusion: antuono` (physics/density_gradient.hpp), sent to ghosts.
 // `temperature` [K] and its rates: heat transfer (physics/heat_transfer.hpp), integrated like the
 // density (predicted, corrected) for fluids and conducting walls; imposed by the wall temperature
@@ -118,7 +119,7 @@ constexpr FieldType field_type_of() {
   F(density_rate_prev, float, Scalar, History, kMigrated, "", "density_rate_prev")                                    \
   F(colour_gradient, float, Vector, Derived, kGhost | kRefreshed | kOptional, "", "colour_gradient_x",               \
     "colour_gradient_y", "colour_gradient_z")                                                                         \
-  F(shift, float, Vector, Derived, kOptional, "", "sx", "sy", "sz")                                                   \
+  F(shift, float, Vector, Derived, kGhost | kRefreshed | kOptional, "", "sx", "sy", "sz")                             \
   F(density_gradient, float, Vector, Derived, kGhost | kRefreshed | kOptional, "", "density_gradient_x",             \
     "density_gradient_y", "density_gradient_z")                                                                       \
   F(temperature, float, Scalar, State, kMigrated | kCheckpointed | kGhost | kRefreshed | kExported | kThermal,        \

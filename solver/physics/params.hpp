@@ -40,6 +40,8 @@ struct ShiftingParams {
   float coefficient = 1.0f;  // C of shifting.hpp (Sun et al. 2017: 1)
   float mach = 0.1f;         // Ma = U / c0 of the flow's reference speed U
   float tensile = 0.2f;      // R of the tensile-instability term (Sun et al. 2017: 0.2; relaxation: 0)
+  bool volume_consistent = false;  // the density follows the shift's volume change (shifting.hpp)
+  bool free_surface = true;        // the free-surface rules apply (false: a closed flow, shifting.hpp)
 };
 
 // SPS turbulence (turbulence.hpp; case key `turbulence`). Off: no SPS fields, no SPS passes.

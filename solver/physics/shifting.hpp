@@ -28,11 +28,23 @@
 // n_i = sum_{j of another fluid} V_j grad W_ij / |.| is removed, so particles slide along the
 // interface and never across it (a shift across it would mix the fluids, or squeeze one into the
 // other).
-// As in the 2017 model the shift is not an ALE transport: velocity and density are not corrected
-// for it. The consistent terms of Sun et al. (2019) (the shifting velocity's divergence in the
-// continuity equation) need the neighbours' shifts, i.e. a halo refresh of `shift`, and are not
-// implemented; without them the shifting perturbs the pressure (docs/studies/impact-pressures.md
-// measures it).
+// As in the 2017 model the shift is not an ALE transport: the velocity is not corrected for it.
+// The density follows it with `shifting.volume_consistent: true` (ShiftingParams::volume_consistent;
+// continuity density only): a particle keeps its mass, so where the shift spreads particles (a clump
+// evened out, a void filled) their volumes grow and their densities fall, and where it gathers them
+// the reverse. Eq. 6 with the displacements in place of the velocities gives the change, applied
+// once per step after the neighbours' shifts have reached the ghosts (a halo refresh of `shift`):
+//   delta rho_i = rho_i sum_j V_j (dr_i - dr_j) . grad_i W_ij,   V_j = m / rho0 (as above),
+// which is, to O(rho / rho0 - 1), the change of the summation density sum_j m W_ij under the
+// displacements: the continuity density stays the density of the particles' arrangement. It is
+// the shift's divergence in the continuity equation, -rho div(dr); not an ALE form in which mass
+// moves between particles with the shift (to first order -rho div u + dr . grad rho per unit time,
+// the density of a point carried through the field), which spate's fixed masses do not follow.
+// Without the term a shifted particle keeps its density wherever it goes: where shifting works
+// without pause (the fluid in tension behind a cylinder) the mean density then climbs step after
+// step, and the pressure with it (docs/studies/cylinder-flow.md: 1002 -> 1011 kg/m^3 over 3 s).
+// Off by default: every shipped free-surface case was validated without it (and without it the
+// shifting perturbs the pressure: docs/studies/impact-pressures.md measures it).
 #include <cstdint>
 
 #include "fluid_interactions.hpp"
@@ -86,12 +98,15 @@ SPATE_HD void accumulate_shifting_pair(const PhysicsParams& P, const FluidMateri
 template <int Dim>
 SPATE_HD Vec<Dim> shifting_displacement(const PhysicsParams& P, const FluidMaterial& M, const ShiftingSums<Dim>& s, float dt) {
   Vec<Dim> dr = zero_vec<Dim>();
+  // Without a free surface (shifting.free_surface: false) a cut kernel is a void in the fluid, which
+  // the shift fills instead of keeping it as a surface.
+  const bool free_surface = P.shifting.free_surface;
   const float surface = s.divergence / static_cast<float>(Dim);
-  if (surface < kSurfaceSplash) return dr;
+  if (free_surface && surface < kSurfaceSplash) return dr;
   const float scale = -4.0f * P.shifting.coefficient * P.h * P.shifting.mach * M.c0 * dt;
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) dr[k] = scale * s.concentration[k];
   const float g2 = dot(s.gradient, s.gradient);
-  if (surface < kSurfaceVicinity && g2 > 0.0f) {
+  if (free_surface && surface < kSurfaceVicinity && g2 > 0.0f) {
     // n = -gradient / |gradient| (outward); remove n (n . dr) when n . dr > 0.
     const float inv_g = 1.0f / sqrtf(g2);
     const float outward = -dot(s.gradient, dr) * inv_g;
@@ -111,5 +126,22 @@ SPATE_HD Vec<Dim> shifting_displacement(const PhysicsParams& P, const FluidMater
   }
   return dr;
 }
+
+// The volume-consistent density's pair part (see the top of the file): V_j (dr_i - dr_j) .
+// grad_i W_ij for neighbour j (fluid or wall; a wall's dr is 0) at xj with displacement dr_j, V_j =
+// m / rho0 of fluid particle i's material M. Exactly 0 for j = i and beyond the support; the sum
+// times rho_i is the density change (shift_density_change).
+template <class Kernel, int Dim>
+SPATE_HD float shift_volume_term(const PhysicsParams& P, const FluidMaterial& M, const Vec<Dim>& xi, const Vec<Dim>& dri,
+                                     const Vec<Dim>& xj, const Vec<Dim>& drj) {
+  const Vec<Dim> r = xi - xj;
+  const float r2 = dot(r, r);
+  if (r2 >= P.support2) return 0.0f;
+  const float F = Kernel::gradient_factor(sqrtf(r2) * P.inv_h, P.gradient_norm, P.inv_h2);
+  return M.mass / M.rho0 * F * dot(dri - drj, r);
+}
+
+// delta rho_i of fluid particle i (density rho_i) from its pair sum.
+SPATE_HD float shift_density_change(float rho_i, float pair_sum) { return rho_i * pair_sum; }
 
 }  // namespace spate

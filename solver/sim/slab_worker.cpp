@@ -150,12 +150,20 @@ double SlabWorker::fluid_rates_overlapping_refresh() {
 }
 
 // Particle shifting (physics/shifting.hpp), when the case asks for it: the displacements from the
-// state the rates were computed on (ghosts included, still current), applied by correct().
+// state the rates were computed on (ghosts included, still current), applied by correct(). Volume
+// consistent: the ghosts' shifts by a halo refresh, then each density's change under them (the
+// refresh's wait is not busy time, as in compute_rates).
 void SlabWorker::shift(float dt) {
   if (!params_.shifting.enabled) return;
-  const auto t = Clock::now();
+  auto t = Clock::now();
   timed(Pass::Shifting, [&] { kernels_->shifting(particles_, grid_, params_, dt); });
-  const double seconds = since(t);
+  double seconds = since(t);
+  if (params_.shifting.volume_consistent) {
+    refresh_halo();
+    t = Clock::now();
+    timed(Pass::Shifting, [&] { kernels_->shift_density(particles_, grid_, params_); });
+    seconds += since(t);
+  }
   busy_seconds_ += seconds;
   window_fluid_seconds_ += seconds;
 }

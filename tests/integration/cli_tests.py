@@ -578,18 +578,24 @@ def growth_fits_a_probe_and_refuses_bad_input(env):
 @test
 def shifting_split_independent(env):
     # Particle shifting (a neighbour pass whose result moves the particles) on one and on three
-    # device slabs: bit-identical checkpoints; and it moves them (not the run without it).
-    paths = []
-    for devices, shifting in ((1, "true"), (3, "true"), (1, "false")):
-        out = env.path(f"shift{devices}{shifting}")
+    # device slabs: bit-identical checkpoints; and it moves them (not the run without it). The same
+    # with the volume-consistent density (the shifts cross the slab faces in a halo refresh, then
+    # change the densities), which changes the particles again.
+    paths = {}
+    for devices, shifting, consistent in ((1, "true", "false"), (3, "true", "false"), (1, "false", "false"),
+                                          (1, "true", "true"), (3, "true", "true")):
+        out = env.path(f"shift{devices}{shifting}{consistent}")
         p = env.run("run", env.tiny, "--steps", "20", "--devices", str(devices), "--out", out, "--quiet",
-                    "--set", f"shifting.enabled={shifting}")
-        check(p.returncode == 0, f"--devices {devices}, shifting {shifting}: exit {p.returncode}")
-        paths.append(final_checkpoint(env, out, 20))
-    p = env.run("compare", paths[0], paths[1], "--tolerance", "0")
-    check(p.returncode == 0, "with shifting, 1 and 3 devices must give bit-identical results")
-    p = env.run("compare", paths[0], paths[2], "--tolerance", "0")
+                    "--set", f"shifting.enabled={shifting}", "--set", f"shifting.volume_consistent={consistent}")
+        check(p.returncode == 0, f"--devices {devices}, shifting {shifting}, volume_consistent {consistent}: exit {p.returncode}")
+        paths[devices, shifting, consistent] = final_checkpoint(env, out, 20)
+    for consistent in ("false", "true"):
+        p = env.run("compare", paths[1, "true", consistent], paths[3, "true", consistent], "--tolerance", "0")
+        check(p.returncode == 0, f"with shifting (volume_consistent {consistent}), 1 and 3 devices must give bit-identical results")
+    p = env.run("compare", paths[1, "true", "false"], paths[1, "false", "false"], "--tolerance", "0")
     check(p.returncode != 0, "shifting must change the particles")
+    p = env.run("compare", paths[1, "true", "false"], paths[1, "true", "true"], "--tolerance", "0")
+    check(p.returncode != 0, "the volume-consistent density must change the particles")
 
 
 @test

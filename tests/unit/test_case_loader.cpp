@@ -175,6 +175,20 @@ TEST(CaseLoader, ShiftingKeysAreRead) {
   EXPECT_NE(error_of(kMinimal2D, {"shifting.mach=0"}).find("mach"), std::string::npos);
   EXPECT_NE(error_of(kMinimal2D, {"shifting.coefficient=-1"}).find("coefficient"), std::string::npos);
   EXPECT_NE(error_of(kMinimal2D, {"shifting.enabled=true", "shifting.speed=1"}).find("speed"), std::string::npos);
+  // The volume-consistent density: off by default, on when asked, and never with a summation density
+  // (which follows the positions by itself) or without shifting.
+  EXPECT_FALSE(P.shifting.volume_consistent);
+  EXPECT_TRUE(physics_params(parse_case(kMinimal2D, "tiny.yaml", {"shifting.enabled=true", "shifting.volume_consistent=true"}))
+                  .shifting.volume_consistent);
+  EXPECT_FALSE(physics_params(parse_case(kMinimal2D, "tiny.yaml", {"shifting.volume_consistent=true"})).shifting.volume_consistent);
+  EXPECT_FALSE(physics_params(parse_case(kMinimal2D, "tiny.yaml",
+                                         {"shifting.enabled=true", "shifting.volume_consistent=true", "density.mode=summation"}))
+                   .shifting.volume_consistent);
+  EXPECT_NE(error_of(kMinimal2D, {"shifting.volume_consistent=2"}).find("volume_consistent"), std::string::npos);
+  // The free-surface rules: on by default, off for a closed flow.
+  EXPECT_TRUE(P.shifting.free_surface);
+  EXPECT_FALSE(physics_params(parse_case(kMinimal2D, "tiny.yaml", {"shifting.enabled=true", "shifting.free_surface=false"}))
+                   .shifting.free_surface);
 }
 
 TEST(CaseLoader, EveryKeyIsRead) {

@@ -1,6 +1,7 @@
 // Particle shifting of delta-plus-SPH (solver/physics/shifting.hpp) on 2D lattices of spacing dp:
 // nothing moves on a perfect lattice, a displaced particle is pushed back towards its lattice site,
-// a particle on a free surface is never pushed out of the fluid, and a splashed one is left alone.
+// a particle on a free surface is never pushed out of the fluid, and a splashed one is left alone;
+// the volume-consistent density changes by -rho div(dr), the summation density's change.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -62,6 +63,18 @@ TEST(Shifting, AFreeSurfaceParticleIsNotPushedOutOfTheFluid) {
   EXPECT_LT(std::hypot(deep[0], deep[1]), 1e-6f * L.P.dp);
 }
 
+// A closed flow (shifting.free_surface: false): the same cut kernel is a void, and the particles on
+// its edge are shifted into it (up, out of the lattice), one as isolated as a splash too.
+TEST(Shifting, InAClosedFlowAVoidIsFilled) {
+  Lattice2D L;
+  L.P.shifting.free_surface = false;
+  const auto all = L.sites(0);
+  EXPECT_GT(L.shift_of(Vec<2>{0, 0}, all)[1], 1e-4f * L.P.dp);
+  EXPECT_GT(L.shift_of(Vec<2>{0, -L.P.dp}, all)[1], 1e-6f * L.P.dp);
+  std::vector<ParticleState<2>> pair{{{0, 0}, {0, 0}, L.M.rho0, 0.0f, 0, {0, 0}, {0, 0}}, {{0.9f * L.P.dp, 0}, {0, 0}, L.M.rho0, 0.0f, 0, {0, 0}, {0, 0}}};
+  EXPECT_LT(L.shift_of(Vec<2>{0, 0}, pair)[0], 0.0f) << "away from its close neighbour";
+}
+
 // Several fluids: fluid 1 above y = 0.5 dp, fluid 0 below. A particle of fluid 0 on the interface
 // row, displaced diagonally, is shifted along the interface (its normal leaning with the offset),
 // while the same particle with every neighbour of its own fluid is pushed back diagonally.
@@ -90,6 +103,48 @@ TEST(Shifting, ASplashedParticleIsLeftAlone) {
   const Vec<2> dr = L.shift_of(Vec<2>{0, 0}, pair);
   EXPECT_EQ(dr[0], 0.0f);
   EXPECT_EQ(dr[1], 0.0f);
+}
+
+// The volume-consistent density (shifting.volume_consistent): the density change of the particle
+// at the origin of a lattice (itself one of `all`) under the displacements dr_j of all, its own dri.
+float density_change(const Lattice2D& L, const std::vector<ParticleState<2>>& all, const std::vector<Vec<2>>& dr, const Vec<2>& dri,
+                     float rho_i) {
+  const Vec<2> xi{0, 0};
+  float sum = 0.0f;
+  for (std::size_t j = 0; j < all.size(); ++j) sum += shift_volume_term<WendlandC2, 2>(L.P, L.M, xi, dri, all[j].x, dr[j]);
+  return shift_density_change(rho_i, sum);
+}
+
+TEST(Shifting, ATranslationLeavesTheDensityAlone) {
+  Lattice2D L;
+  const auto all = L.sites(6);
+  const Vec<2> d{0.07f * L.P.dp, -0.11f * L.P.dp};
+  EXPECT_EQ(density_change(L, all, std::vector<Vec<2>>(all.size(), d), d, 1003.0f), 0.0f);
+}
+
+// A uniform dilation dr = eps x (div dr = 2 eps in 2D) lowers the density by rho 2 eps, to the
+// lattice's accuracy, and by as much (within 5%) as it lowers the summation density sum_j m W_ij of
+// the dilated lattice: the continuity density stays the density of the particles' arrangement. A
+// contraction raises it by the same.
+TEST(Shifting, ADilationLowersTheDensityByItsDivergence) {
+  Lattice2D L;
+  const auto all = L.sites(6);
+  const float eps = 1e-3f, rho = 1000.0f;
+  for (const float e : {eps, -eps}) {
+    std::vector<Vec<2>> dr;
+    for (const auto& p : all) dr.push_back(e * p.x);
+    const float change = density_change(L, all, dr, Vec<2>{0, 0}, rho);
+    EXPECT_NEAR(change, -rho * 2.0f * e, 0.01f * rho * 2.0f * eps) << "eps " << e;
+    double before = 0.0, after = 0.0;
+    for (const auto& p : all) {
+      const double r = std::hypot(p.x[0], p.x[1]);
+      before += L.M.mass * WendlandC2::value(static_cast<float>(r) * L.P.inv_h, L.P.kernel_norm);
+      after += L.M.mass * WendlandC2::value(static_cast<float>(r * (1.0 + e)) * L.P.inv_h, L.P.kernel_norm);
+    }
+    // 3.7% apart: the gradient's lattice renormalisation (kernels.hpp) makes sum V F r^2 exactly
+    // -Dim, which the summation of W on the lattice is not made to match.
+    EXPECT_NEAR(change, (after - before) * rho / before, 0.05f * rho * 2.0f * eps) << "the summation density's change, eps " << e;
+  }
 }
 
 }  // namespace

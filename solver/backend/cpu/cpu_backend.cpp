@@ -146,6 +146,12 @@ void shifting(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P, fl
   });
 }
 
+void shift_density(ParticleStore& p, const CellGrid& grid, const PhysicsParams& P) {
+  per_particle_pass(grid, P, [&]<class Kernel, int Dim>(const CellGridView& v, std::uint32_t i, const int g[3]) {
+    update_shift_density<Kernel, Dim>(P, v, p, i, g);
+  });
+}
+
 float min_time_step(const ParticleStore& p, const PhysicsParams& P, const TimeStepControl& c) {
   float dt = std::numeric_limits<float>::infinity();
   const auto n = static_cast<std::int64_t>(p.owned());

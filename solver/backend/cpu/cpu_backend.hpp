@@ -42,6 +42,9 @@ void sps_acceleration(ParticleStore& p, const CellGrid& g, const PhysicsParams& 
 // Particle-shifting displacement (physics/shifting.hpp) of the owned fluid particles for a step
 // dt, into `shift`; correct() then adds it to the positions (only when P.shifting.enabled).
 void shifting(ParticleStore& p, const CellGrid& g, const PhysicsParams& P, float dt);
+// shifting.volume_consistent: the density change of the owned fluid particles under the shifts,
+// after shifting() and a halo refresh of `shift` (physics/shifting.hpp).
+void shift_density(ParticleStore& p, const CellGrid& g, const PhysicsParams& P);
 // Heat transfer (physics/heat_transfer.hpp), only when P.heat.on: the temperature of the owned wall
 // particles behind tank faces with a condition (before the halo refresh), then, after the fluid
 // rates, the conduction rates of the owned particles and the buoyancy of the owned fluid.
@@ -117,6 +120,9 @@ class Kernels : public StepKernels {
   }
   void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
     cpu::shifting(store(), arrays_->grid(), P, dt);
+  }
+  void shift_density(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    cpu::shift_density(store(), arrays_->grid(), P);
   }
   void wall_temperature(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
     cpu::wall_temperature(store(), arrays_->grid(), P);

@@ -80,6 +80,12 @@ struct ShiftingPass {
     update_shift<Kernel, Dim>(P, v, d, i, g, dt);
   }
 };
+struct ShiftDensityPass {
+  template <class Kernel, int Dim>
+  __device__ static void run(const PhysicsParams& P, const CellGridView& v, DeviceFields& d, std::uint32_t i, const int g[3]) {
+    update_shift_density<Kernel, Dim>(P, v, d, i, g);
+  }
+};
 template <bool Gamma7, bool Multiphase, bool MovingWalls, bool Riemann>
 struct FluidRatesPass {
   template <class Kernel, int Dim>
@@ -308,6 +314,9 @@ class CudaKernels final : public StepKernels {
   }
   void shifting(ParticleStore&, const CellGrid&, const PhysicsParams& P, float dt) override {
     neighbour_pass<ShiftingPass>(P, ParticleRange{0, owned()}, dt);
+  }
+  void shift_density(ParticleStore&, const CellGrid&, const PhysicsParams& P) override {
+    neighbour_pass<ShiftDensityPass>(P, ParticleRange{0, owned()});
   }
   // Heat transfer in the CPU's lane order (pair_lanes.hpp): the wall temperatures' fits on
   // half-warps; the fluid particles' conduction summed by the half-warp fluid pass, so that the heat
