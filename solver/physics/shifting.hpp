@@ -137,8 +137,7 @@ SPATE_HD float shift_volume_term(const PhysicsParams& P, const FluidMaterial& M,
   const Vec<Dim> r = xi - xj;
   const float r2 = dot(r, r);
   if (r2 >= P.support2) return 0.0f;
-  const float F = Kernel::gradient_factor(sqrtf(r2) * P.inv_h, P.gradient_norm, P.inv_h2);
-  return M.mass / M.rho0 * F * dot(dri - drj, r);
+  return M.mass / M.rho0 * kernel_gradient_factor<Kernel>(P, r2) * dot(dri - drj, r);
 }
 
 // delta rho_i of fluid particle i (density rho_i) from its pair sum.
