@@ -232,6 +232,8 @@ struct Case {
   bool portable_eos = false;
   DensityMode density_mode = DensityMode::Continuity;
   DensityDiffusion diffusion = DensityDiffusion::Fourtakas;
+  // density.closed_volume: the fluid fills its container; its volume is held (sim/closed_volume.hpp).
+  bool closed_volume = false;
   double delta = 0.1;
   MomentumFlux flux = MomentumFlux::Central;
   double riemann_limiter = 3.0;

@@ -1245,6 +1245,9 @@ Case read(Section& root, const std::string& file) {
     if (!(c.density_min_ratio >= 0 && c.density_min_ratio < 1))
       s.fail(s.raw("min_ratio"), "min_ratio", "must be in [0, 1) (a fraction of the reference density)");
     if (!(c.density_max_ratio > 1)) s.fail(s.raw("max_ratio"), "max_ratio", "must be > 1 (a multiple of the reference density)");
+    c.closed_volume = s.boolean("closed_volume", false);
+    if (c.closed_volume && c.density_mode != DensityMode::Continuity)
+      s.fail(s.raw("closed_volume"), "closed_volume", "is for the continuity density (mode: continuity); a summation density follows the particles and does not drift");
     s.finish();
   }
   {

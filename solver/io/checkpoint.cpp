@@ -133,6 +133,7 @@ std::string header_checksum(const CheckpointMeta& m, int dim) {
   text(m.geometry_hash);
   if (!m.bodies.empty()) text(m.bodies);  // files without floating solids keep their checksum
   if (!m.drive.empty()) text(m.drive);    // and files without a drive theirs
+  if (!m.closed_volume.empty()) text(m.closed_volume);
   return fmt::format("{:016x}", h);
 }
 
@@ -277,6 +278,7 @@ void write_checkpoint(const std::filesystem::path& path, const CheckpointMeta& m
     w.text(file.get(), "geometry_hash", m.geometry_hash);
     if (!m.bodies.empty()) w.text(file.get(), "bodies", m.bodies);
     if (!m.drive.empty()) w.text(file.get(), "drive", m.drive);
+    if (!m.closed_volume.empty()) w.text(file.get(), "closed_volume", m.closed_volume);
     w.text(file.get(), "header_checksum", header_checksum(m, dim));
     Handle group = w.make(H5Gcreate2(file.get(), "particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "creating group particles");
     const hsize_t n = count;
@@ -547,6 +549,7 @@ CheckpointMeta read_checkpoint(const std::filesystem::path& path, ParticleStore&
     meta.geometry_hash = r.text(file.get(), "geometry_hash");
     meta.bodies = r.text(file.get(), "bodies", false);
     meta.drive = r.text(file.get(), "drive", false);
+    meta.closed_volume = r.text(file.get(), "closed_volume", false);
   }
   if (dim != 2 && dim != 3) r.fail(fmt::format("attribute 'dimensions' is {}, must be 2 or 3", dim));
   if (meta.step < 0 || meta.step > kLargestStep) r.fail(fmt::format("attribute 'step' is {}, not a step number", meta.step));

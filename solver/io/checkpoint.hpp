@@ -67,6 +67,9 @@ struct CheckpointMeta {
   // A driven flow's state (FlowDrive::save; empty without `drive`): attribute `drive`, part of the
   // header checksum when there is one.
   std::string drive;
+  // A held volume's reference (ClosedVolume::save; empty without `density.closed_volume`): attribute
+  // `closed_volume`, part of the header checksum when present.
+  std::string closed_volume;
   std::string geometry_hash;  // geometry_hash() of the case (generator.hpp); empty before version 3
   int format_version = kCheckpointFormatVersion;  // of the file read (writes use the current one)
   bool derived_saved = false;  // read: the file held the derived datasets (else they are zero)

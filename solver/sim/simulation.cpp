@@ -36,6 +36,7 @@
 #include "memory_estimate.hpp"
 #include "../io/vtk_snapshot.hpp"
 #include "../particles/particle_pack.hpp"
+#include "closed_volume.hpp"
 #include "flow_drive.hpp"
 #include "probes.hpp"
 #include "relax.hpp"
@@ -367,10 +368,15 @@ class Worker {
     drive_ = &drive;
     if (s_.restarted) drive.restore(s_.start.drive);
     drive.apply(params);
+    // A fluid that fills its container (closed_volume.hpp): its volume at the start, or the saved one.
+    ClosedVolume volume(s_.c);
+    volume_ = &volume;
+    if (s_.restarted) volume.restore(s_.start.closed_volume);
     motions.set_step(params, s_.start.time, s_.start.time);
     bodies.set_step(params);
     w_.set_params(params);
     w_.prepare(!s_.restarted);
+    if (!s_.restarted) volume.start(w_);
     if (!bodies.empty() && !s_.restarted) bodies.set_loads(body_loads(w_, bodies));
 
     ProbeSet probes(s_.c, s_.opts.out_dir, writer, s_.restarted ? std::optional<std::int64_t>(s_.start.step) : std::nullopt);
@@ -517,6 +523,7 @@ class Worker {
         unstable = describe(*report.fault, step, time);
         break;
       }
+      volume.hold(w_);
       if (static_cast<double>(removed) > removed_limit) {
         unstable = fmt::format("step {}, t = {:.6g} s: {} fluid particles ({:.3g} % of the fluid) have left the domain through "
                                "its open sides, more than tank.max_removed_fraction = {} allows",
@@ -583,6 +590,8 @@ class Worker {
       r.ghosts = ghosts;
       r.bytes_per_particle = static_cast<double>(solver_bytes) / static_cast<double>(std::max<std::int64_t>(1, total_particles));
       r.imbalance_history = imbalance_log;
+      if (volume.on() && writer) spdlog::info("density.closed_volume: the fluid's densities were scaled back to its volume {} times in {} steps",
+                                              volume.scalings(), taken);
       r.migrated = w_.crossings();
       r.handed_over = w_.handovers();
       r.face_moves = w_.face_moves();
@@ -681,6 +690,7 @@ class Worker {
       meta.geometry_hash = geometry_hash(s_.c);
       if (bodies_) meta.bodies = bodies_->save();
       if (drive_) meta.drive = drive_->save();
+      if (volume_) meta.closed_volume = volume_->save();
       std::vector<std::vector<FieldRef>> fields;
       for (auto* slab : all.slabs) fields.push_back(slab->fields());
       write_checkpoint(path, meta, s_.c.dim, all.by_id.size(), [&](std::size_t k, char* out) {
@@ -728,6 +738,7 @@ class Worker {
   OpenSides open_sides_;  // the tank's at t = 0 (tank_open_sides moves them with a moving tank)
   const RigidBodies* bodies_ = nullptr;  // the run's floating solids (for checkpoints)
   const FlowDrive* drive_ = nullptr;      // the run's flow drive (for checkpoints)
+  const ClosedVolume* volume_ = nullptr;  // the run's held volume (for checkpoints)
 };
 
 }  // namespace
@@ -747,6 +758,9 @@ RunResult Simulation::run() {
   if (options_.devices < 1) throw InputError(fmt::format("--devices {}: must be at least 1", options_.devices));
   if (options_.backend != "cpu" && options_.backend != "cuda")
     throw InputError(fmt::format("--backend {}: expected 'cpu' or 'cuda'", options_.backend));
+  if (options_.backend == "cuda" && case_.closed_volume)
+    throw InputError("--backend cuda: the case's density.closed_volume is held on the CPU backend only (sim/closed_volume.hpp); "
+                     "run it with --backend cpu");
   if (options_.backend == "cuda") {
     try {
       gpu::require_device();
@@ -790,6 +804,11 @@ RunResult Simulation::run() {
       FlowDrive(case_).restore(s.start.drive);
     } catch (const std::exception& e) {
       throw InputError(fmt::format("{}: attribute 'drive': {}", options_.restart->string(), e.what()));
+    }
+    try {
+      ClosedVolume(case_).restore(s.start.closed_volume);
+    } catch (const std::exception& e) {
+      throw InputError(fmt::format("{}: attribute 'closed_volume': {}", options_.restart->string(), e.what()));
     }
   } else {
     s.initial = relax_particles(case_, generate_particles(case_));  // as generated unless `relax:` asks

@@ -5,7 +5,6 @@
 
 #include <cmath>
 #include <limits>
-#include <thread>
 
 #include "../source_dir.hpp"
 #include "case/case.hpp"
@@ -13,6 +12,7 @@
 #include "comm/in_process_transport.hpp"
 #include "sim/probes.hpp"
 #include "sim/slab_worker.hpp"
+#include "slabs.hpp"
 
 namespace spate {
 namespace {
@@ -34,18 +34,7 @@ probes:
   - {name: bore, type: front, min_depth: 0.02}
 )";
 
-// One slab holding `particles`, with pressures and wall states computed as at the start of a run.
-struct Slab {
-  Slab(const Case& c, const ParticleStore& particles) : lattice(make_lattice(c)), hub(1), t(hub.endpoint(0, false)),
-                                                        w(lattice, physics_params(c), *t) {
-    w.take_share(particles, SlabLayout::uniform(lattice.cells[0], 1));
-    w.prepare(false);
-  }
-  Lattice lattice;
-  InProcessHub hub;
-  std::unique_ptr<SlabTransport> t;
-  SlabWorker w;
-};
+using Slab = test::OneSlab;
 
 TEST(ProbeFiles, HeadersCarryUnits) {
   ProbeSpec p;
@@ -90,19 +79,8 @@ TEST(CentroidProbe, MeanOfOnePhaseIndependentOfTheSplit) {
   EXPECT_NEAR(water[0], 0.025, 1e-6);
   EXPECT_NEAR(water[2], -1.0, 1e-6);
 
-  const Lattice L = make_lattice(c);
-  InProcessHub hub(3);
-  std::vector<std::unique_ptr<SlabTransport>> t;
-  std::vector<std::unique_ptr<SlabWorker>> w;
-  for (int s = 0; s < 3; ++s) {
-    t.push_back(hub.endpoint(s, false));
-    w.push_back(std::make_unique<SlabWorker>(L, physics_params(c), *t[s]));
-    w[s]->take_share(p, SlabLayout::uniform(L.cells[0], 3));
-  }
-  std::vector<std::vector<double>> rows(3);
-  std::vector<std::thread> threads;
-  for (int s = 0; s < 3; ++s) threads.emplace_back([&, s] { rows[s] = sample_centroid(*w[s], 1); });
-  for (auto& th : threads) th.join();
+  test::SplitSlabs three(c, p, 3);
+  const auto rows = three.each([](int, SlabWorker& w) { return sample_centroid(w, 1); });
   for (int s = 0; s < 3; ++s) EXPECT_EQ(rows[s], row) << "slab " << s;
 }
 
