@@ -233,12 +233,23 @@ SPATE_HD void update_shift(const PhysicsParams& P, const CellGridView& v, Fields
   const Vec<Dim> xi = load_vec<Dim>(f.pos, i);
   const float w_dp = Kernel::value(P.dp * P.inv_h, P.kernel_norm);
   ShiftingSums<Dim> sums;
+  const bool carry_velocity = P.shifting.correct_velocity;
+  ParticleState<Dim> si{xi, carry_velocity ? load_vec<Dim>(f.vel, i) : zero_vec<Dim>(), f.density[i], 0.0f, f.material[i], zero_vec<Dim>(), zero_vec<Dim>()};
+  VelocityGradient<Dim> grad_v;
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
-    for (std::uint32_t j = jb; j < je; ++j)
-      accumulate_shifting_pair<Kernel, Dim>(P, M, f.material[i], w_dp, xi, ParticleState<Dim>{load_vec<Dim>(f.pos, j), zero_vec<Dim>(), f.density[j], 0.0f, f.material[j], zero_vec<Dim>(), zero_vec<Dim>()}, sums);
+    for (std::uint32_t j = jb; j < je; ++j) {
+      const ParticleState<Dim> sj{load_vec<Dim>(f.pos, j), carry_velocity ? load_vec<Dim>(f.vel, j) : zero_vec<Dim>(), f.density[j], 0.0f,
+                                  f.material[j], zero_vec<Dim>(), zero_vec<Dim>()};
+      accumulate_shifting_pair<Kernel, Dim>(P, M, f.material[i], w_dp, xi, sj, sums);
+      if (carry_velocity) accumulate_velocity_gradient<Kernel, Dim>(P, si, sj, M.mass / M.rho0, grad_v);
+    }
   });
   const Vec<Dim> dr = shifting_displacement<Dim>(P, M, sums, dt);
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.shift[k][i] = dr[k];
+  if (carry_velocity) {
+    const Vec<Dim> dv = shift_velocity_change<Dim>(grad_v, dr);
+    SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.shift_velocity[k][i] = dv[k];
+  }
 }
 
 // `shifting.volume_consistent`: the density change of fluid particle i under every particle's

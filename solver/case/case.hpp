@@ -254,6 +254,7 @@ struct Case {
   double shifting_mach = 0.1;
   bool shifting_volume_consistent = false;  // the density follows the shift (shifting.hpp)
   bool shifting_free_surface = true;        // the free-surface rules (false: a closed flow)
+  bool shifting_correct_velocity = false;   // the velocity follows the shift (shifting.hpp)
   Vec3d gravity{0, 0, -9.81};
   Vec3d body_force{0, 0, 0};
   // `drive`: the body force along the periodic axes set every step so that the fluid's mean

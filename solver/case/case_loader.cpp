@@ -1290,6 +1290,7 @@ Case read(Section& root, const std::string& file) {
     if (!(c.shifting_mach > 0 && c.shifting_mach <= 1)) s.fail(s.raw("mach"), "mach", "must be in (0, 1]");
     c.shifting_volume_consistent = s.boolean("volume_consistent", false);
     c.shifting_free_surface = s.boolean("free_surface", true);
+    c.shifting_correct_velocity = s.boolean("correct_velocity", false);
     s.finish();
   }
   if (auto t = root.child("time")) {
@@ -1914,6 +1915,7 @@ PhysicsParams physics_params(const Case& c) {
   // A summation density follows the positions by itself: the term is for continuity only.
   P.shifting.volume_consistent = c.shifting && c.shifting_volume_consistent && c.density_mode == DensityMode::Continuity;
   P.shifting.free_surface = c.shifting_free_surface;
+  P.shifting.correct_velocity = c.shifting && c.shifting_correct_velocity;
   for (int k = 0; k < 3; ++k) {
     P.gravity[k] = static_cast<float>(c.gravity[k]);
     P.body_force[k] = static_cast<float>(c.body_force[k]);

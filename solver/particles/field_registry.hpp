@@ -48,10 +48,12 @@ enum FieldFlag : std::uint16_t {
                          // (physics/turbulence.hpp)
   kWallFrame = 1 << 9,   // optional, its own group: only in the stores of runs whose shaped walls slide
                          // or follow the log law (physics/wall_boundary.hpp WallFrame)
+  kShiftVelocity = 1 << 10,  // optional, its own group: only in the stores of runs whose shifting
+                             // corrects the velocity (`shifting.correct_velocity`, physics/shifting.hpp)
 };
 // The groups of optional fields (OptionalFields): a field in a group is in the stores of the runs
 // that enable that group and no others.
-constexpr std::uint16_t kOptionalGroups = kOptional | kThermal | kTurbulence | kWallFrame;
+constexpr std::uint16_t kOptionalGroups = kOptional | kThermal | kTurbulence | kWallFrame | kShiftVelocity;
 
 struct FieldSpec {
   std::string_view member;  // C++ member of ParticleStore / DeviceFields
@@ -100,7 +102,9 @@ constexpr FieldType field_type_of() {
 // a box tank's (physics/wall_boundary.hpp WallFrame); the normal is sent to ghosts (the artificial
 // viscosity lets a free-slip neighbour slide) and exported (to check it in ParaView).
 // `temperature_gradient`: per-step scratch of the heat pass when particles are shifted (the corrector
-// carries the temperature to the shifted position, T += grad T . dr).
+// carries the temperature to the shifted position, T += grad T . dr). `shift_velocity`: per-step
+// scratch of the shifting pass with `shifting.correct_velocity`, the velocity's change (grad v) dr
+// at the shifted position, added by the corrector.
 // Order matters only for readability and the neighbour record layout (kNeighbour fields in this
 // order). Renaming a dataset is a checkpoint format change (kCheckpointFormatVersion, checkpoint.cpp).
 // clang-format off
@@ -137,7 +141,9 @@ constexpr FieldType field_type_of() {
   F(eddy_viscosity, float, Scalar, Derived, kExported | kTurbulence, "eddy_viscosity", "eddy_viscosity")               \
   F(wall_normal, float, Vector, State, kMigrated | kCheckpointed | kGhost | kExported | kWallFrame, "wall_normal",    \
     "wall_normal_x", "wall_normal_y", "wall_normal_z")                                                                \
-  F(wall_depth, float, Scalar, State, kMigrated | kCheckpointed | kWallFrame, "", "wall_depth")
+  F(wall_depth, float, Scalar, State, kMigrated | kCheckpointed | kWallFrame, "", "wall_depth")                     \
+  F(shift_velocity, float, Vector, Derived, kShiftVelocity, "", "shift_velocity_x", "shift_velocity_y",               \
+    "shift_velocity_z")
 // clang-format on
 
 #define SPATE_FIELD_SPEC(member, ctype, shape, role, flags, exported, ...) \

@@ -42,6 +42,7 @@ struct ShiftingParams {
   float tensile = 0.2f;      // R of the tensile-instability term (Sun et al. 2017: 0.2; relaxation: 0)
   bool volume_consistent = false;  // the density follows the shift's volume change (shifting.hpp)
   bool free_surface = true;        // the free-surface rules apply (false: a closed flow, shifting.hpp)
+  bool correct_velocity = false;   // the velocity follows the shift to first order (shifting.hpp)
 };
 
 // SPS turbulence (turbulence.hpp; case key `turbulence`). Off: no SPS fields, no SPS passes.
@@ -245,7 +246,8 @@ inline bool needs_optional_fields(const PhysicsParams& P) {
 // particle's surface frame) when a shaped wall slides or follows the log law.
 inline std::uint16_t optional_field_groups(const PhysicsParams& P) {
   return static_cast<std::uint16_t>((needs_optional_fields(P) ? kOptional : 0) | (P.heat.on ? kThermal : 0) |
-                                    (P.turbulence.on ? kTurbulence : 0) | (P.materials.face_frames ? kWallFrame : 0));
+                                    (P.turbulence.on ? kTurbulence : 0) | (P.materials.face_frames ? kWallFrame : 0) |
+                                    (P.shifting.enabled && P.shifting.correct_velocity ? kShiftVelocity : 0));
 }
 
 }  // namespace spate

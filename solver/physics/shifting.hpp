@@ -28,7 +28,15 @@
 // n_i = sum_{j of another fluid} V_j grad W_ij / |.| is removed, so particles slide along the
 // interface and never across it (a shift across it would mix the fluids, or squeeze one into the
 // other).
-// As in the 2017 model the shift is not an ALE transport: the velocity is not corrected for it.
+// As in the 2017 model the shift is not an ALE transport: by default the velocity is not corrected
+// for it. With `shifting.correct_velocity: true` (ShiftingParams::correct_velocity) the velocity
+// follows the particle to its shifted position to first order, as the temperature always does and
+// as Xu, Stansby & Laurence (2009, J. Comput. Phys. 228:6703) and Lind et al. (2012) correct every
+// hydrodynamic variable:  v_i += (grad v)_i dr_i,  with
+//   (grad v)_i = sum_j V_j (v_j - v_i) (x) grad_i W_ij,   V_j = m / rho0,
+// summed in the shifting pass's own neighbour loop (walls give their no-slip velocity, the one the
+// viscous term sees). Without it a particle shifted across a shear layer carries its velocity into
+// the neighbouring stream: in the cylinder's wake that is a momentum diffusion of its own.
 // The density follows it with `shifting.volume_consistent: true` (ShiftingParams::volume_consistent;
 // continuity density only): a particle keeps its mass, so where the shift spreads particles (a clump
 // evened out, a void filled) their volumes grow and their densities fall, and where it gathers them
@@ -51,6 +59,7 @@
 #include "kernels.hpp"
 #include "params.hpp"
 #include "vec.hpp"
+#include "velocity_gradient.hpp"
 
 namespace spate {
 
@@ -125,6 +134,15 @@ SPATE_HD Vec<Dim> shifting_displacement(const PhysicsParams& P, const FluidMater
     SPATE_UNROLL for (int k = 0; k < Dim; ++k) dr[k] *= f;
   }
   return dr;
+}
+
+// `shifting.correct_velocity`: the velocity's change at the shifted position, (dr . grad) v, from
+// the velocity gradient's sums (velocity_gradient.hpp, g[a][b] = d v_b / d x_a).
+template <int Dim>
+SPATE_HD Vec<Dim> shift_velocity_change(const VelocityGradient<Dim>& grad, const Vec<Dim>& dr) {
+  Vec<Dim> dv = zero_vec<Dim>();
+  SPATE_UNROLL for (int a = 0; a < Dim; ++a) SPATE_UNROLL for (int b = 0; b < Dim; ++b) dv[b] += dr[a] * grad.g[a][b];
+  return dv;
 }
 
 // The volume-consistent density's pair part (see the top of the file): V_j (dr_i - dr_j) .

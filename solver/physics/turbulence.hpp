@@ -26,14 +26,9 @@
 // the viscous stress in the shipped Poiseuille channel. The eddy viscosity does not limit the time step: with |S| below U / dp,
 // 0.125 h^2 / nu_t exceeds 14 dp / U, far above the acoustic limit h / c0.
 #include "fluid_interactions.hpp"
+#include "velocity_gradient.hpp"
 
 namespace spate {
-
-// The velocity gradient sums of pass 1: g[a][b] = d v_b / d x_a.
-template <int Dim>
-struct VelocityGradient {
-  float g[Dim][Dim] = {};
-};
 
 // The symmetric kinematic stress over density, T = tau / rho, of one particle: the diagonal
 // (xx, yy[, zz]) and the shear (xy in 2D; xy, xz, yz in 3D), as the registry stores them
@@ -60,32 +55,6 @@ SPATE_HD void store_sps_stress(Fields& f, std::uint32_t i, const SpsStress<Dim>&
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.sps_stress[k][i] = T.diagonal[k];
   SPATE_UNROLL for (int k = 0; k < Dim * (Dim - 1) / 2; ++k) f.sps_shear[k][i] = T.shear[k];
   f.eddy_viscosity[i] = nu_t;
-}
-
-// Neighbour j's term of particle i's velocity gradient, V_j (v_j - v_i) (x) grad_i W_ij into
-// t[a][b] (volume_j = m_j / rho_j; v_j a wall's extrapolated no-slip velocity). Branch-free (beyond
-// the support F = 0), for the CPU backend's vectorised loop over neighbours inside the support.
-template <class Kernel, int Dim>
-SPATE_HD void velocity_gradient_term(const PhysicsParams& P, const Vec<Dim>& xi, const Vec<Dim>& vi, const Vec<Dim>& xj,
-                                     const Vec<Dim>& vj, float volume_j, float (&t)[Dim][Dim]) {
-  const Vec<Dim> r = xi - xj;
-  const float vF = volume_j * kernel_gradient_factor<Kernel>(P, dot(r, r));
-  SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
-    SPATE_UNROLL for (int b = 0; b < Dim; ++b) t[a][b] = vF * r[a] * (vj[b] - vi[b]);
-  }
-}
-
-// The same added to the sums, for a neighbour inside the support (none beyond it).
-template <class Kernel, int Dim>
-SPATE_HD void accumulate_velocity_gradient(const PhysicsParams& P, const ParticleState<Dim>& i, const ParticleState<Dim>& j,
-                                           float volume_j, VelocityGradient<Dim>& s) {
-  const Vec<Dim> r = i.x - j.x;
-  if (dot(r, r) >= P.support2) return;  // as the CPU backend selects neighbours (sps_passes.cpp)
-  float t[Dim][Dim];
-  velocity_gradient_term<Kernel, Dim>(P, i.x, i.v, j.x, j.v, volume_j, t);
-  SPATE_UNROLL for (int a = 0; a < Dim; ++a) {
-    SPATE_UNROLL for (int b = 0; b < Dim; ++b) s.g[a][b] += t[a][b];
-  }
 }
 
 // T = tau / rho_i of the closure above, and the eddy viscosity nu_t [m^2/s] (exported).

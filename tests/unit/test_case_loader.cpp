@@ -189,6 +189,14 @@ TEST(CaseLoader, ShiftingKeysAreRead) {
   EXPECT_TRUE(P.shifting.free_surface);
   EXPECT_FALSE(physics_params(parse_case(kMinimal2D, "tiny.yaml", {"shifting.enabled=true", "shifting.free_surface=false"}))
                    .shifting.free_surface);
+  // The velocity correction: off by default; on when asked, and only then do the stores carry its field.
+  EXPECT_FALSE(P.shifting.correct_velocity);
+  EXPECT_EQ(optional_field_groups(P) & kShiftVelocity, 0);
+  const PhysicsParams corrected = physics_params(parse_case(kMinimal2D, "tiny.yaml", {"shifting.enabled=true", "shifting.correct_velocity=true"}));
+  EXPECT_TRUE(corrected.shifting.correct_velocity);
+  EXPECT_EQ(optional_field_groups(corrected) & kShiftVelocity, kShiftVelocity);
+  EXPECT_FALSE(physics_params(parse_case(kMinimal2D, "tiny.yaml", {"shifting.correct_velocity=true"})).shifting.correct_velocity);
+  EXPECT_NE(error_of(kMinimal2D, {"shifting.correct_velocity=yes please"}).find("correct_velocity"), std::string::npos);
 }
 
 TEST(CaseLoader, EveryKeyIsRead) {

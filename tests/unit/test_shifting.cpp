@@ -1,7 +1,8 @@
 // Particle shifting of delta-plus-SPH (solver/physics/shifting.hpp) on 2D lattices of spacing dp:
 // nothing moves on a perfect lattice, a displaced particle is pushed back towards its lattice site,
 // a particle on a free surface is never pushed out of the fluid, and a splashed one is left alone;
-// the volume-consistent density changes by -rho div(dr), the summation density's change.
+// the volume-consistent density changes by -rho div(dr), the summation density's change; the
+// corrected velocity follows a shifted particle along a linear field.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -145,6 +146,36 @@ TEST(Shifting, ADilationLowersTheDensityByItsDivergence) {
     // -Dim, which the summation of W on the lattice is not made to match.
     EXPECT_NEAR(change, (after - before) * rho / before, 0.05f * rho * 2.0f * eps) << "the summation density's change, eps " << e;
   }
+}
+
+// shifting.correct_velocity: on a lattice carrying a linear velocity field v = A x (a shear and a
+// strain), the velocity's change at the shifted position is A dr, the field's own value there, to
+// the lattice gradient's accuracy; a uniform velocity gives no change, also where the kernel is cut.
+TEST(Shifting, TheVelocityFollowsAShiftedParticleAlongALinearField) {
+  Lattice2D L;
+  const float A[2][2] = {{3.0f, 5.0f}, {-2.0f, -3.0f}};  // v_a = A[a][b] x_b
+  auto all = L.sites(6);
+  for (auto& p : all)
+    for (int a = 0; a < 2; ++a) p.v[a] = A[a][0] * p.x[0] + A[a][1] * p.x[1] + (a == 0 ? 0.4f : -0.1f);
+  const ParticleState<2> centre = all[6 * 19 + 12];  // the site (0, 0)
+  ASSERT_EQ(centre.x[0], 0.0f);
+  ASSERT_EQ(centre.x[1], 0.0f);
+  VelocityGradient<2> grad;
+  for (const auto& j : all) accumulate_velocity_gradient<WendlandC2, 2>(L.P, centre, j, L.M.mass / L.M.rho0, grad);
+  const Vec<2> dr{0.07f * L.P.dp, -0.11f * L.P.dp};
+  const Vec<2> dv = shift_velocity_change<2>(grad, dr);
+  for (int a = 0; a < 2; ++a) {
+    const float exact = A[a][0] * dr[0] + A[a][1] * dr[1];
+    EXPECT_NEAR(dv[a], exact, 1e-3f * std::fabs(exact)) << "component " << a;
+  }
+  // A uniform velocity under a cut kernel (the free surface row): nothing to carry.
+  auto surface = L.sites(0);
+  for (auto& p : surface) p.v = Vec<2>{0.4f, -0.1f};
+  VelocityGradient<2> uniform;
+  for (const auto& j : surface) accumulate_velocity_gradient<WendlandC2, 2>(L.P, surface[6 * 13 + 12], j, L.M.mass / L.M.rho0, uniform);
+  const Vec<2> none = shift_velocity_change<2>(uniform, dr);
+  EXPECT_EQ(none[0], 0.0f);
+  EXPECT_EQ(none[1], 0.0f);
 }
 
 }  // namespace

@@ -294,12 +294,14 @@ Case moving_walls_case() {
 }
 
 // Particle shifting amplifies any difference tenfold, so another summation order leaves the
-// tolerance (GpuOrder); the cases that must give the CPU's bits take it: the shifting pass, and with
-// the volume-consistent density the shifts' halo refresh and the density pass.
+// tolerance (GpuOrder); the cases that must give the CPU's bits take it: the shifting pass, with
+// the volume-consistent density the shifts' halo refresh and the density pass, and with the velocity
+// correction the velocity gradient in the shifting pass.
 std::vector<CheckedCase> shifting_cases() {
   const std::string dam_break = test::source_dir() + "/cases/dam_break_2d.yaml";
   return {{"shifting", load_case(dam_break, {"shifting.enabled=true"}), 300},
-          {"shifting_volume", load_case(dam_break, {"shifting.enabled=true", "shifting.volume_consistent=true"}), 300}};
+          {"shifting_volume", load_case(dam_break, {"shifting.enabled=true", "shifting.volume_consistent=true"}), 300},
+          {"shifting_velocity", load_case(dam_break, {"shifting.enabled=true", "shifting.correct_velocity=true"}), 300}};
 }
 
 std::vector<CheckedCase> gpu_checked_cases() {

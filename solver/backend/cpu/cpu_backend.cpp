@@ -53,6 +53,7 @@ void correct(ParticleStore& p, const PhysicsParams& P, float dt) {
   const int d = P.dim;
   const bool continuity = P.density_mode == DensityMode::Continuity;
   const bool shifting = P.shifting.enabled;
+  const bool carry_velocity = shifting && P.shifting.correct_velocity;
   const bool heat = P.heat.on;
 #pragma omp parallel for schedule(static) if (n > cheap_grain())
   for (std::int64_t i = 0; i < n; ++i) {
@@ -61,6 +62,7 @@ void correct(ParticleStore& p, const PhysicsParams& P, float dt) {
     for (int k = 0; k < d; ++k) spate::correct(p.vel[k][i], p.acc[k][i], p.acc_prev[k][i], dt);
     if (continuity) correct_density(p.density[i], p.density_rate[i], p.density_rate_prev[i], dt, density_floor(P, p.material[i]));
     if (shifting) for (int k = 0; k < d; ++k) apply_shift(p.pos[k][i], p.shift[k][i]);
+    if (carry_velocity) for (int k = 0; k < d; ++k) p.vel[k][i] += p.shift_velocity[k][i];
   }
 }
 

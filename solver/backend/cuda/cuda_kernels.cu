@@ -53,6 +53,8 @@ __global__ void correct_kernel(DeviceFields d, int dim, std::uint32_t n, float d
   if (continuity) correct_density(d.density[i], d.density_rate[i], d.density_rate_prev[i], dt, density_floor(P, d.material[i]));
   if (P.shifting.enabled)
     for (int k = 0; k < dim; ++k) apply_shift(d.pos[k][i], d.shift[k][i]);
+  if (P.shifting.enabled && P.shifting.correct_velocity)
+    for (int k = 0; k < dim; ++k) d.vel[k][i] += d.shift_velocity[k][i];
 }
 
 __global__ void eos_kernel(DeviceFields d, std::uint32_t n, PhysicsParams P) {
