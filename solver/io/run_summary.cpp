@@ -77,6 +77,7 @@ void write_summary(const std::filesystem::path& path, const Case& c, const Physi
   j["removed_particles"] = r.removed;
   j["removed_fraction"] = r.particles.fluid > 0 ? static_cast<double>(r.removed) / static_cast<double>(r.particles.fluid) : 0.0;
   j["removed_first_ids"] = r.removed_first_ids;
+  if (c.closed_volume) j["closed_volume_scalings"] = r.closed_volume_scalings;
   j["exit_status"] = r.exit_status;
   j["exit_code"] = r.exit_code;
   if (!r.message.empty()) j["message"] = r.message;

@@ -590,6 +590,7 @@ class Worker {
       r.ghosts = ghosts;
       r.bytes_per_particle = static_cast<double>(solver_bytes) / static_cast<double>(std::max<std::int64_t>(1, total_particles));
       r.imbalance_history = imbalance_log;
+      r.closed_volume_scalings = volume.scalings();
       if (volume.on() && writer && !s_.opts.quiet) spdlog::info("density.closed_volume: the fluid's densities were scaled back to its volume {} times in {} steps",
                                               volume.scalings(), taken);
       r.migrated = w_.crossings();

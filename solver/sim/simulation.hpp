@@ -61,6 +61,7 @@ struct RunResult {
   bool stopped_by_steering = false;
   std::int64_t removed = 0;                       // fluid removed through open sides, since t = 0
   std::vector<std::uint32_t> removed_first_ids;   // the first few of them
+  std::int64_t closed_volume_scalings = 0;        // density.closed_volume: steps whose densities were scaled back
 };
 
 class Simulation {

@@ -580,22 +580,43 @@ def shifting_split_independent(env):
     # Particle shifting (a neighbour pass whose result moves the particles) on one and on three
     # device slabs: bit-identical checkpoints; and it moves them (not the run without it). The same
     # with the volume-consistent density (the shifts cross the slab faces in a halo refresh, then
-    # change the densities), which changes the particles again.
+    # change the densities), which changes the particles again, and with the velocity correction
+    # (the velocity gradient from the ghosts' velocities), which changes them too.
     paths = {}
-    for devices, shifting, consistent in ((1, "true", "false"), (3, "true", "false"), (1, "false", "false"),
-                                          (1, "true", "true"), (3, "true", "true")):
-        out = env.path(f"shift{devices}{shifting}{consistent}")
+    variants = {"plain": [], "consistent": ["shifting.volume_consistent=true"], "velocity": ["shifting.correct_velocity=true"]}
+    for devices, shifting, variant in ((1, "true", "plain"), (3, "true", "plain"), (1, "false", "plain"), (1, "true", "consistent"),
+                                       (3, "true", "consistent"), (1, "true", "velocity"), (3, "true", "velocity")):
+        out = env.path(f"shift{devices}{shifting}{variant}")
+        sets = [a for key in variants[variant] for a in ("--set", key)]
         p = env.run("run", env.tiny, "--steps", "20", "--devices", str(devices), "--out", out, "--quiet",
-                    "--set", f"shifting.enabled={shifting}", "--set", f"shifting.volume_consistent={consistent}")
-        check(p.returncode == 0, f"--devices {devices}, shifting {shifting}, volume_consistent {consistent}: exit {p.returncode}")
-        paths[devices, shifting, consistent] = final_checkpoint(env, out, 20)
-    for consistent in ("false", "true"):
-        p = env.run("compare", paths[1, "true", consistent], paths[3, "true", consistent], "--tolerance", "0")
-        check(p.returncode == 0, f"with shifting (volume_consistent {consistent}), 1 and 3 devices must give bit-identical results")
-    p = env.run("compare", paths[1, "true", "false"], paths[1, "false", "false"], "--tolerance", "0")
+                    "--set", f"shifting.enabled={shifting}", *sets)
+        check(p.returncode == 0, f"--devices {devices}, shifting {shifting}, {variant}: exit {p.returncode}")
+        paths[devices, shifting, variant] = final_checkpoint(env, out, 20)
+    for variant in variants:
+        p = env.run("compare", paths[1, "true", variant], paths[3, "true", variant], "--tolerance", "0")
+        check(p.returncode == 0, f"with shifting ({variant}), 1 and 3 devices must give bit-identical results")
+    p = env.run("compare", paths[1, "true", "plain"], paths[1, "false", "plain"], "--tolerance", "0")
     check(p.returncode != 0, "shifting must change the particles")
-    p = env.run("compare", paths[1, "true", "false"], paths[1, "true", "true"], "--tolerance", "0")
-    check(p.returncode != 0, "the volume-consistent density must change the particles")
+    for variant in ("consistent", "velocity"):
+        p = env.run("compare", paths[1, "true", "plain"], paths[1, "true", variant], "--tolerance", "0")
+        check(p.returncode != 0, f"shifting's {variant} option must change the particles")
+
+
+@test
+def closed_volume_scalings_in_summary(env):
+    # density.closed_volume: summary.json counts the steps after which the densities were scaled
+    # back (at most one a step); a case without the key has no such field.
+    out = env.path("closed_volume")
+    p = env.run("run", os.path.join(env.shipped, "cylinder_flow_2d.yaml"), "--steps", "60", "--out", out, "--quiet",
+                "--set", "dp=0.02", "--set", "output.interval=0")
+    check(p.returncode == 0, f"cylinder_flow_2d at dp 0.02: exit {p.returncode}: {p.stderr}")
+    with open(os.path.join(out, "summary.json")) as f:
+        n = json.load(f).get("closed_volume_scalings")
+    check(isinstance(n, int) and 0 < n <= 60, f"closed_volume_scalings {n} in 60 steps")
+    tiny = env.path("no_closed_volume")
+    p = env.run("run", env.tiny, "--steps", "2", "--out", tiny, "--quiet")
+    with open(os.path.join(tiny, "summary.json")) as f:
+        check("closed_volume_scalings" not in json.load(f), "a run without density.closed_volume reports no scalings")
 
 
 @test

@@ -127,6 +127,7 @@ TEST(Geometry, CylinderDragAtReynolds20) {
               (cd / 5.58 - 1) * 100, push / q, cl);
   const double u = test::mean_after(out / "probes" / "flow.csv", 4, 1.0);
   EXPECT_NEAR(u, c.drive.mean_velocity[0], 1e-3 * c.drive.mean_velocity[0]) << "the drive's mean velocity";
+  EXPECT_GT(r.closed_volume_scalings, 0) << "the case holds its volume (density.closed_volume), and the drift it holds is there";
 }
 
 // A block of water on a frictionless 45-degree slope (cases/free_slip_slope_2d.yaml): the slope's
