@@ -222,9 +222,12 @@ SPATE_HD void update_summation_density(const PhysicsParams& P, const CellGridVie
 // Particle-shifting displacement of fluid particle i for a step dt (shifting.hpp), into `shift`
 // (0 for walls, whose slots the volume-consistent density reads); applied to the position by the
 // corrector (apply_shift). Run after the fluid rates, before the corrector changes any density, so
-// that owned particles and ghosts read the same neighbour state.
-template <class Kernel, int Dim, class Fields>
-SPATE_HD void update_shift(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3], float dt) {
+// that owned particles and ghosts read the same neighbour state. CarryVelocity
+// (`shifting.correct_velocity`): the velocity gradient is summed in the same loop and the
+// velocity's change at the shifted position stored in `shift_velocity` (a compile-time flag, so
+// that the loop without it is what it was).
+template <class Kernel, int Dim, bool CarryVelocity, class Fields>
+SPATE_HD void update_shift_with(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3], float dt) {
   if (!P.is_fluid(f.material[i])) {
     SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.shift[k][i] = 0.0f;
     return;
@@ -233,23 +236,28 @@ SPATE_HD void update_shift(const PhysicsParams& P, const CellGridView& v, Fields
   const Vec<Dim> xi = load_vec<Dim>(f.pos, i);
   const float w_dp = Kernel::value(P.dp * P.inv_h, P.kernel_norm);
   ShiftingSums<Dim> sums;
-  const bool carry_velocity = P.shifting.correct_velocity;
-  ParticleState<Dim> si{xi, carry_velocity ? load_vec<Dim>(f.vel, i) : zero_vec<Dim>(), f.density[i], 0.0f, f.material[i], zero_vec<Dim>(), zero_vec<Dim>()};
-  VelocityGradient<Dim> grad_v;
+  [[maybe_unused]] VelocityGradient<Dim> grad_v;
+  [[maybe_unused]] const ParticleState<Dim> si{xi, CarryVelocity ? load_vec<Dim>(f.vel, i) : zero_vec<Dim>(), 0.0f, 0.0f, f.material[i],
+                                               zero_vec<Dim>(), zero_vec<Dim>()};
   v.for_each_neighbour_range(g, [&](std::uint32_t jb, std::uint32_t je) {
     for (std::uint32_t j = jb; j < je; ++j) {
-      const ParticleState<Dim> sj{load_vec<Dim>(f.pos, j), carry_velocity ? load_vec<Dim>(f.vel, j) : zero_vec<Dim>(), f.density[j], 0.0f,
+      const ParticleState<Dim> sj{load_vec<Dim>(f.pos, j), CarryVelocity ? load_vec<Dim>(f.vel, j) : zero_vec<Dim>(), f.density[j], 0.0f,
                                   f.material[j], zero_vec<Dim>(), zero_vec<Dim>()};
       accumulate_shifting_pair<Kernel, Dim>(P, M, f.material[i], w_dp, xi, sj, sums);
-      if (carry_velocity) accumulate_velocity_gradient<Kernel, Dim>(P, si, sj, M.mass / M.rho0, grad_v);
+      if constexpr (CarryVelocity) accumulate_velocity_gradient<Kernel, Dim>(P, si, sj, M.mass / M.rho0, grad_v);
     }
   });
   const Vec<Dim> dr = shifting_displacement<Dim>(P, M, sums, dt);
   SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.shift[k][i] = dr[k];
-  if (carry_velocity) {
+  if constexpr (CarryVelocity) {
     const Vec<Dim> dv = shift_velocity_change<Dim>(grad_v, dr);
     SPATE_UNROLL for (int k = 0; k < Dim; ++k) f.shift_velocity[k][i] = dv[k];
   }
+}
+template <class Kernel, int Dim, class Fields>
+SPATE_HD void update_shift(const PhysicsParams& P, const CellGridView& v, Fields& f, std::uint32_t i, const int g[3], float dt) {
+  if (P.shifting.correct_velocity) update_shift_with<Kernel, Dim, true>(P, v, f, i, g, dt);
+  else update_shift_with<Kernel, Dim, false>(P, v, f, i, g, dt);
 }
 
 // `shifting.volume_consistent`: the density change of fluid particle i under every particle's
